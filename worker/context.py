@@ -1,0 +1,149 @@
+"""What a pipeline sees of the service: its inputs, a progress reporter and a product writer.
+
+A pipeline never touches HTTP or the database session. Products are written into the blob store as
+they are made and listed here; the runner publishes the list atomically only when the attempt
+succeeds and still holds its lease, so products of a failed or repeated attempt never show.
+"""
+from __future__ import annotations
+
+import json
+import mimetypes
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+from worker.errors import JobCancelled, JobInputError, LeaseLost
+
+MEDIA_TYPES = {".csv": "text/csv", ".json": "application/json", ".png": "image/png", ".html": "text/html",
+               ".txt": "text/plain", ".aem": "text/plain", ".nmea": "text/plain", ".atx": "text/plain",
+               ".rnx": "text/plain", ".sp3": "text/plain", ".zip": "application/zip"}
+
+
+def media_type_for(name: str) -> str:
+    suffix = Path(name).suffix.lower()
+    return MEDIA_TYPES.get(suffix) or mimetypes.guess_type(name)[0] or "application/octet-stream"
+
+
+@dataclass(frozen=True)
+class InputFile:
+    name: str  # the name inside the observation set (what the user calls it)
+    kind: str  # rinex_obs, rinex_nav, sp3, rinex_clock, antex, platform, reference_attitude
+    path: Path  # read-only blob on disk
+    summary: dict
+
+
+@dataclass(frozen=True)
+class InputSet:
+    id: str
+    name: str | None
+    files: list[InputFile]
+    summary: dict
+
+    def of_kind(self, kind: str) -> list[InputFile]:
+        return [f for f in self.files if f.kind == kind]
+
+    def platform(self) -> dict | None:
+        files = self.of_kind("platform")
+        return json.loads(files[0].path.read_text()) if files else None
+
+
+@dataclass
+class ProductRecord:
+    name: str
+    media_type: str
+    sha256: str
+    size_bytes: int
+
+
+@dataclass
+class JobContext:
+    job_id: str
+    attempt: int
+    sets: list[InputSet]
+    workdir: Path
+    _store_blob: Callable[[Path], tuple[str, int]]
+    _flush_progress: Callable[[float, str | None], None] | None = None
+    progress_interval_s: float = 0.3
+    products: dict[str, ProductRecord] = field(default_factory=dict)
+    fraction: float = 0.0
+    stage: str | None = None
+    cancel_requested: threading.Event = field(default_factory=threading.Event)
+    lease_lost: threading.Event = field(default_factory=threading.Event)
+    _last_flush: float = 0.0
+    log_lines: list[str] = field(default_factory=list)
+
+    # --- progress and cancellation ---------------------------------------------------------------
+    def check(self) -> None:
+        """Raise JobCancelled / LeaseLost when the job must stop (call it in long loops)."""
+        if self.lease_lost.is_set():
+            raise LeaseLost(self.job_id)
+        if self.cancel_requested.is_set():
+            raise JobCancelled(self.job_id)
+
+    def progress(self, fraction: float, stage: str | None = None) -> None:
+        """Report progress in [0, 1] and the stage's name; also the place where cancellation happens."""
+        self.check()
+        self.fraction = min(max(float(fraction), 0.0), 1.0)
+        if stage is not None:
+            self.stage = stage[:200]
+        now = time.monotonic()
+        if self._flush_progress and (now - self._last_flush >= self.progress_interval_s or stage is not None):
+            self._last_flush = now
+            self._flush_progress(self.fraction, self.stage)
+
+    def log(self, message: str) -> None:
+        self.log_lines.append(f"{time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())} {message}")
+
+    # --- products --------------------------------------------------------------------------------
+    def write_product(self, name: str, data: bytes | str | dict | list | Path,
+                      media_type: str | None = None) -> ProductRecord:
+        """Store one product; `data` is bytes, text, a JSON-able dict/list or a file path."""
+        if "/" in name or "\\" in name or name.startswith(".") or not name:
+            raise ValueError(f"bad product name {name!r}")
+        self.check()
+        path = self.workdir / "products" / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        if isinstance(data, Path):
+            path = data
+        elif isinstance(data, (dict, list)):
+            path.write_text(json.dumps(data, indent=2, sort_keys=False, default=_json_default) + "\n")
+        elif isinstance(data, str):
+            path.write_text(data)
+        else:
+            path.write_bytes(data)
+        sha, size = self._store_blob(path)
+        record = ProductRecord(name, media_type or media_type_for(name), sha, size)
+        self.products[name] = record
+        return record
+
+    def product_path(self, name: str) -> Path:
+        """A scratch path to write a product into; then call write_product(name, path)."""
+        path = self.workdir / "products" / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        return path
+
+    def require_one(self) -> InputSet:
+        if len(self.sets) != 1:
+            raise JobInputError("Wrong number of observation sets", f"this job type takes exactly one "
+                                f"observation set, got {len(self.sets)}", field="observation_set_ids")
+        return self.sets[0]
+
+    def input_error(self, title: str, detail: str, **where: Any) -> JobInputError:
+        return JobInputError(title, detail, **where)
+
+
+def _json_default(value: Any):
+    try:
+        import numpy as np
+
+        if isinstance(value, np.generic):
+            return value.item()
+        if isinstance(value, np.ndarray):
+            return value.tolist()
+    except ImportError:  # pragma: no cover
+        pass
+    if isinstance(value, Path):
+        return str(value)
+    raise TypeError(f"not JSON serialisable: {type(value).__name__}")

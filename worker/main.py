@@ -1,0 +1,60 @@
+"""The worker process: migrate, start the reaper, consume the queue until told to stop."""
+from __future__ import annotations
+
+import logging
+import threading
+
+from app.db import make_engine, make_sessionmaker
+from app.migrate import migrate
+from app.settings import Settings
+from app.store.blobs import BlobStore
+from worker import runner
+from worker.queue import make_huey
+
+log = logging.getLogger("gnssatt.worker")
+
+
+def build_runtime(settings: Settings, *, immediate: bool = False, name: str | None = None) -> runner.Runtime:
+    settings.ensure_dirs()
+    engine = make_engine(settings)
+    migrate(engine, settings)
+    rt = runner.Runtime(settings=settings, engine=engine, Session=make_sessionmaker(engine),
+                        blobs=BlobStore(settings.blobs_dir), huey=make_huey(settings, immediate=immediate),
+                        worker_name=name or runner.default_worker_name())
+    runner.set_runtime(rt)
+    return rt
+
+
+class Reaper(threading.Thread):
+    def __init__(self, rt: runner.Runtime):
+        super().__init__(name="reaper", daemon=True)
+        self.rt = rt
+        self.stop_event = threading.Event()
+        self.interval_s = max(0.5, min(rt.settings.lease_seconds / 3, 10.0))
+
+    def run(self) -> None:
+        while True:
+            try:
+                runner.reap(self.rt)
+            except Exception:
+                log.exception("reaper pass failed; trying again")
+            if self.stop_event.wait(self.interval_s):
+                return
+
+
+def run_worker(settings: Settings, concurrency: int | None = None) -> None:
+    """Run a worker until SIGINT/SIGTERM (the Huey consumer handles both)."""
+    logging.basicConfig(level=settings.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    rt = build_runtime(settings)
+    runner.cleanup_stale_workdirs(settings)
+    reaper = Reaper(rt)
+    reaper.start()
+    workers = concurrency or settings.worker_concurrency
+    log.info("worker %s: %d job slot(s), database %s, queue %s", rt.worker_name, workers,
+             rt.engine.url.render_as_string(hide_password=True), settings.queue_url or "huey-sqlite")
+    consumer = rt.huey.create_consumer(workers=workers, worker_type="thread", periodic=False,
+                                       initial_delay=0.05, backoff=1.3, max_delay=0.5, check_worker_health=True)
+    try:
+        consumer.run()
+    finally:
+        reaper.stop_event.set()

@@ -1,0 +1,290 @@
+"""Running one job exactly once: claim by lease, heartbeat, publish products atomically, reap the dead.
+
+The job row is the source of truth. A worker claims a queued job with one conditional UPDATE (atomic on
+SQLite, whose writers are serialised, and on PostgreSQL, where a concurrent claimer re-checks the WHERE
+after the first commits), renews the lease while it runs, and finishes with another UPDATE guarded by
+its lease token. A job whose worker died is put back in the queue by the reaper once its lease runs out
+(on PostgreSQL the reaper reads with FOR UPDATE SKIP LOCKED so reapers on many machines share the work).
+"""
+from __future__ import annotations
+
+import logging
+import os
+import shutil
+import socket
+import threading
+import time
+import traceback
+import uuid
+from dataclasses import dataclass
+from datetime import datetime, timedelta
+
+from sqlalchemy import select, update
+from sqlalchemy.engine import Engine
+from sqlalchemy.orm import Session, sessionmaker
+
+from app.models import Job, JobSet, ObservationSet, Product, utcnow
+from app.settings import Settings
+from app.store.blobs import BlobStore
+from worker.context import InputFile, InputSet, JobContext
+from worker.errors import JobCancelled, LeaseLost, is_permanent, problem_for_exception
+from worker.jobs.registry import get_job_type
+
+log = logging.getLogger("gnssatt.worker")
+
+TERMINAL_STATES = ("succeeded", "failed", "cancelled")
+
+
+@dataclass
+class Runtime:
+    settings: Settings
+    engine: Engine
+    Session: sessionmaker[Session]
+    blobs: BlobStore
+    huey: object
+    worker_name: str
+
+
+_RUNTIME: Runtime | None = None
+
+
+def set_runtime(runtime: Runtime | None) -> None:
+    global _RUNTIME
+    _RUNTIME = runtime
+
+
+def get_runtime() -> Runtime:
+    if _RUNTIME is None:
+        raise RuntimeError("worker runtime not configured (worker.main.build_runtime)")
+    return _RUNTIME
+
+
+def run_claimed_job_message(job_id: str) -> None:
+    """Huey task body: run the job if it can be claimed; a duplicate or stale message does nothing."""
+    execute_job(get_runtime(), job_id)
+
+
+# --- claim / heartbeat / finish -------------------------------------------------------------------
+
+def _lease_until(rt: Runtime) -> datetime:
+    return utcnow() + timedelta(seconds=rt.settings.lease_seconds)
+
+
+def claim(rt: Runtime, job_id: str) -> tuple[str, int] | None:
+    """Claim a queued job: returns (lease token, attempt number) or None if someone else has it."""
+    token = f"{rt.worker_name}/{uuid.uuid4().hex[:8]}"
+    now = utcnow()
+    with rt.Session.begin() as s:
+        res = s.execute(update(Job).where(Job.id == job_id, Job.state == "queued",
+                                          Job.cancel_requested.is_(False))
+                        .values(state="running", attempts=Job.attempts + 1, lease_owner=token,
+                                lease_expires_at=_lease_until(rt), heartbeat_at=now, started_at=now,
+                                finished_at=None, progress=0.0, stage="starting", error=None)
+                        .execution_options(synchronize_session=False))
+        if res.rowcount != 1:
+            return None
+        attempt = s.execute(select(Job.attempts).where(Job.id == job_id)).scalar_one()
+    return token, attempt
+
+
+class Heartbeat(threading.Thread):
+    """Renews the lease every heartbeat_seconds and polls for a cancel request every second."""
+
+    def __init__(self, rt: Runtime, job_id: str, token: str, ctx: JobContext):
+        super().__init__(name=f"heartbeat-{job_id[:8]}", daemon=True)
+        self.rt, self.job_id, self.token, self.ctx = rt, job_id, token, ctx
+        self.stop_event = threading.Event()
+
+    def run(self) -> None:
+        last_renew = time.monotonic()
+        poll_s = min(1.0, self.rt.settings.heartbeat_seconds)
+        while not self.stop_event.wait(poll_s):
+            try:
+                renew = time.monotonic() - last_renew >= self.rt.settings.heartbeat_seconds
+                if not self.beat(renew):
+                    self.ctx.lease_lost.set()
+                    return
+                if renew:
+                    last_renew = time.monotonic()
+            except Exception:  # a database hiccup: try again next beat; the lease has slack
+                log.warning("heartbeat of job %s failed:\n%s", self.job_id, traceback.format_exc(limit=2))
+
+    def beat(self, renew: bool) -> bool:
+        with self.rt.Session.begin() as s:
+            values = {"progress": self.ctx.fraction, "stage": self.ctx.stage}
+            if renew:
+                values.update(lease_expires_at=_lease_until(self.rt), heartbeat_at=utcnow())
+            res = s.execute(update(Job).where(Job.id == self.job_id, Job.lease_owner == self.token,
+                                              Job.state == "running").values(**values)
+                            .execution_options(synchronize_session=False))
+            if res.rowcount != 1:
+                return False
+            if s.execute(select(Job.cancel_requested).where(Job.id == self.job_id)).scalar_one():
+                self.ctx.cancel_requested.set()
+        return True
+
+
+def _finish(rt: Runtime, job_id: str, token: str, **values) -> bool:
+    """Move a running job we hold to its next state; False when the lease was lost meanwhile."""
+    with rt.Session.begin() as s:
+        res = s.execute(update(Job).where(Job.id == job_id, Job.lease_owner == token, Job.state == "running")
+                        .values(lease_owner=None, lease_expires_at=None, **values)
+                        .execution_options(synchronize_session=False))
+        return res.rowcount == 1
+
+
+def _publish_success(rt: Runtime, job_id: str, token: str, ctx: JobContext) -> bool:
+    """Mark the job succeeded and insert its products, in one transaction guarded by the lease."""
+    with rt.Session.begin() as s:
+        res = s.execute(update(Job).where(Job.id == job_id, Job.lease_owner == token, Job.state == "running")
+                        .values(state="succeeded", progress=1.0, stage="done", finished_at=utcnow(),
+                                lease_owner=None, lease_expires_at=None, log=_log_text(ctx))
+                        .execution_options(synchronize_session=False))
+        if res.rowcount != 1:
+            s.rollback()
+            return False
+        for rec in ctx.products.values():
+            s.add(Product(job_id=job_id, attempt=ctx.attempt, name=rec.name, media_type=rec.media_type,
+                          sha256=rec.sha256, size_bytes=rec.size_bytes))
+    return True
+
+
+def _log_text(ctx: JobContext) -> str | None:
+    return "\n".join(ctx.log_lines[-2000:]) or None
+
+
+# --- inputs ---------------------------------------------------------------------------------------
+
+def load_inputs(rt: Runtime, job_id: str) -> list[InputSet]:
+    with rt.Session() as s:
+        rows = s.execute(select(ObservationSet).join(JobSet, JobSet.set_id == ObservationSet.id)
+                         .where(JobSet.job_id == job_id).order_by(JobSet.position)).scalars().all()
+        return [InputSet(id=o.id, name=o.name, summary=o.summary or {},
+                         files=[InputFile(name=f.name, kind=f.kind, path=rt.blobs.path(f.sha256),
+                                          summary=f.summary or {}) for f in o.files])
+                for o in rows]
+
+
+# --- the whole life of one attempt ----------------------------------------------------------------
+
+def execute_job(rt: Runtime, job_id: str) -> str | None:
+    """Claim and run one job; returns the state it was left in, or None when it could not be claimed."""
+    claimed = claim(rt, job_id)
+    if claimed is None:
+        return None
+    token, attempt = claimed
+    with rt.Session() as s:
+        job = s.get(Job, job_id)
+        job_type, raw_config, max_attempts = job.type, dict(job.config or {}), job.max_attempts
+    workdir = rt.settings.data_dir / "work" / f"{job_id}-{attempt}"
+    shutil.rmtree(workdir, ignore_errors=True)
+    workdir.mkdir(parents=True)
+
+    def flush(fraction: float, stage: str | None) -> None:
+        with rt.Session.begin() as s2:
+            s2.execute(update(Job).where(Job.id == job_id, Job.lease_owner == token)
+                       .values(progress=fraction, stage=stage).execution_options(synchronize_session=False))
+
+    ctx = JobContext(job_id=job_id, attempt=attempt, sets=[], workdir=workdir,
+                     _store_blob=lambda p: rt.blobs.put_file(p), _flush_progress=flush)
+    beat = Heartbeat(rt, job_id, token, ctx)
+    beat.start()
+    log.info("job %s (%s) attempt %d claimed by %s", job_id, job_type, attempt, token)
+    try:
+        spec = get_job_type(job_type)
+        if spec is None:
+            raise RuntimeError(f"unknown job type {job_type!r} in this worker")
+        config = spec.config_model.model_validate(raw_config)
+        ctx.sets.extend(load_inputs(rt, job_id))
+        ctx.progress(0.0, "running")
+        spec.load_pipeline()(ctx, config)
+        ctx.check()
+        if _publish_success(rt, job_id, token, ctx):
+            log.info("job %s succeeded with %d products", job_id, len(ctx.products))
+            return "succeeded"
+        log.warning("job %s finished but its lease was lost; its products are dropped", job_id)
+        return None
+    except LeaseLost:
+        log.warning("job %s attempt %d lost its lease; stopping without writing", job_id, attempt)
+        return None
+    except JobCancelled:
+        _finish(rt, job_id, token, state="cancelled", finished_at=utcnow(), stage="cancelled", log=_log_text(ctx))
+        log.info("job %s cancelled", job_id)
+        return "cancelled"
+    except Exception as exc:  # noqa: BLE001 - every failure becomes a stored problem document
+        problem = problem_for_exception(exc, job_id, attempt)
+        if is_permanent(exc) or attempt >= max_attempts:
+            _finish(rt, job_id, token, state="failed", finished_at=utcnow(), error=problem, log=_log_text(ctx))
+            log.info("job %s failed: %s", job_id, problem.get("detail"))
+            return "failed"
+        log.warning("job %s attempt %d failed, will retry: %s", job_id, attempt, problem.get("detail"))
+        if _finish(rt, job_id, token, state="queued", error=problem, enqueued_at=utcnow(), stage="retrying"):
+            from worker.queue import enqueue
+            enqueue(rt.huey, job_id, delay_s=min(2.0 * attempt, 30.0))
+        return "queued"
+    finally:
+        beat.stop_event.set()
+        beat.join(timeout=5)
+        shutil.rmtree(workdir, ignore_errors=True)
+
+
+# --- the reaper -----------------------------------------------------------------------------------
+
+def reap(rt: Runtime) -> dict[str, int]:
+    """Requeue jobs whose lease ran out (their worker died) and re-ring jobs whose message was lost."""
+    from worker.queue import enqueue
+
+    now = utcnow()
+    to_enqueue: list[str] = []
+    counts = {"requeued": 0, "failed": 0, "cancelled": 0, "rerung": 0}
+    pg = rt.engine.dialect.name == "postgresql"
+    with rt.Session.begin() as s:
+        q = select(Job).where(Job.state == "running", Job.lease_expires_at < now)
+        if pg:
+            q = q.with_for_update(skip_locked=True)
+        for job in s.execute(q).scalars().all():
+            job.lease_owner = None
+            job.lease_expires_at = None
+            if job.cancel_requested:
+                job.state, job.finished_at, job.stage = "cancelled", now, "cancelled"
+                counts["cancelled"] += 1
+            elif job.attempts >= job.max_attempts:
+                job.state, job.finished_at = "failed", now
+                job.error = {"type": "https://gnssatt.dev/problems/worker-lost", "status": 500,
+                             "title": "The worker running this job was lost",
+                             "detail": f"the worker running this job stopped responding {job.attempts} "
+                                       f"times (max_attempts {job.max_attempts})", "job_id": job.id}
+                counts["failed"] += 1
+            else:
+                job.state, job.stage, job.enqueued_at = "queued", "requeued after lost worker", now
+                to_enqueue.append(job.id)
+                counts["requeued"] += 1
+        stale = now - timedelta(seconds=rt.settings.requeue_after_seconds)
+        q = select(Job).where(Job.state == "queued", Job.enqueued_at < stale)
+        if pg:
+            q = q.with_for_update(skip_locked=True)
+        for job in s.execute(q).scalars().all():
+            job.enqueued_at = now
+            to_enqueue.append(job.id)
+            counts["rerung"] += 1
+    for job_id in to_enqueue:
+        enqueue(rt.huey, job_id)
+    if any(counts.values()):
+        log.info("reaper: %s", counts)
+    return counts
+
+
+def default_worker_name() -> str:
+    return f"{socket.gethostname()}:{os.getpid()}"
+
+
+def cleanup_stale_workdirs(settings: Settings, older_than_s: float = 3600.0) -> None:
+    root = settings.data_dir / "work"
+    if not root.is_dir():
+        return
+    cutoff = time.time() - older_than_s
+    for d in root.iterdir():
+        if d.is_dir() and d.stat().st_mtime < cutoff:
+            shutil.rmtree(d, ignore_errors=True)
+
+
