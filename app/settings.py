@@ -21,6 +21,8 @@ class Settings(BaseSettings):
     queue_url: str | None = Field(
         None, description="redis://host:port/db to share the queue between machines; default: Huey on SQLite "
         "(<data_dir>/queue.db), no server needed.")
+    queue_name: str = Field("gnssatt", pattern=r"^[A-Za-z0-9_.-]{1,64}$",
+                            description="Queue name (lets several deployments share one Redis).")
     max_upload_bytes: int = Field(2 * 1024**3, gt=0, description="Largest observation-set upload accepted.")
     max_bundle_members: int = Field(500, gt=0, description="Most files a .zip/.tar.gz bundle may hold.")
     max_bundle_ratio: float = Field(200.0, gt=1, description="Largest uncompressed/compressed ratio of a bundle.")

@@ -10,16 +10,15 @@ from huey import Huey, RedisHuey, SqliteHuey
 from app.settings import Settings
 
 TASK_NAME = "gnssatt.run_job"
-QUEUE_NAME = "gnssatt"
 
 
 def make_huey(settings: Settings, *, immediate: bool = False) -> Huey:
     """A Huey instance for the configured backend, with the one task `gnssatt.run_job(job_id)` registered."""
     if settings.queue_url:
-        huey: Huey = RedisHuey(QUEUE_NAME, url=settings.queue_url, results=False, immediate=immediate)
+        huey: Huey = RedisHuey(settings.queue_name, url=settings.queue_url, results=False, immediate=immediate)
     else:
         settings.ensure_dirs()
-        huey = SqliteHuey(QUEUE_NAME, filename=str(settings.data_dir / "queue.db"), results=False,
+        huey = SqliteHuey(settings.queue_name, filename=str(settings.data_dir / "queue.db"), results=False,
                           immediate=immediate, timeout=30)
 
     @huey.task(name=TASK_NAME)

@@ -1,0 +1,55 @@
+"""The API application: create_app(settings) wires settings, database, blob store and queue."""
+from __future__ import annotations
+
+import logging
+from contextlib import asynccontextmanager
+
+from fastapi import FastAPI
+
+from app.db import make_engine, make_sessionmaker
+from app.migrate import migrate
+from app.problems import install_problem_handlers
+from app.routes import health, job_types, jobs, observation_sets
+from app.settings import Settings
+from app.store.blobs import BlobStore
+from worker.queue import make_huey
+
+API_VERSION = "0.1.0"
+DESCRIPTION = """GNSS attitude determination as a service.
+
+Upload an observation set (RINEX files of several antennas on one rigid platform, navigation data,
+`platform.json`), submit a job, follow its progress, download its products. Every error is an
+RFC 9457 `application/problem+json` document. Authenticate with `Authorization: Bearer KEY` or
+`X-API-Key: KEY`.
+"""
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    settings = settings or Settings()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI):
+        settings.ensure_dirs()
+        engine = make_engine(settings)
+        migrate(engine, settings)
+        app.state.engine = engine
+        app.state.Session = make_sessionmaker(engine)
+        app.state.blobs = BlobStore(settings.blobs_dir)
+        app.state.huey = make_huey(settings)
+        yield
+        engine.dispose()
+
+    logging.basicConfig(level=settings.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    app = FastAPI(title="gnssatt", version=API_VERSION, description=DESCRIPTION, lifespan=lifespan)
+    app.state.settings = settings
+    install_problem_handlers(app)
+    app.include_router(health.router)
+    app.include_router(observation_sets.router)
+    app.include_router(jobs.router)
+    app.include_router(job_types.router)
+    return app
+
+
+def app_from_env() -> FastAPI:
+    """uvicorn factory: `uvicorn --factory app.main:app_from_env`."""
+    return create_app(Settings())

@@ -1,0 +1,48 @@
+from __future__ import annotations
+
+from datetime import datetime
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+JobState = Literal["queued", "running", "succeeded", "failed", "cancelled"]
+
+
+class JobCreate(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    type: str = Field(description="A job type from GET /v1/job-types.", min_length=1, max_length=60)
+    observation_set_ids: list[str] = Field(default_factory=list, max_length=10000)
+    config: dict[str, Any] = Field(default_factory=dict, description="Validated against the type's config schema.")
+
+
+class JobPublic(BaseModel):
+    id: str
+    type: str
+    state: JobState
+    progress: float = Field(ge=0, le=1)
+    stage: str | None
+    created_at: datetime
+    started_at: datetime | None
+    finished_at: datetime | None
+    attempts: int
+    error: dict[str, Any] | None = Field(description="RFC 9457 problem document of a failed job.")
+    config: dict[str, Any]
+    observation_set_ids: list[str]
+
+
+class ProductPublic(BaseModel):
+    name: str
+    media_type: str
+    size_bytes: int
+    sha256: str
+    url: str
+
+
+class JobTypePublic(BaseModel):
+    name: str
+    title: str
+    description: str
+    min_sets: int
+    max_sets: int | None
+    produces: list[str]
+    config_schema: dict[str, Any]

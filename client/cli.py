@@ -1,0 +1,228 @@
+"""The `gnssatt` command: run the service (serve, worker, admin) and use it (submit, status, fetch, simulate).
+
+The client commands talk HTTP only. serve/worker/admin import the service lazily, inside the command.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+
+from client.api import ApiError, GnssattClient
+
+
+def _client(args) -> GnssattClient:
+    url = args.url or os.environ.get("GNSSATT_URL") or "http://127.0.0.1:8000"
+    key = args.key or os.environ.get("GNSSATT_API_KEY")
+    if not key:
+        sys.exit("gnssatt: no API key: pass --key or set GNSSATT_API_KEY (an operator mints one with "
+                 "'gnssatt admin create-key --team NAME')")
+    return GnssattClient(url, key)
+
+
+def _progress_bar(job: dict) -> None:
+    width = 30
+    frac = float(job.get("progress") or 0.0)
+    filled = int(round(frac * width))
+    stage = (job.get("stage") or "")[:40]
+    line = f"\r[{'#' * filled}{'.' * (width - filled)}] {frac * 100:5.1f}% {job['state']:<9} {stage:<40}"
+    if sys.stderr.isatty():
+        sys.stderr.write(line)
+    else:
+        sys.stderr.write(line.strip("\r") + "\n")
+    sys.stderr.flush()
+
+
+def cmd_serve(args) -> None:
+    import uvicorn
+
+    from app.main import create_app
+    from app.settings import Settings
+
+    settings = Settings()
+    uvicorn.run(create_app(settings), host=args.host, port=args.port, log_level=settings.log_level.lower(),
+                timeout_graceful_shutdown=5)
+
+
+def cmd_worker(args) -> None:
+    from app.settings import Settings
+    from worker.main import run_worker
+
+    run_worker(Settings(), concurrency=args.concurrency)
+
+
+def _admin_session():
+    from app.db import make_engine, make_sessionmaker
+    from app.migrate import migrate
+    from app.settings import Settings
+
+    settings = Settings()
+    engine = make_engine(settings)
+    migrate(engine, settings)
+    return make_sessionmaker(engine)
+
+
+def cmd_create_key(args) -> None:
+    from app.keys import create_key
+
+    Session = _admin_session()
+    with Session.begin() as s:
+        key, _ = create_key(s, args.team, args.label)
+    print(f"API key for team {args.team!r} (shown once; store it safely):")
+    print(key)
+
+
+def cmd_revoke_key(args) -> None:
+    from app.keys import revoke_key
+
+    Session = _admin_session()
+    with Session.begin() as s:
+        n = revoke_key(s, args.key)
+    print(f"revoked {n} key(s)")
+    if n == 0:
+        sys.exit(1)
+
+
+def cmd_submit(args) -> None:
+    config = json.loads(Path(args.config).read_text()) if args.config else {}
+    with _client(args) as c:
+        obs_set = c.upload_set([Path(p) for p in args.paths], name=args.name)
+        print(f"observation set {obs_set['id']}: {len(obs_set['files'])} file(s)", file=sys.stderr)
+        job = c.submit_job(args.type, [obs_set["id"]], config)
+        print(f"job {job['id']} ({job['type']}) queued", file=sys.stderr)
+        if args.no_wait:
+            print(job["id"])
+            return
+        job = c.wait(job["id"], on_update=_progress_bar)
+        sys.stderr.write("\n")
+        _finish(c, job, args.out)
+
+
+def _finish(c: GnssattClient, job: dict, out: str | None) -> None:
+    if job["state"] != "succeeded":
+        err = job.get("error") or {}
+        print(f"job {job['id']} {job['state']}: {err.get('title', '')}: {err.get('detail', '')}", file=sys.stderr)
+        sys.exit(2)
+    out_dir = Path(out or f"gnssatt-{job['id']}")
+    for p in c.download_products(job["id"], out_dir):
+        print(p)
+
+
+def cmd_status(args) -> None:
+    with _client(args) as c:
+        if args.job_id:
+            print(json.dumps(c.get_job(args.job_id), indent=2))
+        else:
+            for job in c.list_jobs(state=args.state, limit=args.limit)["items"]:
+                print(f"{job['id']}  {job['type']:<12} {job['state']:<9} {job['progress'] * 100:5.1f}%  "
+                      f"{job['created_at']}")
+
+
+def cmd_fetch(args) -> None:
+    with _client(args) as c:
+        job = c.get_job(args.job_id)
+        if args.wait:
+            job = c.wait(args.job_id, on_update=_progress_bar)
+            sys.stderr.write("\n")
+        _finish(c, job, args.out)
+
+
+def cmd_simulate(args) -> None:
+    from worker.sim import list_scenarios, simulate_scenario
+
+    if args.list:
+        for name, params in list_scenarios().items():
+            print(name, json.dumps(params))
+        return
+    overrides = {}
+    for item in args.set or []:
+        key, _, value = item.partition("=")
+        try:
+            overrides[key] = json.loads(value)
+        except json.JSONDecodeError:
+            overrides[key] = value
+    if args.duration_s is not None:
+        overrides["duration_s"] = args.duration_s
+    count = args.count or 1
+    for k in range(count):
+        out = Path(args.out) if count == 1 else Path(args.out) / f"set-{k:04d}"
+        simulate_scenario(args.scenario, out, seed=args.seed + k, overrides=overrides)
+        print(out)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="gnssatt", description="GNSS attitude determination service and client.")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    s = sub.add_parser("serve", help="run the HTTP API")
+    s.add_argument("--host", default="127.0.0.1")
+    s.add_argument("--port", type=int, default=8000)
+    s.set_defaults(func=cmd_serve)
+
+    s = sub.add_parser("worker", help="run a worker that processes jobs")
+    s.add_argument("--concurrency", type=int, default=None)
+    s.set_defaults(func=cmd_worker)
+
+    admin = sub.add_parser("admin", help="operator commands (talk to the database directly)")
+    asub = admin.add_subparsers(dest="admin_command", required=True)
+    s = asub.add_parser("create-key", help="mint an API key for a team (created if new)")
+    s.add_argument("--team", required=True)
+    s.add_argument("--label", default=None)
+    s.set_defaults(func=cmd_create_key)
+    s = asub.add_parser("revoke-key", help="revoke a key (give the key, or its first 10 characters)")
+    s.add_argument("key")
+    s.set_defaults(func=cmd_revoke_key)
+
+    def client_opts(sp):
+        sp.add_argument("--url", default=None, help="API base URL (env GNSSATT_URL)")
+        sp.add_argument("--key", default=None, help="API key (env GNSSATT_API_KEY)")
+
+    s = sub.add_parser("submit", help="upload files, run a job, wait, download its products")
+    client_opts(s)
+    s.add_argument("--type", required=True)
+    s.add_argument("--config", default=None, help="JSON file with the job config")
+    s.add_argument("--name", default=None, help="name of the observation set")
+    s.add_argument("--out", default=None, help="directory for the products")
+    s.add_argument("--no-wait", action="store_true", help="print the job id and return")
+    s.add_argument("paths", nargs="+")
+    s.set_defaults(func=cmd_submit)
+
+    s = sub.add_parser("status", help="one job, or the list of jobs")
+    client_opts(s)
+    s.add_argument("job_id", nargs="?")
+    s.add_argument("--state", default=None)
+    s.add_argument("--limit", type=int, default=20)
+    s.set_defaults(func=cmd_status)
+
+    s = sub.add_parser("fetch", help="download a job's products")
+    client_opts(s)
+    s.add_argument("job_id")
+    s.add_argument("--out", default=None)
+    s.add_argument("--wait", action="store_true")
+    s.set_defaults(func=cmd_fetch)
+
+    s = sub.add_parser("simulate", help="write a simulated observation set (truth simulator)")
+    s.add_argument("--scenario", default="earth-pointing")
+    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--duration-s", type=float, default=None)
+    s.add_argument("--count", type=int, default=None)
+    s.add_argument("--set", action="append", metavar="KEY=VALUE", help="override a preset parameter")
+    s.add_argument("--list", action="store_true", help="list the scenarios and their parameters")
+    s.add_argument("--out", default="sim-out")
+    s.set_defaults(func=cmd_simulate)
+    return p
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = build_parser().parse_args(argv)
+    try:
+        args.func(args)
+    except ApiError as exc:
+        print(f"gnssatt: {exc}", file=sys.stderr)
+        sys.exit(1)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,57 @@
+"""In-process API tests: a fresh SQLite data dir per test, Huey in immediate mode (jobs run inline)."""
+from __future__ import annotations
+
+import pytest
+from fastapi.testclient import TestClient
+
+from app.db import make_engine, make_sessionmaker
+from app.keys import create_key
+from app.main import create_app
+from app.settings import Settings
+from worker import runner
+from worker.main import build_runtime
+
+
+@pytest.fixture
+def settings(tmp_path):
+    return Settings(data_dir=tmp_path / "var", lease_seconds=5, heartbeat_seconds=0.5,
+                    max_upload_bytes=5 * 1024 * 1024)
+
+
+@pytest.fixture
+def api(settings, monkeypatch):
+    """(client, key) with the worker runtime in immediate mode, so a submitted job runs in the request."""
+    rt = build_runtime(settings, immediate=True, name="test-worker")
+    app = create_app(settings)
+    with TestClient(app, raise_server_exceptions=False) as client:
+        app.state.huey = rt.huey
+        with rt.Session.begin() as s:
+            key, _ = create_key(s, "team-a")
+        client.headers["Authorization"] = f"Bearer {key}"
+        client.rt = rt
+        yield client
+    runner.set_runtime(None)
+    rt.engine.dispose()
+
+
+@pytest.fixture
+def other_key(api):
+    with api.rt.Session.begin() as s:
+        key, _ = create_key(s, "team-b")
+    return key
+
+
+def stored_state(settings: Settings) -> dict:
+    """What is kept on disk and in the database: used to prove a rejected upload stored nothing."""
+    engine = make_engine(settings)
+    Session = make_sessionmaker(engine)
+    from sqlalchemy import func, select
+
+    from app.models import ObservationSet, SetFile
+    with Session() as s:
+        n_sets = s.execute(select(func.count()).select_from(ObservationSet)).scalar_one()
+        n_files = s.execute(select(func.count()).select_from(SetFile)).scalar_one()
+    engine.dispose()
+    blobs = [p for p in settings.blobs_dir.rglob("*") if p.is_file() and p.parent.name != "tmp"]
+    staging = [p for p in settings.staging_dir.rglob("*")]
+    return {"sets": n_sets, "files": n_files, "blobs": len(blobs), "staging": len(staging)}

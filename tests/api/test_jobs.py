@@ -1,0 +1,134 @@
+"""Jobs in process (Huey immediate mode): submit, validate, run, products, retries, cancel, isolation."""
+from __future__ import annotations
+
+from tests.api.test_observation_sets import _files, sample_items
+
+
+def _set(api) -> str:
+    return api.post("/v1/observation-sets", files=_files(*sample_items())).json()["id"]
+
+
+def test_job_types_list_config_schemas(api):
+    types = {t["name"]: t for t in api.get("/v1/job-types").json()}
+    assert {"inspect", "selftest"} <= set(types)
+    assert types["inspect"]["config_schema"]["properties"]["gap_factor"]["exclusiveMinimum"] == 1.0
+
+
+def test_selftest_job_runs_and_publishes_products(api):
+    set_id = _set(api)
+    resp = api.post("/v1/jobs", json={"type": "selftest", "observation_set_ids": [set_id],
+                                      "config": {"duration_s": 0.2}})
+    assert resp.status_code == 202, resp.text
+    job_id = resp.json()["id"]
+    assert resp.headers["location"] == f"/v1/jobs/{job_id}"
+    job = api.get(f"/v1/jobs/{job_id}").json()
+    assert job["state"] == "succeeded" and job["progress"] == 1.0 and job["attempts"] == 1
+    assert job["started_at"] and job["finished_at"] and job["observation_set_ids"] == [set_id]
+    products = {p["name"]: p for p in api.get(f"/v1/jobs/{job_id}/products").json()}
+    assert set(products) == {"early.json", "selftest.json"}
+    dl = api.get(f"/v1/jobs/{job_id}/products/selftest.json")
+    assert dl.status_code == 200 and dl.headers["content-type"] == "application/json"
+    assert 'filename="selftest.json"' in dl.headers["content-disposition"]
+    assert dl.json()["attempt"] == 1 and dl.json()["observation_sets"][0]["id"] == set_id
+    assert api.get(f"/v1/jobs/{job_id}/products/nope.csv").status_code == 404
+
+
+def test_unknown_type_and_bad_config_are_422_naming_the_field(api):
+    resp = api.post("/v1/jobs", json={"type": "no-such-type", "observation_set_ids": []})
+    assert resp.status_code == 422 and resp.json()["field"] == "type"
+    assert "inspect" in resp.json()["detail"]
+    resp = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": -1}})
+    assert resp.status_code == 422 and resp.json()["field"] == "config.duration_s"
+    resp = api.post("/v1/jobs", json={"type": "selftest", "config": {"bogus": 1}})
+    assert resp.status_code == 422 and resp.json()["field"] == "config.bogus"
+    resp = api.post("/v1/jobs", json={"type": "inspect", "observation_set_ids": []})
+    assert resp.status_code == 422 and resp.json()["field"] == "observation_set_ids"
+    resp = api.post("/v1/jobs", json={"type": "inspect"}, headers={"content-type": "application/json"})
+    assert resp.status_code == 422
+    resp = api.post("/v1/jobs", content=b"{not json", headers={"content-type": "application/json"})
+    assert resp.status_code == 422 and resp.headers["content-type"].startswith("application/problem+json")
+
+
+def test_retries_then_success_keeps_only_the_last_attempts_products(api):
+    resp = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0, "fail_attempts": 2}})
+    job_id = resp.json()["id"]
+    # Immediate mode runs the retries as they are scheduled; drive the queue until the job settles.
+    import time
+    from worker.runner import execute_job
+    for _ in range(3):
+        if api.get(f"/v1/jobs/{job_id}").json()["state"] == "queued":
+            execute_job(api.rt, job_id)
+        time.sleep(0.01)
+    job = api.get(f"/v1/jobs/{job_id}").json()
+    assert job["state"] == "succeeded" and job["attempts"] == 3, job
+    early = api.get(f"/v1/jobs/{job_id}/products/early.json").json()
+    assert early["attempt"] == 3
+
+
+def test_fails_after_max_attempts_with_problem_document(api):
+    job_id = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0, "fail_attempts": 99}}).json()["id"]
+    from worker.runner import execute_job
+    for _ in range(5):
+        execute_job(api.rt, job_id)
+    job = api.get(f"/v1/jobs/{job_id}").json()
+    assert job["state"] == "failed" and job["attempts"] == 3
+    assert job["error"]["status"] == 500 and "fails on purpose" in job["error"]["detail"]
+    assert api.get(f"/v1/jobs/{job_id}/products").json() == []
+
+
+def test_input_error_is_not_retried(api):
+    job_id = api.post("/v1/jobs", json={"type": "selftest", "config": {"fail_attempts": 5,
+                                                                       "fail_as_input_error": True}}).json()["id"]
+    job = api.get(f"/v1/jobs/{job_id}").json()
+    assert job["state"] == "failed" and job["attempts"] == 1
+    assert job["error"]["field"] == "config.fail_attempts" and job["error"]["status"] == 422
+
+
+def test_cancel_queued_job_and_refuse_finished(api):
+    from app.models import Job
+    job_id = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]
+    assert api.post(f"/v1/jobs/{job_id}/cancel").status_code == 409  # already succeeded
+    with api.rt.Session.begin() as s:  # a job no worker has reached yet
+        job = Job(team_id=s.get(Job, job_id).team_id, type="selftest", config={}, set_ids=[], state="queued")
+        s.add(job)
+        s.flush()
+        queued_id = job.id
+    resp = api.post(f"/v1/jobs/{queued_id}/cancel")
+    assert resp.status_code == 200 and resp.json()["state"] == "cancelled"
+    from worker.runner import execute_job
+    assert execute_job(api.rt, queued_id) is None  # a late queue message does nothing
+
+
+def test_set_in_use_cannot_be_deleted(api):
+    from app.models import Job, JobSet
+    set_id = _set(api)
+    with api.rt.Session.begin() as s:
+        team_id = s.execute(__import__("sqlalchemy").text("select team_id from observation_sets")).scalar()
+        job = Job(team_id=team_id, type="selftest", config={}, set_ids=[set_id], state="running")
+        job.sets = [JobSet(set_id=set_id, position=0)]
+        s.add(job)
+    resp = api.delete(f"/v1/observation-sets/{set_id}")
+    assert resp.status_code == 409 and resp.json()["job_id"]
+
+
+def test_job_list_filters_and_isolation(api, other_key):
+    for d in (0, 0, 0):
+        api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": d}})
+    api.post("/v1/jobs", json={"type": "selftest", "config": {"fail_attempts": 1, "fail_as_input_error": True}})
+    assert api.get("/v1/jobs", params={"state": "succeeded"}).json()["total"] == 3
+    assert api.get("/v1/jobs", params={"state": "failed"}).json()["total"] == 1
+    assert api.get("/v1/jobs", params={"type": "inspect"}).json()["total"] == 0
+    page = api.get("/v1/jobs", params={"limit": 3}).json()
+    assert page["total"] == 4 and page["next_offset"] == 3
+    assert api.get("/v1/jobs", params={"state": "bogus"}).status_code == 422
+    other = {"Authorization": f"Bearer {other_key}"}
+    assert api.get("/v1/jobs", headers=other).json()["total"] == 0
+    job_id = page["items"][0]["id"]
+    for path in (f"/v1/jobs/{job_id}", f"/v1/jobs/{job_id}/products", f"/v1/jobs/{job_id}/events"):
+        assert api.get(path, headers=other).status_code == 404
+    assert api.post(f"/v1/jobs/{job_id}/cancel", headers=other).status_code == 404
+
+
+def test_health(api):
+    assert api.get("/healthz").json() == {"status": "ok", "database": None, "queue": None}
+    assert api.get("/readyz").json()["status"] == "ok"

@@ -1,0 +1,23 @@
+"""Job type `selftest`: an operator's check of the whole job path (queue, worker, leases, progress,
+cancellation, products) without any science. It reports progress for `duration_s`, writes a product
+naming the attempt that made it, and can be told to fail its first attempts to show retries."""
+from __future__ import annotations
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from worker.jobs.registry import JobType
+
+
+class SelftestConfig(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    duration_s: float = Field(2.0, ge=0.0, le=3600.0, description="How long the job runs, reporting progress.")
+    fail_attempts: int = Field(0, ge=0, le=100, description="Fail (as an internal error) the first N attempts.")
+    fail_as_input_error: bool = Field(False, description="Fail as a user-input error instead (never retried).")
+
+
+JOB_TYPE = JobType(
+    name="selftest", title="Service self-test",
+    description="Checks the job path end to end: runs for duration_s with progress, writes selftest.json "
+                "with the attempt number; can fail its first attempts to show retries.",
+    config_model=SelftestConfig, pipeline="worker.pipelines.selftest:run", min_sets=0, max_sets=None,
+    produces=("selftest.json", "early.json"))
