@@ -30,15 +30,13 @@ Neglects: the RINEX 4 STO/EOP/ION messages, SBAS and NavIC records (skipped, cou
 """
 from __future__ import annotations
 
-import gzip
 import os
 import re
-import zlib
 from dataclasses import dataclass, field, fields
-from pathlib import Path
 
 import numpy as np
 
+from worker.gnss.io.compression import read_text_bytes
 from worker.gnss.io.errors import ParseError, ParseWarning
 from worker.gnss.time import SECONDS_PER_WEEK, GpsTime
 
@@ -79,37 +77,18 @@ _FIELD_W = 19
 
 # --- source --------------------------------------------------------------------------------------------
 
-def _fallback_read_bytes(source, name=None) -> bytes:
-    if isinstance(source, (bytes, bytearray, memoryview)):
-        data = bytes(source)
-    else:
-        data = Path(source).read_bytes()
-    if data[:2] == b"\x1f\x8b":
-        data = gzip.decompress(data)
-    return data
-
-
 def read_source_text(source, name: str | None = None) -> tuple[str, str]:
     """(decoded text, display name) of a path or bytes, decompressed by magic bytes.
 
-    Uses `worker.gnss.io.compression.read_text_bytes` (gzip, .Z, zip, Hatanaka); text is decoded as latin-1 so
-    any byte sequence decodes and the parser, not the decoder, reports what is wrong.
+    Uses `worker.gnss.io.compression.read_text_bytes` (gzip, .Z, zip, bzip2, Hatanaka; ParseError on damage).
+    Text is decoded as latin-1 so any byte sequence decodes and the parser, not the decoder, reports what is
+    wrong (with its line number).
     """
     display = name if name is not None else (
         "<bytes>" if isinstance(source, (bytes, bytearray, memoryview)) else os.path.basename(str(source)))
-    try:
-        from worker.gnss.io.compression import read_text_bytes  # noqa: PLC0415  (optional until it lands)
-    except ImportError:
-        read_text_bytes = _fallback_read_bytes
-    try:
-        data = read_text_bytes(source, name=name)
-    except ParseError:
-        raise
-    except (OSError, EOFError, zlib.error, ValueError) as exc:
-        raise ParseError(display, None, "a readable (optionally gzip/.Z/zip/Hatanaka compressed) text file",
-                         f"{type(exc).__name__}: {exc}") from None
-    if isinstance(data, str):
-        return data, display
+    if isinstance(source, (bytearray, memoryview)):
+        source = bytes(source)
+    data = read_text_bytes(source, name=display)
     return bytes(data).decode("latin-1"), display
 
 
