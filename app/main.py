@@ -47,7 +47,41 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(observation_sets.router)
     app.include_router(jobs.router)
     app.include_router(job_types.router)
+    app.openapi = lambda: _openapi_with_problems(app)  # type: ignore[method-assign]
     return app
+
+
+def _openapi_with_problems(app: FastAPI) -> dict:
+    """The generated spec, with every 4xx/5xx answer documented as application/problem+json (RFC 9457),
+    401 on every /v1 operation and 500 everywhere, as the handlers in app/problems.py answer them."""
+    if app.openapi_schema:
+        return app.openapi_schema
+    from fastapi.openapi.utils import get_openapi
+
+    from app.problems import Problem
+
+    spec = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes)
+    schemas = spec.setdefault("components", {}).setdefault("schemas", {})
+    schemas["Problem"] = Problem.model_json_schema(ref_template="#/components/schemas/{model}")
+    schemas.pop("HTTPValidationError", None)
+    schemas.pop("ValidationError", None)
+    problem = {"application/problem+json": {"schema": {"$ref": "#/components/schemas/Problem"}}}
+    for path, ops in spec.get("paths", {}).items():
+        for op in ops.values():
+            responses = op.setdefault("responses", {})
+            if path.startswith("/v1"):
+                responses.setdefault("401", {"description": "Missing or invalid API key"})
+            if op.get("parameters") or op.get("requestBody"):
+                responses.setdefault("422", {"description": "Validation error"})
+            if op.get("requestBody"):
+                responses.setdefault("400", {"description": "Malformed request body"})
+            responses.setdefault("500", {"description": "Internal error"})
+            for code, resp in responses.items():
+                if code[0] in "45":
+                    resp["content"] = problem
+                    resp["description"] = resp.get("description") or "Problem"
+    app.openapi_schema = spec
+    return spec
 
 
 def app_from_env() -> FastAPI:

@@ -177,7 +177,9 @@ def list_products(job_id: str, request: Request, team: TeamDep, session: Session
 
 
 @router.get("/{job_id}/products/{name}", response_class=FileResponse,
-            responses={**ERRORS, 200: {"content": {"application/octet-stream": {}}, "description": "The file"}},
+            responses={**ERRORS, 200: {"content": {"*/*": {"schema": {}}},
+                                       "description": "The file, with its own media type (text/csv, "
+                                                      "application/json, image/png, text/html, ...)"}},
             summary="Download one product")
 def download_product(job_id: str, name: str, request: Request, team: TeamDep, session: SessionDep):
     job = get_owned_job(session, team.id, job_id)

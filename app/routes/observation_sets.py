@@ -24,7 +24,7 @@ UPLOAD_BODY = {
         "content": {"multipart/form-data": {"schema": {
             "type": "object", "required": ["files"],
             "properties": {
-                "files": {"type": "array", "items": {"type": "string", "format": "binary"},
+                "files": {"type": "array", "items": {"type": "string", "format": "binary"}, "minItems": 1,
                           "description": "RINEX observation files (one per antenna), navigation files (RINEX "
                                          "nav and/or SP3), platform.json, optionally a reference attitude CSV; "
                                          "or one .zip / .tar.gz bundle holding them."},

@@ -1,0 +1,123 @@
+"""`make demo`: start the API and a worker in the background on the embedded default (SQLite + Huey),
+mint a key, simulate a CASSIOPE-like observation set, submit it over HTTP, wait, print the products.
+`make stop` stops what the demo started. Uses only the `gnssatt` command and HTTP."""
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import httpx
+
+from client.api import GnssattClient
+
+
+def _gnssatt(*args: str) -> list[str]:
+    return [sys.executable, "-m", "client.cli", *args]
+
+
+def _pidfile(data_dir: Path, name: str) -> Path:
+    return data_dir / "run" / f"{name}.pid"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+        return True
+    except OSError:
+        return False
+
+
+def stop(data_dir: Path) -> None:
+    stopped = 0
+    for name in ("worker", "api"):
+        pf = _pidfile(data_dir, name)
+        if not pf.exists():
+            continue
+        pid = int(pf.read_text())
+        if _alive(pid):
+            os.kill(pid, signal.SIGINT if name == "worker" else signal.SIGTERM)
+            for _ in range(100):
+                if not _alive(pid):
+                    break
+                time.sleep(0.1)
+            else:
+                os.kill(pid, signal.SIGKILL)
+            stopped += 1
+        pf.unlink(missing_ok=True)
+    print(f"stopped {stopped} process(es)" if stopped else "nothing was running")
+
+
+def _start(name: str, args: list[str], data_dir: Path, env: dict) -> int:
+    pf = _pidfile(data_dir, name)
+    if pf.exists() and _alive(int(pf.read_text())):
+        return int(pf.read_text())
+    (data_dir / "logs").mkdir(parents=True, exist_ok=True)
+    log = open(data_dir / "logs" / f"{name}.log", "ab")
+    proc = subprocess.Popen(args, env=env, stdout=log, stderr=subprocess.STDOUT, start_new_session=True)
+    pf.parent.mkdir(parents=True, exist_ok=True)
+    pf.write_text(str(proc.pid))
+    return proc.pid
+
+
+def demo(port: int, data_dir: Path, scenario: str, duration_s: float, job_type: str) -> None:
+    env = dict(os.environ, GNSSATT_DATA_DIR=str(data_dir))
+    url = f"http://127.0.0.1:{port}"
+    print(f"data directory: {data_dir}")
+    _start("api", _gnssatt("serve", "--port", str(port)), data_dir, env)
+    _start("worker", _gnssatt("worker"), data_dir, env)
+    for _ in range(300):
+        try:
+            if httpx.get(url + "/readyz", timeout=1).status_code == 200:
+                break
+        except httpx.HTTPError:
+            pass
+        time.sleep(0.1)
+    else:
+        sys.exit(f"the API did not come up; see {data_dir / 'logs' / 'api.log'}")
+    out = subprocess.run(_gnssatt("admin", "create-key", "--team", "demo"), env=env, capture_output=True,
+                         text=True, check=True)
+    key = out.stdout.strip().splitlines()[-1]
+    sample = data_dir / "demo-set"
+    print(f"simulating a {scenario} observation set ({duration_s:g} s) into {sample} ...")
+    subprocess.run(_gnssatt("simulate", "--scenario", scenario, "--duration-s", str(duration_s),
+                            "--out", str(sample)), env=env, check=True, stdout=subprocess.DEVNULL)
+    files = sorted(p for p in sample.rglob("*") if p.is_file() and "truth" not in p.relative_to(sample).parts)
+    with GnssattClient(url, key) as client:
+        obs_set = client.upload_set(files, name=f"demo {scenario}")
+        print(f"uploaded observation set {obs_set['id']} ({len(obs_set['files'])} files)")
+        job = client.submit_job(job_type, [obs_set["id"]], {})
+        print(f"submitted {job_type} job {job['id']}; waiting ...")
+        job = client.wait(job["id"])
+        if job["state"] != "succeeded":
+            sys.exit(f"job {job['id']} {job['state']}: {job.get('error')}")
+        print(f"job {job['id']} succeeded after {job['attempts']} attempt(s). Products:")
+        local = client.download_products(job["id"], data_dir / "demo-products" / job["id"])
+        for prod, path in zip(client.products(job["id"]), local):
+            print(f"  {prod['url']}\n    -> {path}")
+    print(f"\nAPI docs: {url}/docs   API key: {key}")
+    print("The service keeps running in the background. Stop it with: make stop")
+
+
+def main() -> None:
+    p = argparse.ArgumentParser()
+    p.add_argument("--port", type=int, default=8000)
+    p.add_argument("--data-dir", default="var")
+    p.add_argument("--scenario", default="earth-pointing")
+    p.add_argument("--duration-s", type=float, default=300.0)
+    p.add_argument("--job-type", default="inspect")
+    p.add_argument("--stop", action="store_true")
+    args = p.parse_args()
+    data_dir = Path(args.data_dir).resolve()
+    if args.stop:
+        stop(data_dir)
+    else:
+        demo(args.port, data_dir, args.scenario, args.duration_s, args.job_type)
+
+
+if __name__ == "__main__":
+    main()
