@@ -1,0 +1,38 @@
+"""docker/ matches the service: the compose file runs api, workers, postgres and redis with the same
+settings the README documents, and the Dockerfile copies every package the project installs.
+(No Docker engine runs here, so the images themselves are built elsewhere.)"""
+from __future__ import annotations
+
+import re
+
+import yaml
+
+from app.settings import Settings
+from tests.conftest import REPO_ROOT
+
+
+def test_compose_services_and_settings():
+    doc = yaml.safe_load((REPO_ROOT / "docker" / "compose.yaml").read_text())
+    services = doc["services"]
+    assert {"api", "worker", "postgres", "redis"} <= set(services)
+    assert services["api"]["command"][:2] == ["gnssatt", "serve"]
+    assert services["worker"]["command"][:2] == ["gnssatt", "worker"]
+    fields = {f"GNSSATT_{name.upper()}" for name in Settings.model_fields}
+    for name in ("api", "worker"):
+        env = services[name]["environment"]
+        assert set(env) <= fields, set(env) - fields
+        assert env["GNSSATT_DATABASE_URL"].startswith("postgresql+psycopg://")
+        assert env["GNSSATT_QUEUE_URL"].startswith("redis://")
+
+
+def test_dockerfile_copies_every_package():
+    text = (REPO_ROOT / "docker" / "Dockerfile").read_text()
+    copied = set(re.findall(r"^COPY (\S+) ", text, re.M))
+    for pkg in ("app", "worker", "client", "migrations", "pyproject.toml"):
+        assert pkg in copied, pkg
+
+
+def test_readme_documents_every_setting():
+    readme = (REPO_ROOT / "README.md").read_text()
+    for name in Settings.model_fields:
+        assert f"GNSSATT_{name.upper()}" in readme, name
