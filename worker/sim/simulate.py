@@ -206,7 +206,8 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
         x_r = np.einsum("nij,j->ni", R_e_b, A["R_a_b"][0])
         y_r = np.einsum("nij,j->ni", R_e_b, A["R_a_b"][1])
         w = ob.windup_cycles(e, x_r, y_r, x_s, y_s) if p.windup else np.zeros((n_ep, n_sv))
-        blocked = ob.earth_blocked(r_ant, e, rho, p.earth_block_height_km * 1e3)
+        blocked = (ob.earth_blocked(r_ant, e, rho, p.earth_block_height_km * 1e3) if p.kind == "spacecraft"
+                   else np.zeros((n_ep, n_sv), bool))   # terrestrial: the local elevation mask decides
         geo[aid] = dict(k_jump=k_jump, dtr=dtr, t_true=t_true, r_ant=r_ant, rho=rho, e=e, dt_sv=dt_sv, tau=tau,
                         range_rate=range_rate, el=el, az=az, windup=w, blocked=blocked, e_ant=e_ant)
 
