@@ -401,3 +401,44 @@ def test_ground_static_heading(tmp_path):
     assert abs(np.linalg.norm(b) - 1.0) < 2e-5
     ds = _load_obs(set_dir / "obs" / "ANT1.rnx")
     assert ds.sv.size >= 6
+
+
+def test_noise_level_of_single_differences(tmp_path):
+    """White phase noise of 3 mm per receiver gives single-difference residuals of 3 sqrt(2) = 4.2 mm."""
+    ov = {**BENIGN, "noise": True, "noise_grows_with_cn0": False, "duration_s": 120.0}
+    simulate_scenario("earth-pointing", tmp_path, seed=9, overrides=ov)
+    r = {}
+    for aid in ("GPS-2", "GPS-0"):
+        ds = _load_obs(tmp_path / "obs" / f"{aid}.rnx")
+        ph, _ = _reconstruct(tmp_path, aid, ds, "L1")
+        r[aid] = (ds["L1C"].values * ind.LAM["L1"] - ph, ds.time.values, list(ds.sv.values))
+    common = [s for s in r["GPS-2"][2] if s in r["GPS-0"][2]]
+    ta, tb = r["GPS-2"][1], r["GPS-0"][1]
+    t = np.intersect1d(ta, tb)
+    sd = (r["GPS-0"][0][np.ix_(np.searchsorted(tb, t), [r["GPS-0"][2].index(s) for s in common])]
+          - r["GPS-2"][0][np.ix_(np.searchsorted(ta, t), [r["GPS-2"][2].index(s) for s in common])])
+    sd = sd[np.isfinite(sd)]
+    assert sd.size > 500
+    assert 0.0036 < np.std(sd) < 0.0049
+    assert abs(np.mean(sd)) < 0.0006
+
+
+def test_orbit_from_sp3_and_tle(tmp_path):
+    from worker.gnss.io.sp3 import read_sp3
+
+    a = simulate_scenario("earth-pointing", tmp_path / "a", overrides={"start_gps": "2018-06-06T12:19:00",
+                                                                        "duration_s": 240.0, "truth_components": False})
+    b = simulate_scenario("earth-pointing", tmp_path / "b", overrides={
+        "duration_s": 100.0, "orbit_source": "sp3", "orbit_sp3_path": a.sets[0]["files"]["sp3"],
+        "truth_components": False})
+    sa, sb = read_sp3(a.sets[0]["files"]["sp3"]), read_sp3(b.sets[0]["files"]["sp3"])
+    ia = np.searchsorted(sa.time.s, sb.time.s)
+    np.testing.assert_allclose(sb.position_ecef_m, sa.position_ecef_m[ia], atol=3e-3)
+    tle = simulate_scenario("earth-pointing", tmp_path / "tle", overrides={
+        "start_gps": "2019-12-09T16:00:00", "duration_s": 30.0, "orbit_source": "tle", "truth_components": False,
+        "tle_line1": "1 25544U 98067A   19343.69339541  .00001764  00000-0  38792-4 0  9991",
+        "tle_line2": "2 25544  51.6439 211.2001 0007417  17.6667  85.6398 15.50103472202482"})
+    st = read_sp3(tle.sets[0]["files"]["sp3"])
+    h_km = (np.linalg.norm(st.position_ecef_m[:, 0], axis=1) - 6371e3) / 1e3
+    assert np.all((h_km > 380) & (h_km < 450))
+    assert np.all(np.abs(np.linalg.norm(st.velocity_ecef_m_s[:, 0], axis=1) - 7.2e3) < 400)

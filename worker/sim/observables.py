@@ -365,10 +365,14 @@ def build_arcs(tracked: np.ndarray, slip: np.ndarray, slip_lli: np.ndarray) -> A
 
 
 def noise_scale(cn0: np.ndarray, ref_dbhz: float, grows: bool) -> np.ndarray:
-    """Thermal-noise scale 10^((ref - C/N0)/20) (sigma ~ 1/sqrt(C/N0)), 1 where `grows` is False, capped at 10."""
+    """Thermal-noise scale 10^((ref - C/N0)/20) (sigma ~ 1/sqrt(C/N0)), 1 where `grows` is False.
+
+    Clipped to [0.5, 4]: a PLL/DLL near its tracking threshold is lost rather than noisier (the tracking
+    thresholds end the growth; 4 = 12 dB below the reference C/N0).
+    """
     if not grows:
         return np.ones_like(cn0)
-    return np.clip(10.0 ** ((ref_dbhz - np.nan_to_num(cn0, nan=ref_dbhz)) / 20.0), 0.5, 10.0)
+    return np.clip(10.0 ** ((ref_dbhz - np.nan_to_num(cn0, nan=ref_dbhz)) / 20.0), 0.5, 4.0)
 
 
 __all__ = ["antenna_frame", "pcv_grid_mm", "bilinear_pcv_mm", "gain_db", "ClockModel", "light_time_geometry",

@@ -140,51 +140,24 @@ def _com_from_ecef(earth, dt, r_e, v_e) -> CenterOfMass:
 
 
 def orbit_from_sp3_file(earth: EarthRotation, span_s, t0_gps_s: int, path: str | Path) -> CenterOfMass:
-    """Centre of mass from the first satellite of an SP3-c/d file (positions, km), Lagrange-interpolated."""
+    """Centre of mass from the first satellite of an SP3 file (worker.gnss.io.sp3 reader, degree-9 Lagrange
+    interpolation of worker.gnss.orbits.sp3_interp for position and velocity), moved to GCRF."""
+    from worker.gnss.io.sp3 import read_sp3
+    from worker.gnss.orbits.sp3_interp import interpolate_sp3, interpolate_sp3_velocity
     from worker.gnss.time import GpsTime
 
-    times, pos = [], []
-    sat = None
-    for line in Path(path).read_text().splitlines():
-        if line.startswith("*"):
-            f = line[1:].split()
-            times.append(GpsTime.from_calendar(int(f[0]), int(f[1]), int(f[2]), int(f[3]), int(f[4]), float(f[5])))
-        elif line.startswith("P") and times:
-            sid = line[1:4]
-            sat = sat or sid
-            if sid == sat:
-                pos.append([float(line[4:18]), float(line[18:32]), float(line[32:46])])
-    tt = np.array([(t - GpsTime(t0_gps_s)) for t in times])
-    P = np.asarray(pos) * 1e3
+    sp3 = read_sp3(path)
+    sat = sp3.sats[0]
     lo = np.floor(span_s[0] / _GRID_S) * _GRID_S - 2 * _GRID_S
     hi = np.ceil(span_s[1] / _GRID_S) * _GRID_S + 2 * _GRID_S
-    if tt[0] > lo or tt[-1] < hi:
-        raise ValueError(f"SP3 {path} covers {tt[0]:.0f}..{tt[-1]:.0f} s, the scenario needs {lo:.0f}..{hi:.0f} s")
     dt = np.arange(lo, hi + _GRID_S / 2, _GRID_S)
-    r_e, v_e = _lagrange(tt, P, dt)
+    t = GpsTime(t0_gps_s) + dt
+    r_e = np.asarray(interpolate_sp3(sp3, [sat], t)[0])[:, 0, :]
+    v_e = np.asarray(interpolate_sp3_velocity(sp3, [sat], t))[:, 0, :]
+    if not (np.all(np.isfinite(r_e)) and np.all(np.isfinite(v_e))):
+        raise ValueError(f"SP3 {path} does not cover the scenario span {lo:.0f}..{hi:.0f} s around the start "
+                         f"(with 5 sampling points of margin)")
     return _com_from_ecef(earth, dt, r_e, v_e)
-
-
-def _lagrange(tt, P, t, order: int = 9):
-    """Lagrange interpolation (value and derivative) of P(tt) at t with `order+1` nodes centred on each t."""
-    n = order + 1
-    idx = np.clip(np.searchsorted(tt, t) - n // 2, 0, len(tt) - n)
-    out = np.zeros((len(t), P.shape[1]))
-    der = np.zeros_like(out)
-    h = 1e-3
-    for sign, target in ((0, out), (1, der)):
-        for k, ti in enumerate(t):
-            x = tt[idx[k]: idx[k] + n]
-            y = P[idx[k]: idx[k] + n]
-
-            def L(tv):
-                acc = np.zeros(P.shape[1])
-                for j in range(n):
-                    w = np.prod([(tv - x[m]) / (x[j] - x[m]) for m in range(n) if m != j])
-                    acc += w * y[j]
-                return acc
-            target[k] = L(ti) if sign == 0 else (L(ti + h) - L(ti - h)) / (2 * h)
-    return out, der
 
 
 class Terrestrial:
