@@ -28,9 +28,9 @@ from worker.gnss.time import GpsTime
 
 __all__ = ["FrequencyPattern", "AntennaPattern", "read_antex", "write_antex", "summarize_antex"]
 
-_F_RE = re.compile(r"\s*(?:[+-]?(?:\d+\.\d*|\.\d+|\d+)|NaN|nan)\s*")
-_INT_RE = re.compile(r"\s*[+-]?\d+\s*")
-_FREQ_RE = re.compile(r"[A-Z][ 0-9]\d")
+_F_RE = re.compile(r" *(?:[+-]?(?:[0-9]+\.[0-9]*|\.[0-9]+|[0-9]+)|NaN|nan) *")
+_INT_RE = re.compile(r" *[+-]?[0-9]+ *")
+_FREQ_RE = re.compile(r"[A-Z][ 0-9][0-9]")
 
 
 def _arr_eq(a, b) -> bool:

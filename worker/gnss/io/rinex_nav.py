@@ -70,8 +70,8 @@ MAX_AGE_S = {"G": 7200.0, "J": 7200.0, "E": 14400.0, "C": 21600.0, "R": 1800.0}
 
 # One D19.12 field as RINEX writes it: sign, mantissa, exponent with 2-3 digits (a field cut short by a column
 # shift ends in a one-digit exponent and is refused rather than misread).
-_NUM_RE = re.compile(r"\s*[+-]?(?:\d+\.\d*|\.\d+|\d+)(?:[EeDd][+-]?\d{2,3})?\s*")
-_INT_RE = re.compile(r"\s*\d+\s*")
+_NUM_RE = re.compile(r" *[+-]?(?:[0-9]+\.[0-9]*|\.[0-9]+|[0-9]+)(?:[EeDd][+-]?[0-9]{2,3})? *")
+_INT_RE = re.compile(r" *[0-9]+ *")
 _FIELD_W = 19
 
 

@@ -38,9 +38,9 @@ __all__ = ["Sp3Data", "read_sp3", "summarize_sp3", "BAD_CLOCK_US"]
 #: Clock value that means "bad or absent" (microseconds; SP3-c/d sec. "Bad or absent values").
 BAD_CLOCK_US = 999999.0
 
-_F_RE = re.compile(r"\s*[+-]?(?:\d+\.\d*|\.\d+)\s*")   # F14.6 (a decimal point is required)
-_INT_RE = re.compile(r"\s*\d+\s*")
-_SAT_RE = re.compile(r"[A-Z][ 0-9]\d|[ ]{2}\d|[ ][ 0-9]\d")
+_F_RE = re.compile(r" *[+-]?(?:[0-9]+\.[0-9]*|\.[0-9]+) *")   # F14.6 (a decimal point is required)
+_INT_RE = re.compile(r" *[0-9]+ *")
+_SAT_RE = re.compile(r"[A-Z][ 0-9][0-9]|[ ]{2}[0-9]|[ ][ 0-9][0-9]")
 
 
 @dataclass
