@@ -365,7 +365,7 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
         if p.truth_components:
             comp_files[aid] = _write_components(set_dir / "truth" / f"observations_{aid}.csv", tags, const.sats,
                                                 G, comp, tracked, sigs, gap)
-    progress(0.92, "orbit, attitude and truth files")
+    progress(0.92, "files (nav, SP3, attitude, truth)")
 
     # --- nav ---
     recs = const.records(tags[0], tags[-1])
