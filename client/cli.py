@@ -145,11 +145,14 @@ def cmd_simulate(args) -> None:
             overrides[key] = value
     if args.duration_s is not None:
         overrides["duration_s"] = args.duration_s
-    count = args.count or 1
-    for k in range(count):
-        out = Path(args.out) if count == 1 else Path(args.out) / f"set-{k:04d}"
-        simulate_scenario(args.scenario, out, seed=args.seed + k, overrides=overrides)
-        print(out)
+    if args.count is not None:
+        overrides["count"] = args.count
+    try:
+        result = simulate_scenario(args.scenario, Path(args.out), seed=args.seed, overrides=overrides)
+    except ValueError as exc:
+        sys.exit(f"gnssatt simulate: {exc}")
+    for entry in result.sets:
+        print(entry["dir"])
 
 
 def build_parser() -> argparse.ArgumentParser:

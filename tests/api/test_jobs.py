@@ -132,3 +132,36 @@ def test_job_list_filters_and_isolation(api, other_key):
 def test_health(api):
     assert api.get("/healthz").json() == {"status": "ok", "database": None, "queue": None}
     assert api.get("/readyz").json()["status"] == "ok"
+
+
+def test_simulate_job_writes_a_set_that_uploads_back(api):
+    import io
+    import zipfile
+    resp = api.post("/v1/jobs", json={"type": "simulate", "config": {"scenario": "earth-pointing", "seed": 3,
+                                                                      "overrides": {"duration_s": 60}}})
+    assert resp.status_code == 202, resp.text
+    job = api.get(f"/v1/jobs/{resp.json()['id']}").json()
+    assert job["state"] == "succeeded", job
+    bundle = api.get(f"/v1/jobs/{job['id']}/products/simulated_set.zip")
+    assert bundle.headers["content-type"] == "application/zip"
+    names = zipfile.ZipFile(io.BytesIO(bundle.content)).namelist()
+    assert {"obs/GPS-2.rnx", "obs/GPS-0.rnx", "obs/GPS-1.rnx", "nav/brdc.rnx", "platform.json",
+            "truth/attitude.csv"} <= set(names)
+    # the simulated set is a valid observation set (without its truth folder)
+    buf = io.BytesIO()
+    with zipfile.ZipFile(io.BytesIO(bundle.content)) as src, zipfile.ZipFile(buf, "w") as dst:
+        for n in src.namelist():
+            if not n.startswith("truth/"):
+                dst.writestr(n, src.read(n))
+    up = api.post("/v1/observation-sets", files=[("files", ("sim.zip", buf.getvalue(), "application/zip"))])
+    assert up.status_code == 201, up.text
+    assert up.json()["summary"]["antennas"] == {"GPS-2": "obs/GPS-2.rnx", "GPS-0": "obs/GPS-0.rnx",
+                                               "GPS-1": "obs/GPS-1.rnx"}
+
+
+def test_simulate_job_refuses_unknown_scenario_and_override(api):
+    resp = api.post("/v1/jobs", json={"type": "simulate", "config": {"scenario": "moon-landing"}})
+    assert resp.status_code == 422 and resp.json()["field"] == "config.scenario"
+    job_id = api.post("/v1/jobs", json={"type": "simulate", "config": {"overrides": {"no_such_knob": 1}}}).json()["id"]
+    job = api.get(f"/v1/jobs/{job_id}").json()
+    assert job["state"] == "failed" and job["attempts"] == 1 and "no_such_knob" in job["error"]["detail"]
