@@ -17,7 +17,7 @@ def test_simulate_writes_a_set_and_takes_overrides(tmp_path):
                   "--set", "interval_s=2", "--out", str(tmp_path / "s"))
     assert out.returncode == 0, out.stderr
     obs = sorted((tmp_path / "s" / "obs").glob("*.rnx"))
-    assert [p.name for p in obs] == ["ANT-A.rnx", "ANT-B.rnx"]
+    assert [p.name for p in obs] == ["ANT-A.rnx", "ANT-B.rnx", "ANT-C.rnx"]
     assert "     2.000" in obs[0].read_text().split("END OF HEADER")[0]  # INTERVAL overridden
     again = gnssatt("simulate", "--scenario", "cubesat", "--duration-s", "20", "--seed", "7",
                     "--set", "interval_s=2", "--out", str(tmp_path / "t"))
