@@ -274,3 +274,22 @@ def test_real_nav_summary():
     assert s["version"] == 2.1 and s["systems"] == ["G"] and s["n_records"] == {"G": 194}
     assert s["time_span_gps"][0].startswith("2010-03-17T23:00") and s["time_span_gps"][1].startswith("2010-03-19")
     assert s["has_klobuchar"] and s["leap_seconds"] == 15
+
+
+def test_rinex2_glonass_file_utc_epochs():
+    """RINEX 2 'G' file: epochs in UTC, converted with the leap seconds of the epoch's date (14 s in 2007)."""
+    from tests.gnss.test_rinex_nav_builders import header_line
+    hdr = "\n".join([header_line("     2.01           G: GLONASS NAV DATA", "RINEX VERSION / TYPE"),
+                     header_line("gnssatt-test", "PGM / RUN BY / DATE"),
+                     header_line("    14", "LEAP SECONDS"), header_line("", "END OF HEADER")]) + "\n"
+    v = [d19(x, "D") for x in GLO_VALUES]
+    rec = "\n".join([" 3 07  3 21  0 15  0.0" + "".join(v[0:3])] +
+                    ["   " + "".join(v[k:k + 4]) for k in (3, 7, 11)]) + "\n"
+    nav = read_rinex_nav(_b(hdr + rec), name="g.07g")
+    g = nav.glonass
+    assert g.sat.tolist() == ["R03"] and g.toc.iso(0) == ["2007-03-21T00:15:14"] and g.leap_s.tolist() == [14]
+    assert g.position_m[0, 2] == GLO_VALUES[11] * 1e3 and nav.kepler == {}
+    wrong = hdr.replace("    14", "    13")
+    nav2 = read_rinex_nav(_b(wrong + rec), name="g.07g")
+    assert nav2.glonass.toc.iso(0) == ["2007-03-21T00:15:14"]
+    assert any(w.code == "LEAP_SECONDS_MISMATCH" for w in nav2.warnings)
