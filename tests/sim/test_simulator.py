@@ -442,3 +442,22 @@ def test_orbit_from_sp3_and_tle(tmp_path):
     h_km = (np.linalg.norm(st.position_ecef_m[:, 0], axis=1) - 6371e3) / 1e3
     assert np.all((h_km > 380) & (h_km < 450))
     assert np.all(np.abs(np.linalg.norm(st.velocity_ecef_m_s[:, 0], axis=1) - 7.2e3) < 400)
+
+
+def test_hard_pass_lli_survives_gaps(hard_set):
+    """Every flagged arc start is flagged in the file, at its first written epoch (after a gap if need be)."""
+    set_dir, _ = hard_set
+    arcs = [a for a in ind.read_csv(set_dir / "truth" / "arcs.csv") if a["antenna"] == "GPS-1"
+            and a["signal"] == "L1"]
+    ds = _load_obs(set_dir / "obs" / "GPS-1.rnx")
+    iso = _times_iso(ds)
+    lli = np.nan_to_num(ds["L1Clli"].values, nan=0)
+    L = ds["L1C"].values
+    sv = list(ds.sv.values)
+    for a in arcs:
+        j = sv.index(a["sat"])
+        in_arc = np.nonzero((iso >= a["start_time_gps"]) & (iso <= a["end_time_gps"]) & np.isfinite(L[:, j]))[0]
+        if len(in_arc) == 0:
+            continue
+        assert lli[in_arc[0], j] == (1 if a["lli"] == "1" else 0)
+        assert np.all(lli[in_arc[1:], j] == 0)

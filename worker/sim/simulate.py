@@ -22,7 +22,7 @@ from worker.gnss.time import GpsTime
 from worker.sim import _rot
 from worker.sim import observables as ob
 from worker.sim._constants import C_M_S, F_L1_HZ, F_L2_HZ, GAMMA_L2, LEAP_TABLE_EXPIRES
-from worker.sim._frames import EarthRotation, geodetic_from_ecef
+from worker.sim._frames import EarthRotation
 from worker.sim._rinex_obs_out import write_obs
 from worker.sim.constellation import synthetic_gps
 from worker.sim.scenarios import SimParams, list_scenarios, make_params
@@ -318,10 +318,13 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
             dop = -(G["range_rate"] + np.gradient(pco_term + pcv_term + lam_f * G["windup"], p.interval_s, axis=0)
                     + atm_rate[f]) / lam_f + n_dop
             lli = np.zeros((n_ep, n_sv), np.int64)
-            starts_lli = [(a, s) for s, a, fl in zip(arcs.sat, arcs.start, arcs.lli) if fl]
-            if starts_lli:
-                aa, ss_ = np.array(starts_lli).T
-                lli[aa, ss_] = 1
+            for s, a, b, fl in zip(arcs.sat, arcs.start, arcs.end, arcs.lli):
+                if fl:   # an arc starting inside a data gap flags its first epoch in the file
+                    k = a
+                    while k <= b and gap[k]:
+                        k += 1
+                    if k <= b:
+                        lli[k, s] = 1
             cn0_w = np.round(cn0[f], 1)
             ssi = np.clip(np.floor(np.nan_to_num(cn0_w, nan=0) / 6.0), 1, 9).astype(np.int64)
             ok = trk
@@ -343,7 +346,6 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
         vals[gap] = np.nan
         lli_a = np.stack(llis, axis=-1)
         ssi_a = np.stack(ssis, axis=-1)
-        # an epoch in a gap loses its LLI: move it to the next written epoch of the same arc
         obs_path = set_dir / "obs" / f"{aid}.rnx"
         approx = r_com_nom[0] + R_e_b_nom[0] @ A["pos"]
         write_obs(obs_path, marker=aid, obs_types=types, epochs=tags, sats=const.sats, values=vals, lli=lli_a,
@@ -357,10 +359,6 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
         summary["antennas"][aid] = {"signals": ant_sum, "gap_epochs": int(gap.sum()),
                                     "outage_epochs": int(outage.sum()),
                                     "clock_jumps": int(np.count_nonzero(np.diff(G["k_jump"])))}
-        # truth per antenna per epoch
-        week, sow = tags.week_sow()
-        for k in range(n_ep):
-            pass
         truth_rows.append((aid, G, gap))
         if p.truth_components:
             comp_files[aid] = _write_components(set_dir / "truth" / f"observations_{aid}.csv", tags, const.sats,
