@@ -5,7 +5,8 @@ Float64 seconds since 1980 resolve only about 0.24 us, which a LEO range rate of
 
 Implements: GPS time scale and week numbering of IS-GPS-200 sec. 20.3.3.5.2.4 (continuous week count,
 no 1024 roll-over here); proleptic Gregorian calendar via the days-from-civil algorithm (H. Hinnant).
-Neglects: leap seconds (GPS time has none); UTC conversion lives with the leap-second table.
+Neglects: leap seconds (GPS time has none); UTC conversion lives with the leap-second table
+(worker.gnss.leap_seconds), used by `to_jd_utc` / `to_jd_ut1`. TT / TAI / BDT / GST are fixed offsets.
 """
 from __future__ import annotations
 
@@ -15,6 +16,14 @@ SECONDS_PER_DAY = 86400
 SECONDS_PER_WEEK = 604800
 # Days from 1970-01-01 to the GPS epoch 1980-01-06.
 _GPS_EPOCH_UNIX_DAYS = 3657
+# Julian date of the GPS epoch, and the fixed offsets of TAI / TT / BDT / GST from GPS time.
+JD_GPS_EPOCH = 2444244.5
+TAI_MINUS_GPS_S = 19.0  # IS-GPS-200 sec. 3.3.4
+TT_MINUS_GPS_S = 51.184  # TT = TAI + 32.184 s (IAU 2000 B1.9)
+BDT_MINUS_GPST_S = -14.0  # BDS ICD B1I v3.0 sec. 4.1.2
+BDT_WEEK_OFFSET = 1356  # GPS week of the BDT epoch
+GST_MINUS_GPST_S = 0.0  # Galileo OS SIS ICD 5.1.2 (GGTO neglected)
+GST_WEEK_OFFSET = 1024  # GPS week of the GST epoch (1999-08-22)
 
 
 def days_from_civil(year, month, day) -> np.ndarray:
@@ -163,3 +172,79 @@ class GpsTime:
 
     def __repr__(self) -> str:
         return f"GpsTime({self.iso(6)!r})"
+
+    # --- other time scales (two-part Julian dates for ERFA) ---------------------------------------
+    def _jd_with_offset(self, offset_s) -> tuple[np.ndarray, np.ndarray]:
+        days = np.floor_divide(self.s, SECONDS_PER_DAY)
+        sod = (self.s - days * SECONDS_PER_DAY).astype(np.float64)
+        jd1 = JD_GPS_EPOCH + days.astype(np.float64)
+        jd2 = (sod + (self.frac + np.asarray(offset_s, dtype=np.float64))) / SECONDS_PER_DAY
+        return jd1, jd2
+
+    def to_jd_gps(self) -> tuple[np.ndarray, np.ndarray]:
+        """(jd1, jd2): two-part Julian date in the GPS time scale; jd1 = JD of 0h of the GPS day."""
+        return self._jd_with_offset(0.0)
+
+    def to_jd_tai(self) -> tuple[np.ndarray, np.ndarray]:
+        """(jd1, jd2): two-part Julian date in TAI (TAI = GPS + 19 s, IS-GPS-200 sec. 3.3.4)."""
+        return self._jd_with_offset(TAI_MINUS_GPS_S)
+
+    def to_jd_tt(self) -> tuple[np.ndarray, np.ndarray]:
+        """(jd1, jd2): two-part Julian date in TT for ERFA (TT = TAI + 32.184 s = GPS + 51.184 s).
+
+        jd1 is the JD of 0h of the GPS day (an integer + 0.5), jd2 the TT fraction (may exceed 1 a little),
+        so the sum keeps ~1e-11 day (1 us) and each part is exact to the ERFA two-part convention.
+        """
+        return self._jd_with_offset(TT_MINUS_GPS_S)
+
+    def to_jd_utc(self) -> tuple[np.ndarray, np.ndarray]:
+        """(jd1, jd2): ERFA quasi Julian date in UTC (a leap-second day has 86401 s), via erfa.dtf2d.
+
+        Implements: UTC = GPS - (GPS - UTC) with worker.gnss.leap_seconds (IERS Bulletin C), then the
+        SOFA/ERFA UTC quasi-JD convention of iauDtf2d.
+        """
+        import erfa
+
+        from worker.gnss.leap_seconds import gps_to_utc
+
+        y, mo, d, hh, mi, ss = gps_to_utc(self)
+        return erfa.dtf2d("UTC", y.astype(np.int32), mo.astype(np.int32), d.astype(np.int32),
+                          hh.astype(np.int32), mi.astype(np.int32), ss)
+
+    def to_jd_ut1(self, ut1_minus_utc_s=0.0) -> tuple[np.ndarray, np.ndarray]:
+        """(jd1, jd2): two-part Julian date in UT1 = UTC + (UT1 - UTC) [s], UTC from the leap-second table.
+
+        Computed as UT1 = GPS - (GPS - UTC) + (UT1 - UTC), a continuous scale (no quasi-JD).
+        """
+        from worker.gnss.leap_seconds import gps_minus_utc_s
+
+        return self._jd_with_offset(np.asarray(ut1_minus_utc_s, dtype=np.float64) - gps_minus_utc_s(self))
+
+    # --- BeiDou and Galileo system times ----------------------------------------------------------
+    @classmethod
+    def from_bdt_week_sow(cls, week, sow) -> "GpsTime":
+        """GPS time of a BeiDou Time week and seconds of week (BDT = GPST - 14 s; BDT week 0 = GPS week 1356).
+
+        Implements: BDS ICD B1I v3.0 sec. 4.1.2 (BDT epoch 2006-01-01T00:00:00 UTC).
+        """
+        return cls.from_week_sow(np.asarray(week, dtype=np.int64) + BDT_WEEK_OFFSET, sow) + (-BDT_MINUS_GPST_S)
+
+    def bdt_week_sow(self) -> tuple[np.ndarray, np.ndarray]:
+        """(BDT week, BDT seconds of week) of these GPS times."""
+        week, sow = (self + BDT_MINUS_GPST_S).week_sow()
+        return week - BDT_WEEK_OFFSET, sow
+
+    @classmethod
+    def from_gst_week_sow(cls, week, sow) -> "GpsTime":
+        """GPS time of a Galileo System Time week (GST week 0 = GPS week 1024) and seconds of week.
+
+        Implements: Galileo OS SIS ICD 2.1 sec. 5.1.2. Neglects: GGTO (GST - GPST, a few ns, broadcast).
+        Note: RINEX 3/4 navigation files write the Galileo week already aligned to GPS weeks; use
+        `from_week_sow` for those.
+        """
+        return cls.from_week_sow(np.asarray(week, dtype=np.int64) + GST_WEEK_OFFSET, sow)
+
+    def gst_week_sow(self) -> tuple[np.ndarray, np.ndarray]:
+        """(GST week, GST seconds of week) of these GPS times (GGTO neglected)."""
+        week, sow = self.week_sow()
+        return week - GST_WEEK_OFFSET, sow
