@@ -65,6 +65,7 @@ class JobContext:
     workdir: Path
     _store_blob: Callable[[Path], tuple[str, int]]
     _flush_progress: Callable[[float, str | None], None] | None = None
+    _map: Callable[..., list] | None = None
     progress_interval_s: float = 0.3
     products: dict[str, ProductRecord] = field(default_factory=dict)
     fraction: float = 0.0
@@ -95,6 +96,16 @@ class JobContext:
 
     def log(self, message: str) -> None:
         self.log_lines.append(f"{time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())} {message}")
+
+    # --- fan-out ---------------------------------------------------------------------------------
+    def map(self, function: str, payloads: list[dict], *, progress_span: tuple[float, float] = (0.0, 0.9),
+            stage: str = "tasks") -> list:
+        """Run `function(payload, sets) -> result` ("module:function") for every payload on any worker
+        (this one included) and return the results in payload order. Progress counts finished tasks."""
+        if self._map is None:
+            from worker.fanout import run_locally
+            return run_locally(self, function, payloads, progress_span, stage)
+        return self._map(function, payloads, progress_span, stage)
 
     # --- products --------------------------------------------------------------------------------
     def write_product(self, name: str, data: bytes | str | dict | list | Path,

@@ -10,6 +10,7 @@ from huey import Huey, RedisHuey, SqliteHuey
 from app.settings import Settings
 
 TASK_NAME = "gnssatt.run_job"
+TASK_NAME_FANOUT = "gnssatt.run_task"
 
 
 def make_huey(settings: Settings, *, immediate: bool = False) -> Huey:
@@ -26,7 +27,13 @@ def make_huey(settings: Settings, *, immediate: bool = False) -> Huey:
         from worker.runner import run_claimed_job_message
         run_claimed_job_message(job_id)
 
+    @huey.task(name=TASK_NAME_FANOUT)
+    def run_task(task_id: str) -> None:
+        from worker.fanout import run_task_message
+        run_task_message(task_id)
+
     huey.run_job = run_job  # type: ignore[attr-defined]
+    huey.run_task = run_task  # type: ignore[attr-defined]
     return huey
 
 
@@ -36,6 +43,11 @@ def enqueue(huey: Huey, job_id: str, delay_s: float | None = None) -> None:
         huey.run_job.schedule((job_id,), delay=delay_s)  # type: ignore[attr-defined]
     else:
         huey.run_job(job_id)  # type: ignore[attr-defined]
+
+
+def enqueue_task(huey: Huey, task_id: str) -> None:
+    """Ring the doorbell for one fan-out task (see worker/fanout.py)."""
+    huey.run_task(task_id)  # type: ignore[attr-defined]
 
 
 def queue_reachable(huey: Huey) -> bool:

@@ -185,8 +185,11 @@ def execute_job(rt: Runtime, job_id: str) -> str | None:
             s2.execute(update(Job).where(Job.id == job_id, Job.lease_owner == token)
                        .values(progress=fraction, stage=stage).execution_options(synchronize_session=False))
 
+    from worker.fanout import gather
+
     ctx = JobContext(job_id=job_id, attempt=attempt, sets=[], workdir=workdir,
                      _store_blob=lambda p: rt.blobs.put_file(p), _flush_progress=flush)
+    ctx._map = lambda function, payloads, span, stage: gather(rt, ctx, function, payloads, span, stage)
     beat = Heartbeat(rt, job_id, token, ctx)
     beat.start()
     log.info("job %s (%s) attempt %d claimed by %s", job_id, job_type, attempt, token)
@@ -269,6 +272,8 @@ def reap(rt: Runtime) -> dict[str, int]:
             counts["rerung"] += 1
     for job_id in to_enqueue:
         enqueue(rt.huey, job_id)
+    from worker.fanout import reap_tasks
+    counts["tasks_requeued"] = reap_tasks(rt)
     if any(counts.values()):
         log.info("reaper: %s", counts)
     return counts

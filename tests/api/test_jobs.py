@@ -165,3 +165,13 @@ def test_simulate_job_refuses_unknown_scenario_and_override(api):
     job_id = api.post("/v1/jobs", json={"type": "simulate", "config": {"overrides": {"no_such_knob": 1}}}).json()["id"]
     job = api.get(f"/v1/jobs/{job_id}").json()
     assert job["state"] == "failed" and job["attempts"] == 1 and "no_such_knob" in job["error"]["detail"]
+
+
+def test_fan_out_runs_every_task_once_on_a_single_worker(api):
+    """Immediate mode, one process: the parent job runs its own tasks while it waits (no deadlock)."""
+    job_id = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0, "fan_out": 5,
+                                                                       "task_seconds": 0}}).json()["id"]
+    job = api.get(f"/v1/jobs/{job_id}").json()
+    assert job["state"] == "succeeded", job
+    tasks = api.get(f"/v1/jobs/{job_id}/products/selftest.json").json()["tasks"]
+    assert [t["square"] for t in tasks] == [0, 1, 4, 9, 16]

@@ -178,3 +178,21 @@ def test_processes_starting_at_once_share_one_migrated_database(service):
             done = _wait_job(c, job["id"])
             assert done["state"] == "succeeded" and done["attempts"] == 1
     assert all(w.poll() is None for w in service.workers), service.logs_text()
+
+
+def test_fan_out_spreads_over_workers_and_survives_a_killed_one(service):
+    service.start_api()
+    first = service.start_worker()
+    service.start_worker()
+    key = service.create_key("ops")
+    with service.client(key) as c:
+        job = c.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0, "fan_out": 12,
+                                                                      "task_seconds": 0.6}}).json()
+        wait_for(lambda: c.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.6, 60, what="fan-out under way")
+        service.kill_worker(first)  # whatever it held (the parent or a task) comes back after its lease
+        service.start_worker()
+        done = _wait_job(c, job["id"], timeout_s=90)
+        assert done["state"] == "succeeded", (done, service.logs_text())
+        tasks = c.get(f"/v1/jobs/{job['id']}/products/selftest.json").json()["tasks"]
+        assert [t["square"] for t in tasks] == [n * n for n in range(12)]
+        assert len({t["worker"] for t in tasks}) >= 2, tasks  # the work was shared

@@ -13,6 +13,8 @@ class SelftestConfig(BaseModel):
     duration_s: float = Field(2.0, ge=0.0, le=3600.0, description="How long the job runs, reporting progress.")
     fail_attempts: int = Field(0, ge=0, le=100, description="Fail (as an internal error) the first N attempts.")
     fail_as_input_error: bool = Field(False, description="Fail as a user-input error instead (never retried).")
+    fan_out: int = Field(0, ge=0, le=1000, description="Split into this many tasks that any worker may run.")
+    task_seconds: float = Field(0.2, ge=0.0, le=600.0, description="How long each fanned-out task works.")
 
 
 JOB_TYPE = JobType(

@@ -21,8 +21,20 @@ def run(ctx: JobContext, config) -> None:
     for k in range(steps):
         ctx.progress(k / steps, f"step {k + 1} of {steps}")
         time.sleep(config.duration_s / steps)
+    tasks = []
+    if config.fan_out:
+        tasks = ctx.map("worker.pipelines.selftest:square_task",
+                        [{"n": i, "seconds": config.task_seconds, "label": f"n={i}"} for i in range(config.fan_out)],
+                        progress_span=(0.5, 0.95), stage="fan-out")
     ctx.write_product("selftest.json", {
+        "tasks": tasks,
         "attempt": ctx.attempt, "host": socket.gethostname(), "pid": os.getpid(),
         "elapsed_s": round(time.monotonic() - start, 3),
         "observation_sets": [{"id": s.id, "files": [f.name for f in s.files]} for s in ctx.sets]})
     ctx.progress(1.0, "done")
+
+
+def square_task(payload: dict, sets) -> dict:
+    """A fan-out task: works for payload['seconds'] and reports which worker process ran it."""
+    time.sleep(float(payload.get("seconds", 0.0)))
+    return {"n": payload["n"], "square": payload["n"] ** 2, "worker": f"{socket.gethostname()}:{os.getpid()}"}

@@ -1,0 +1,219 @@
+"""Fan-out: split one job into tasks that any worker may run, and gather their results.
+
+`ctx.map(function, payloads)` inserts one `job_tasks` row per payload and rings the queue for each. Every
+worker's consumer claims task rows with the same lease discipline as jobs (conditional UPDATE, heartbeat,
+reaper). The parent's own worker does not sit idle while it waits: it claims and runs pending tasks of its
+job itself, so one worker alone finishes the job, and N workers share it. Task functions are pure
+(`function(payload, sets) -> dict`); results are pickled into the content-addressed blob store, so a
+repeated task (its worker died) just overwrites an identical result, and a retried parent job reuses the
+results its earlier attempt already has.
+"""
+from __future__ import annotations
+
+import importlib
+import logging
+import pickle
+import threading
+import time
+import traceback
+import uuid
+from datetime import timedelta
+from typing import Any, Callable
+
+from sqlalchemy import func, select, update
+from sqlalchemy.dialects.postgresql import insert as pg_insert
+from sqlalchemy.dialects.sqlite import insert as sqlite_insert
+
+from app.models import Job, JobTask, utcnow
+from worker.context import InputSet
+
+log = logging.getLogger("gnssatt.fanout")
+
+
+class TaskFailed(RuntimeError):
+    pass
+
+
+def _load(function: str) -> Callable[[dict, list[InputSet]], Any]:
+    module_name, _, func_name = function.partition(":")
+    return getattr(importlib.import_module(module_name), func_name)
+
+
+def create_tasks(rt, job_id: str, function: str, payloads: list[dict]) -> None:
+    """Insert the task rows of a job (idempotent: rows of an earlier attempt are kept with their results)."""
+    rows = [{"id": uuid.uuid4().hex, "job_id": job_id, "idx": i, "function": function, "payload": p,
+             "state": "pending", "attempts": 0} for i, p in enumerate(payloads)]
+    insert = pg_insert if rt.engine.dialect.name == "postgresql" else sqlite_insert
+    with rt.Session.begin() as s:
+        if rows:
+            s.execute(insert(JobTask).values(rows).on_conflict_do_nothing(index_elements=["job_id", "idx"]))
+        # tasks that failed in an earlier attempt of the parent get a fresh start
+        s.execute(update(JobTask).where(JobTask.job_id == job_id, JobTask.state == "failed")
+                  .values(state="pending", attempts=0, error=None).execution_options(synchronize_session=False))
+
+
+def ring(rt, job_id: str) -> None:
+    from worker.queue import enqueue_task
+
+    with rt.Session() as s:
+        ids = s.execute(select(JobTask.id).where(JobTask.job_id == job_id, JobTask.state == "pending")).scalars().all()
+    for task_id in ids:
+        enqueue_task(rt.huey, task_id)
+
+
+def claim_task(rt, task_id: str | None = None, job_id: str | None = None) -> tuple[str, str] | None:
+    """Claim one pending task (a given one, or any of a job's); returns (task id, lease token) or None."""
+    token = f"{rt.worker_name}/{uuid.uuid4().hex[:8]}"
+    for _ in range(5):
+        with rt.Session() as s:
+            if task_id is None:
+                task_id_try = s.execute(select(JobTask.id).where(JobTask.job_id == job_id, JobTask.state == "pending")
+                                        .order_by(JobTask.idx).limit(1)).scalar_one_or_none()
+                if task_id_try is None:
+                    return None
+            else:
+                task_id_try = task_id
+        with rt.Session.begin() as s:
+            res = s.execute(update(JobTask).where(JobTask.id == task_id_try, JobTask.state == "pending")
+                            .values(state="running", attempts=JobTask.attempts + 1, lease_owner=token,
+                                    worker=rt.worker_name, started_at=utcnow(),
+                                    lease_expires_at=utcnow() + timedelta(seconds=rt.settings.lease_seconds))
+                            .execution_options(synchronize_session=False))
+        if res.rowcount == 1:
+            return task_id_try, token
+        if task_id is not None:
+            return None
+    return None
+
+
+def run_task(rt, task_id: str, token: str, sets: list[InputSet] | None = None) -> bool:
+    """Run a claimed task; True when its result was stored."""
+    from worker.runner import load_inputs
+
+    with rt.Session() as s:
+        task = s.get(JobTask, task_id)
+        function, payload, job_id, attempts = task.function, dict(task.payload), task.job_id, task.attempts
+        parent = s.get(Job, job_id)
+        max_attempts = parent.max_attempts if parent else 3
+        if parent is None or parent.cancel_requested or parent.state in ("failed", "cancelled"):
+            s.close()
+            _settle(rt, task_id, token, state="cancelled")
+            return False
+    stop = threading.Event()
+
+    def beat():
+        while not stop.wait(rt.settings.heartbeat_seconds):
+            try:
+                with rt.Session.begin() as s2:
+                    s2.execute(update(JobTask).where(JobTask.id == task_id, JobTask.lease_owner == token)
+                               .values(lease_expires_at=utcnow() + timedelta(seconds=rt.settings.lease_seconds))
+                               .execution_options(synchronize_session=False))
+            except Exception:  # noqa: BLE001 - next beat
+                log.warning("task heartbeat failed", exc_info=True)
+
+    thread = threading.Thread(target=beat, daemon=True, name=f"task-{task_id[:8]}")
+    thread.start()
+    t0 = time.monotonic()
+    try:
+        if sets is None:
+            sets = load_inputs(rt, job_id)
+        result = _load(function)(payload, sets)
+        sha, _ = rt.blobs.put_bytes(pickle.dumps(result, protocol=5))
+        ok = _settle(rt, task_id, token, state="done", result_sha256=sha)
+        log.info("task %s of job %s (#%s) done by %s in %.2f s", task_id[:8], job_id[:8], payload.get("label", ""),
+                 rt.worker_name, time.monotonic() - t0)
+        return ok
+    except Exception as exc:  # noqa: BLE001 - the task's failure is recorded, the parent decides
+        text = f"{type(exc).__name__}: {exc}\n" + "".join(traceback.format_exception(exc))[-3000:]
+        _settle(rt, task_id, token, state="failed" if attempts >= max_attempts else "pending", error=text)
+        log.warning("task %s of job %s failed (attempt %d): %s", task_id[:8], job_id[:8], attempts, exc)
+        return False
+    finally:
+        stop.set()
+        thread.join(timeout=5)
+
+
+def _settle(rt, task_id: str, token: str, **values) -> bool:
+    with rt.Session.begin() as s:
+        res = s.execute(update(JobTask).where(JobTask.id == task_id, JobTask.lease_owner == token)
+                        .values(lease_owner=None, lease_expires_at=None, finished_at=utcnow(), **values)
+                        .execution_options(synchronize_session=False))
+        return res.rowcount == 1
+
+
+def run_task_message(task_id: str) -> None:
+    """Queue entry point: claim and run one task if it is still pending."""
+    from worker.runner import get_runtime
+
+    rt = get_runtime()
+    claimed = claim_task(rt, task_id=task_id)
+    if claimed is not None:
+        run_task(rt, *claimed)
+
+
+def gather(rt, ctx, function: str, payloads: list[dict], progress_span: tuple[float, float],
+           stage: str) -> list[Any]:
+    """Create, share, help run and wait for all tasks of this job; returns their results in payload order."""
+    job_id = ctx.job_id
+    create_tasks(rt, job_id, function, payloads)
+    ring(rt, job_id)
+    lo, hi = progress_span
+    n = len(payloads)
+    while True:
+        ctx.check()
+        with rt.Session() as s:
+            counts = dict(s.execute(select(JobTask.state, func.count()).where(JobTask.job_id == job_id)
+                                    .group_by(JobTask.state)).all())
+        done = counts.get("done", 0)
+        ctx.progress(lo + (hi - lo) * done / max(n, 1), f"{stage}: {done}/{n} done")
+        if counts.get("failed"):
+            with rt.Session() as s:
+                bad = s.execute(select(JobTask).where(JobTask.job_id == job_id, JobTask.state == "failed")
+                                .order_by(JobTask.idx).limit(1)).scalar_one()
+                raise TaskFailed(f"task {bad.idx} ({bad.payload.get('label', '')}) failed {bad.attempts} times: "
+                                 f"{(bad.error or '').splitlines()[0]}")
+        if done == n:
+            break
+        claimed = claim_task(rt, job_id=job_id)
+        if claimed is not None:
+            run_task(rt, *claimed, sets=ctx.sets)
+        else:
+            time.sleep(0.2)
+    with rt.Session() as s:
+        rows = s.execute(select(JobTask).where(JobTask.job_id == job_id).order_by(JobTask.idx)).scalars().all()
+        task_log = [f"task {r.idx:4d} {r.payload.get('label', '')!s:<24} worker={r.worker} attempts={r.attempts} "
+                    f"seconds={(r.finished_at - r.started_at).total_seconds():.2f}" for r in rows]
+        shas = [r.result_sha256 for r in rows]
+    for line in task_log:
+        ctx.log(line)
+    return [pickle.loads(rt.blobs.path(sha).read_bytes()) for sha in shas]
+
+
+def reap_tasks(rt) -> int:
+    """Put tasks whose worker died back to pending (and ring the queue); returns how many."""
+    now = utcnow()
+    with rt.Session.begin() as s:
+        q = select(JobTask).where(JobTask.state == "running", JobTask.lease_expires_at < now)
+        if rt.engine.dialect.name == "postgresql":
+            q = q.with_for_update(skip_locked=True)
+        stale = s.execute(q).scalars().all()
+        ids = []
+        for t in stale:
+            t.state, t.lease_owner, t.lease_expires_at = "pending", None, None
+            ids.append(t.id)
+    from worker.queue import enqueue_task
+    for task_id in ids:
+        enqueue_task(rt.huey, task_id)
+    return len(ids)
+
+
+def run_locally(ctx, function: str, payloads: list[dict], progress_span: tuple[float, float],
+                stage: str) -> list[Any]:
+    """The same contract without a service (scripts, unit tests): run every task here, in order."""
+    lo, hi = progress_span
+    fn = _load(function)
+    out = []
+    for i, payload in enumerate(payloads):
+        ctx.progress(lo + (hi - lo) * i / max(len(payloads), 1), f"{stage}: {i}/{len(payloads)} done")
+        out.append(fn(payload, ctx.sets))
+    return out
