@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import shutil
 import statistics
 import subprocess
 import sys
@@ -162,9 +163,18 @@ def main() -> None:
                 svc.start_worker()
                 key = svc.create_key("bench")
                 loads.append(load_run(svc, key, paths, args.clients))
-                rss.append(rss_during_upload(svc, key, big))
             finally:
                 svc.shutdown()
+            fresh = Service(tmp / f"big{run}", "sqlite", None, None)  # RSS of an API that serves only this
+            (tmp / f"big{run}").mkdir()
+            fresh.env["GNSSATT_MAX_UPLOAD_BYTES"] = str(3 * 2**30)
+            try:
+                fresh.start_api()
+                rss.append(rss_during_upload(fresh, fresh.create_key("bench"), big))
+            finally:
+                fresh.shutdown()
+            shutil.rmtree(tmp / f"svc{run}", ignore_errors=True)
+            shutil.rmtree(tmp / f"big{run}", ignore_errors=True)
             print(f"run {run + 1}: {loads[-1]} {rss[-1]}", file=sys.stderr)
     med = {k: statistics.median(r[k] for r in loads) for k in loads[0]}
     med_rss = {k: statistics.median(r[k] for r in rss) for k in rss[0]}

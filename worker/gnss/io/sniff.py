@@ -15,10 +15,10 @@ import gzip
 import io
 import json
 import zipfile
+from collections import Counter
 from pathlib import Path
 from typing import Iterator
 
-import numpy as np
 
 from worker.gnss.io.errors import ParseError, ParseWarning
 
@@ -173,6 +173,68 @@ def _is_special_v2(line: str) -> bool:
     return len(line) >= 29 and line[1:26].strip() == "" and line[28:29].isdigit()
 
 
+class _EpochStats:
+    """First, last, count, backward steps and a histogram of steps, in constant memory (a 1 GiB file has
+    millions of epochs: keeping them all would cost more than the upload itself)."""
+
+    def __init__(self):
+        self.count = 0
+        self.backwards = 0
+        self.steps: Counter[float] = Counter()
+        self._first: tuple[int, float] | None = None
+        self._prev: tuple[int, float] | None = None
+
+    def add(self, t: tuple) -> None:
+        year, month, day, hour, minute, sec = t
+        whole = int(sec // 1)
+        s = (_days_from_civil(year, month, day) * 86400 + hour * 3600 + minute * 60 + whole, sec - whole)
+        if self._prev is not None:
+            step = (s[0] - self._prev[0]) + (s[1] - self._prev[1])
+            if step < -1e-6:
+                self.backwards += 1
+            if len(self.steps) < 10000 or step in self.steps:
+                self.steps[round(step, 6)] += 1
+        else:
+            self._first = s
+        self._prev = s
+        self.count += 1
+
+    def _time(self, s: tuple[int, float]):
+        from worker.gnss.time import GpsTime
+        return GpsTime(s[0] - _GPS_EPOCH_UNIX_DAYS * 86400, s[1])
+
+    @property
+    def first(self):
+        return self._time(self._first)
+
+    @property
+    def last(self):
+        return self._time(self._prev)
+
+    def median_step_s(self) -> float | None:
+        total = sum(self.steps.values())
+        if not total:
+            return None
+        seen = 0
+        for step in sorted(self.steps):
+            seen += self.steps[step]
+            if seen * 2 >= total:
+                return float(step)
+        return None
+
+
+def _days_from_civil(y: int, m: int, d: int) -> int:
+    """Days since 1970-01-01 (H. Hinnant), scalar and fast for the per-line scan."""
+    y -= m <= 2
+    era = y // 400
+    yoe = y - era * 400
+    doy = (153 * ((m + 9) % 12) + 2) // 5 + d - 1
+    return era * 146097 + yoe * 365 + yoe // 4 - yoe // 100 + doy - 719468
+
+
+_GPS_EPOCH_UNIX_DAYS = 3657
+
+
 def scan_rinex_obs(lines: Iterator[str], name: str, compression: str | None = None) -> dict:
     """Summary of a RINEX observation file from a line iterator, in bounded memory.
 
@@ -180,8 +242,6 @@ def scan_rinex_obs(lines: Iterator[str], name: str, compression: str | None = No
     signals per system, satellites and warnings. Raises ParseError for missing mandatory header lines,
     malformed epoch lines and truncated epochs.
     """
-    from worker.gnss.time import GpsTime
-
     warnings: list[ParseWarning] = []
     version = None
     obs_types: dict[str, list[str]] = {}
@@ -276,7 +336,7 @@ def scan_rinex_obs(lines: Iterator[str], name: str, compression: str | None = No
         warnings.append(ParseWarning("unknown-antenna", f"antenna type {antenna!r}: no phase-centre model applies"))
 
     # Data section.
-    times: list[tuple] = []
+    epochs = _EpochStats()
     sats: set[str] = set()
     events = 0
     it = iter(lines)
@@ -316,7 +376,7 @@ def scan_rinex_obs(lines: Iterator[str], name: str, compression: str | None = No
                         raise ParseError(name, line_no, "a satellite record starting with a satellite id like G01",
                                          rec)
                     sats.add(sid)
-                times.append(t)
+                epochs.add(t)
             else:
                 events += 1
                 for _ in need(count, "event records", line_no, events=True):
@@ -347,16 +407,12 @@ def scan_rinex_obs(lines: Iterator[str], name: str, compression: str | None = No
                 sats.add(sid)
             for _ in need(count * v2_lines_per_sat, "observation lines", epoch_line):
                 pass
-            times.append(t)
-    if not times:
+            epochs.add(t)
+    if not epochs.count:
         raise ParseError(name, line_no + 1, "at least one epoch with observations", "none")
-    arr = np.array(times, dtype=np.float64)
-    gps = GpsTime.from_calendar(arr[:, 0].astype(int), arr[:, 1].astype(int), arr[:, 2].astype(int),
-                                arr[:, 3].astype(int), arr[:, 4].astype(int), arr[:, 5])
-    dt = np.diff(gps.s).astype(np.float64) + np.diff(gps.frac)
-    if np.any(dt < -1e-6):
-        warnings.append(ParseWarning("epochs-not-increasing", f"{int(np.sum(dt < -1e-6))} epochs go back in time"))
-    interval = float(np.round(np.median(dt), 6)) if len(dt) else None
+    if epochs.backwards:
+        warnings.append(ParseWarning("epochs-not-increasing", f"{epochs.backwards} epochs go back in time"))
+    interval = epochs.median_step_s()
     if header_interval is None:
         warnings.append(ParseWarning("missing-interval", "no INTERVAL in the header; taken from the data"))
     elif interval is not None and abs(header_interval - interval) > 1e-3:
@@ -367,9 +423,9 @@ def scan_rinex_obs(lines: Iterator[str], name: str, compression: str | None = No
         "format": "RINEX observation", "version": version, "compression": compression,
         "marker_name": marker, "receiver_type": receiver, "antenna_type": antenna,
         "approx_position_ecef_m": approx,
-        "time_first": gps[0].iso(), "time_last": gps[-1].iso(),
-        "duration_s": float(gps[-1] - gps[0]), "interval_s": interval, "header_interval_s": header_interval,
-        "n_epochs": len(times), "n_events": events,
+        "time_first": epochs.first.iso(), "time_last": epochs.last.iso(),
+        "duration_s": float(epochs.last - epochs.first), "interval_s": interval, "header_interval_s": header_interval,
+        "n_epochs": epochs.count, "n_events": events,
         "systems": systems, "signals": {s: obs_types.get(s, []) for s in systems},
         "satellites": sorted(sats),
         "warnings": [w.to_dict() for w in warnings],
