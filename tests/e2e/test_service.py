@@ -196,3 +196,32 @@ def test_fan_out_spreads_over_workers_and_survives_a_killed_one(service):
         tasks = c.get(f"/v1/jobs/{job['id']}/products/selftest.json").json()["tasks"]
         assert [t["square"] for t in tasks] == [n * n for n in range(12)]
         assert len({t["worker"] for t in tasks}) >= 2, tasks  # the work was shared
+
+
+def test_cli_submit_status_fetch_and_revoke(service, tmp_path):
+    import subprocess
+    import sys
+    service.start_api()
+    service.start_worker()
+    key = service.create_key("cli")
+    env = dict(service.env, GNSSATT_URL=service.url, GNSSATT_API_KEY=key)
+    paths = [str(p) for p in write_sample_set(tmp_path / "set", n_epochs=10)]
+
+    def cli(*args):
+        return subprocess.run([sys.executable, "-m", "client.cli", *args], env=env, capture_output=True, text=True,
+                              timeout=120, cwd=str(tmp_path))
+
+    out = cli("submit", "--type", "inspect", "--out", str(tmp_path / "products"), *paths)
+    assert out.returncode == 0, out.stderr
+    assert sorted(p.name for p in (tmp_path / "products").iterdir()) == ["observations.csv", "summary.json"]
+    assert "100.0%" in out.stderr  # the progress bar reached the end
+    job_id = out.stderr.split("job ")[1].split()[0]
+    status = cli("status")
+    assert status.returncode == 0 and job_id in status.stdout and "succeeded" in status.stdout
+    fetched = cli("fetch", job_id, "--out", str(tmp_path / "again"))
+    assert fetched.returncode == 0 and (tmp_path / "again" / "summary.json").is_file()
+    bad = cli("submit", "--type", "inspect", str(tmp_path / "set" / "platform.json"))
+    assert bad.returncode == 1 and "422" in bad.stderr and "observation file" in bad.stderr
+    revoked = cli("admin", "revoke-key", key)
+    assert revoked.returncode == 0 and "revoked 1" in revoked.stdout
+    assert cli("status").returncode == 1
