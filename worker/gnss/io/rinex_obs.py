@@ -1050,6 +1050,9 @@ def read_rinex_obs(source, *, name: str | None = None) -> RinexObs:
         header_lines.pop()
     hdr = _parse_header(header_lines, label)
     body = data[split_at:]
+    if body.strip() and not body.endswith(b"\n"):
+        hdr.warnings.append(ParseWarning("no-final-newline", "the file does not end with a newline: its last "
+                                         "record may be cut (a record cut between fields reads as blanks)"))
     if SUPPORTED_VERSIONS[hdr.version] == 2:
         return _read_body_v2(hdr, body, label)
     return _read_body_v3(hdr, body, label)
