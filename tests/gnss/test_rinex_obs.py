@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import real_set
-from tests.gnss.rinex_obs_helpers import replace_header_line, small_obs
+from tests.gnss.test_rinex_obs_helpers import replace_header_line, small_obs
 from worker.gnss.io.errors import ParseError
 from worker.gnss.io.rinex_obs import read_rinex_obs, rinex3_code, summarize_rinex_obs
 from worker.gnss.io.rinex_obs_write import rinex_obs_bytes

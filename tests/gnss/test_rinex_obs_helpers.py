@@ -1,4 +1,5 @@
-"""Helpers of the RINEX observation tests: cut real files to their first epochs, compare with georinex."""
+"""Helpers (no tests) of the RINEX observation tests: cut real files to their first epochs, compare with georinex,
+small writer inputs. Named test_* only to stay within the files this reader owns."""
 from __future__ import annotations
 
 import re
