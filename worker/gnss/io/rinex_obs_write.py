@@ -144,7 +144,9 @@ def rinex_obs_bytes(obs, version: float = 3.04, *, marker_name: str | None = Non
                        else np.zeros(n_ep), dtype=np.int64)
     clock = getattr(obs, "clock_offset_s", None)
     clock = np.full(n_ep, np.nan) if clock is None else np.asarray(clock, dtype=np.float64)
-    systems = sorted({s[0] for s in sats}, key=lambda c: "GRECJSI".index(c) if c in "GRECJSI" else 99)
+    in_data = {s[0] for s in sats}
+    declared = [s for s in (getattr(hdr, "obs_types", None) or {}) if s in in_data]  # keep the header's order
+    systems = declared + sorted(in_data - set(declared), key=lambda c: "GRECJSI".find(c) % 99)
     if interval_s is None:
         interval_s = getattr(hdr, "interval_s", None)
     if interval_s is None and n_ep > 1:
