@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import logging
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request, Response
@@ -19,6 +20,7 @@ from app.schemas.jobs import JobCreate, JobPublic, JobState, ProductPublic
 from worker.jobs.registry import get_job_type, job_types
 from worker.queue import enqueue
 
+log = logging.getLogger("gnssatt.api")
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
 ERRORS = {401: {"model": Problem}, 404: {"model": Problem}, 422: {"model": Problem}}
 TERMINAL = ("succeeded", "failed", "cancelled")
@@ -80,7 +82,10 @@ def submit_job(body: JobCreate, request: Request, response: Response, team: Team
     job.sets = [JobSet(set_id=sid, position=i) for i, sid in enumerate(ids)]
     session.add(job)
     session.commit()
-    enqueue(request.app.state.huey, job.id)  # if this is lost, the reaper re-rings queued jobs
+    try:
+        enqueue(request.app.state.huey, job.id)
+    except Exception:  # noqa: BLE001 - the job row is the truth: the reaper re-rings queued jobs
+        log.warning("could not enqueue job %s now; a worker's reaper will pick it up", job.id, exc_info=True)
     response.headers["Location"] = f"/v1/jobs/{job.id}"
     return to_public(job)
 
@@ -132,6 +137,7 @@ async def job_events(job_id: str, request: Request, team: TeamDep, session: Sess
     """Streams `event: progress` with the job as JSON whenever its state, progress or stage changes, and a
     final `event: end` once it has finished. Reconnect at will: the first event is the current state."""
     get_owned_job(session, team.id, job_id)
+    session.close()  # hand the connection back: the stream may last for hours
     Session = request.app.state.Session
 
     def snapshot() -> dict | None:

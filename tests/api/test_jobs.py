@@ -175,3 +175,25 @@ def test_fan_out_runs_every_task_once_on_a_single_worker(api):
     assert job["state"] == "succeeded", job
     tasks = api.get(f"/v1/jobs/{job_id}/products/selftest.json").json()["tasks"]
     assert [t["square"] for t in tasks] == [0, 1, 4, 9, 16]
+
+
+def test_lost_queue_message_is_rerung_by_the_reaper(api, monkeypatch):
+    """The queue is only a doorbell: a job whose message never arrived still runs."""
+    import app.routes.jobs as jobs_routes
+    from worker import runner
+
+    def down(*a, **k):
+        raise ConnectionError("queue unreachable")
+
+    monkeypatch.setattr(jobs_routes, "enqueue", down)
+    resp = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}})
+    assert resp.status_code == 202
+    job_id = resp.json()["id"]
+    assert api.get(f"/v1/jobs/{job_id}").json()["state"] == "queued"
+    monkeypatch.undo()
+    api.rt.settings.requeue_after_seconds = 0.01
+    import time
+    time.sleep(0.05)
+    counts = runner.reap(api.rt)  # immediate mode: re-ringing runs the job
+    assert counts["rerung"] == 1
+    assert api.get(f"/v1/jobs/{job_id}").json()["state"] == "succeeded"
