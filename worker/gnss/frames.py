@@ -289,6 +289,7 @@ def azimuth_elevation(r_from_ecef_m, r_to_ecef_m) -> tuple[np.ndarray, np.ndarra
     """
     e, n, u = np.moveaxis(enu(r_from_ecef_m, r_to_ecef_m), -1, 0)
     az = np.mod(np.arctan2(e, n), 2.0 * np.pi)
+    az = np.where(az >= 2.0 * np.pi, 0.0, az)  # mod of -1e-17 rounds to 2 pi
     el = np.arctan2(u, np.hypot(e, n))
     return az, el
 
