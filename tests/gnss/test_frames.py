@@ -8,7 +8,7 @@ from hypothesis import given, settings, strategies as st
 
 from worker.gnss import frames as F
 from worker.gnss.eop import ARCSEC_RAD, EopSource, OMEGA_ERA_RAD_S
-from worker.gnss.leap_seconds import gps_to_utc, utc_to_gps
+from worker.gnss.leap_seconds import utc_to_gps
 from worker.gnss.time import GpsTime
 
 ANGLE_TOL_RAD = 1e-9  # the brief's requirement (0.2 mas, 6 mm at GNSS orbit radius)

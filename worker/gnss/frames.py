@@ -14,7 +14,7 @@ from __future__ import annotations
 import erfa
 import numpy as np
 
-from worker.gnss.constants import OMEGA_EARTH_RAD_S, WGS84_A_M, WGS84_E2, WGS84_F
+from worker.gnss.constants import OMEGA_EARTH_RAD_S, WGS84_A_M, WGS84_F
 from worker.gnss.eop import EopSource, EopValues
 from worker.gnss.time import GpsTime
 
