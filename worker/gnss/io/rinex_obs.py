@@ -313,8 +313,8 @@ def _decode_slots(mat: np.ndarray, use: np.ndarray, locate, name: str):
     ssi = np.empty((n_rows, n_use), dtype=np.int8)
     rows_per_chunk = max(16, _CHUNK_ELEMENTS // (16 * n_slots))
     for r0 in range(0, n_rows, rows_per_chunk):
-        g3 = mat[r0:r0 + rows_per_chunk].reshape(-1, n_slots, 16)
-        g = g3[:, use, :].reshape(-1, 16) if n_use != n_slots else g3.reshape(-1, 16)
+        # every slot of the chunk is converted (a contiguous view, no gather); unused slots are dropped after
+        g = mat[r0:r0 + rows_per_chunk].reshape(-1, 16)
         d = g - np.uint8(48)
         is_digit = d < 10
         nsb = _bits16(g != 32)
@@ -326,13 +326,13 @@ def _decode_slots(mat: np.ndarray, use: np.ndarray, locate, name: str):
         lowest = nsb & (~nsb + np.uint64(1))
         good = blank | ((nsb == (dig_b | minus_b | dot_b)) & ((gap & (gap + np.uint64(1))) == 0)
                         & (dot_b == np.uint64(1 << 10)) & ((minus_b == 0) | (minus_b == lowest)))
+        good = good.reshape(-1, n_slots)[:, use]
         if not good.all():
-            bad = int(np.flatnonzero(~good)[0])
-            r, k = divmod(bad, n_use)
-            line_no, col, text = locate(r0 + r, int(use[k]))
+            r, k = np.argwhere(~good)[0]
+            line_no, col, text = locate(r0 + int(r), int(use[k]))
             raise ParseError(name, line_no, f"an F14.3 observation (right-justified, 3 decimals) or blanks in "
                              f"columns {col}-{col + 13}", text, column=col)
-        w = np.where(is_digit, d, np.uint8(0)).view(_U64)
+        w = (d * is_digit).view(_U64)  # digits, anything else 0 (np.where here is ~15x slower)
         hi = _swar8(w[:, 0].copy())  # first 8 integer digits
         b = w[:, 1]
         # bytes of b: d8 d9 '.' d11 d12 d13 LLI SSI -> d8 d9 d11 d12 d13 0 0 0 (drop the '.', LLI and SSI)
@@ -342,9 +342,9 @@ def _decode_slots(mat: np.ndarray, use: np.ndarray, locate, name: str):
         np.negative(v, out=v, where=minus_b != 0)
         v[blank] = np.nan
         sl = slice(r0, r0 + rows_per_chunk)
-        values[sl] = v.reshape(-1, n_use)
-        lli[sl] = _FLAG_I8[g[:, 14]].reshape(-1, n_use)
-        ssi[sl] = _FLAG_I8[g[:, 15]].reshape(-1, n_use)
+        values[sl] = v.reshape(-1, n_slots)[:, use]
+        lli[sl] = _FLAG_I8[g[:, 14]].reshape(-1, n_slots)[:, use]
+        ssi[sl] = _FLAG_I8[g[:, 15]].reshape(-1, n_slots)[:, use]
     for arr, what, shift in ((lli, "loss-of-lock indicator (digit or blank)", 14),
                              (ssi, "signal strength indicator (digit or blank)", 15)):
         bad = arr == -2
