@@ -9,7 +9,7 @@ from fastapi import FastAPI
 from app.db import make_engine, make_sessionmaker
 from app.migrate import migrate
 from app.problems import install_problem_handlers
-from app.routes import health, job_types, jobs, observation_sets
+from app.routes import health, job_types, jobs, observation_sets, pcv_maps
 from app.settings import Settings
 from app.store.blobs import BlobStore
 from worker.queue import make_huey
@@ -47,6 +47,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(observation_sets.router)
     app.include_router(jobs.router)
     app.include_router(job_types.router)
+    app.include_router(pcv_maps.router)
     app.openapi = lambda: _openapi_with_problems(app)  # type: ignore[method-assign]
     return app
 

@@ -74,6 +74,7 @@ class JobContext:
     lease_lost: threading.Event = field(default_factory=threading.Event)
     _last_flush: float = 0.0
     log_lines: list[str] = field(default_factory=list)
+    pcv_maps: list[tuple[str, dict]] = field(default_factory=list)
 
     # --- progress and cancellation ---------------------------------------------------------------
     def check(self) -> None:
@@ -128,6 +129,14 @@ class JobContext:
         record = ProductRecord(name, media_type or media_type_for(name), sha, size)
         self.products[name] = record
         return record
+
+    def publish_pcv_map(self, name: str, doc: dict) -> None:
+        """Keep a PCV map (CONVENTIONS JSON) as the next version of `name` in the team's maps, published
+        with the products when the job succeeds (and never by a failed or repeated attempt)."""
+        from worker.gnss.io.pcv_map import parse_pcv_map
+
+        parse_pcv_map(doc, name)  # refuse a malformed map now, not at publication
+        self.pcv_maps.append((name, doc))
 
     def product_path(self, name: str) -> Path:
         """A scratch path to write a product into; then call write_product(name, path)."""

@@ -146,6 +146,13 @@ def _publish_success(rt: Runtime, job_id: str, token: str, ctx: JobContext) -> b
         for rec in ctx.products.values():
             s.add(Product(job_id=job_id, attempt=ctx.attempt, name=rec.name, media_type=rec.media_type,
                           sha256=rec.sha256, size_bytes=rec.size_bytes))
+        if ctx.pcv_maps:
+            team_id = s.execute(select(Job.team_id).where(Job.id == job_id)).scalar_one()
+            from app.store.pcv import add_pcv_map
+            from worker.gnss.io.pcv_map import parse_pcv_map
+
+            for name, doc in ctx.pcv_maps:
+                add_pcv_map(s, rt.blobs, team_id, name, parse_pcv_map(doc, name), source_job_id=job_id)
     return True
 
 

@@ -15,6 +15,8 @@ class SelftestConfig(BaseModel):
     fail_as_input_error: bool = Field(False, description="Fail as a user-input error instead (never retried).")
     fan_out: int = Field(0, ge=0, le=1000, description="Split into this many tasks that any worker may run.")
     task_seconds: float = Field(0.2, ge=0.0, le=600.0, description="How long each fanned-out task works.")
+    publish_pcv_map: str | None = Field(None, max_length=200,
+                                        description="Publish a small flat test PCV map under this name.")
 
 
 JOB_TYPE = JobType(

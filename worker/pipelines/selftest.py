@@ -26,6 +26,11 @@ def run(ctx: JobContext, config) -> None:
         tasks = ctx.map("worker.pipelines.selftest:square_task",
                         [{"n": i, "seconds": config.task_seconds, "label": f"n={i}"} for i in range(config.fan_out)],
                         progress_span=(0.5, 0.95), stage="fan-out")
+    if config.publish_pcv_map:
+        ctx.publish_pcv_map(config.publish_pcv_map, {
+            "platform": "selftest", "pair": ["A", "B"], "frequency": "L1", "azimuth_deg": [45.0, 135.0, 225.0, 315.0],
+            "elevation_deg": [15.0, 45.0, 75.0], "values_mm": [[0.0, 0.5, None, 1.0]] * 3,
+            "count": [[10, 10, 0, 10]] * 3, "sigma_mm": [[0.1, 0.1, None, 0.1]] * 3})
     ctx.write_product("selftest.json", {
         "tasks": tasks,
         "attempt": ctx.attempt, "host": socket.gethostname(), "pid": os.getpid(),

@@ -1,0 +1,24 @@
+"""Keeping PCV maps: the map JSON as a blob, a row naming it as the next version of `name` for a team."""
+from __future__ import annotations
+
+import json
+
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session
+
+from app.models import PcvMap
+from app.store.blobs import BlobStore
+from worker.gnss.io.pcv_map import PcvMap as PcvGrid
+
+
+def add_pcv_map(session: Session, blobs: BlobStore, team_id: str, name: str, grid: PcvGrid,
+                source_job_id: str | None = None) -> PcvMap:
+    """Write the blob, add the row (not committed: the caller's transaction decides)."""
+    sha, _ = blobs.put_bytes(json.dumps(grid.to_json(), separators=(",", ":")).encode())
+    version = (session.execute(select(func.max(PcvMap.version)).where(PcvMap.team_id == team_id,
+                                                                      PcvMap.name == name)).scalar() or 0) + 1
+    row = PcvMap(team_id=team_id, name=name, version=version, platform=grid.platform, first_antenna=grid.first,
+                 second_antenna=grid.second, frequency=grid.frequency, source_job_id=source_job_id, sha256=sha)
+    session.add(row)
+    session.flush()
+    return row
