@@ -765,12 +765,14 @@ def select_ephemeris(kepler: KeplerEphemeris, sat: str, t: GpsTime, *, max_age_s
     1. only records of `sat`; only healthy ones (health == 0) unless `allow_unhealthy`;
     2. only records with |t - toe| <= max age: `max_age_s` if given, else half the curve-fit interval for
        GPS/QZSS (IS-GPS-200 sec. 20.3.4.4: toe sits mid-fit; at least 2 h) and `MAX_AGE_S` for E/C;
-    3. the smallest |t - toe|; among equal ones the later toe, then the latest transmission time (the
-       retransmission or IODE update a receiver would hold last), then the later position in the file.
+    3. among the records already transmitted at `t`, the latest transmission (the upload a receiver would
+       hold: a fresh upload with a new IODE beats an older data set with a nearer toe, e.g. G02 on
+       2007-03-21 at 14:00: IODE 58 (toe 13:59:44, sent 12:40:48) is 0.4 m from the precise orbit, IODE 32
+       (toe 14:00:00, sent 12:11:48) 16 m); where none was transmitted yet, or transmission times are
+       missing or absurd, the smallest |t - toe|; ties go to the later toe, later transmission, later in file.
     Args:
         kepler: records of one system; sat: e.g. 'G05'; t: GpsTime scalar or (n,).
     Implements: IS-GPS-200N sec. 20.3.4.4 (fit interval), 20.3.4.5 (toe at the centre of the fit interval).
-    Neglects: whether the record had been transmitted by `t` (post-processing uses the best record).
     """
     cand = np.flatnonzero(kepler.sat == sat)
     scalar = np.ndim(t.s) == 0
@@ -784,7 +786,7 @@ def select_ephemeris(kepler: KeplerEphemeris, sat: str, t: GpsTime, *, max_age_s
         trans = sub.transmission_gpst()
         # Candidate order encodes the tie-breakers: later toe, later transmission, later in file first.
         order = np.lexsort((-cand, -(trans - toe), -(toe - toe[0])))
-        cand, toe = cand[order], toe[order]
+        cand, toe, trans = cand[order], toe[order], trans[order]
         if max_age_s is not None:
             max_age = np.full(len(cand), float(max_age_s))
         elif kepler.system in ("G", "J"):
@@ -796,7 +798,12 @@ def select_ephemeris(kepler: KeplerEphemeris, sat: str, t: GpsTime, *, max_age_s
         dt = (t1.s[:, None] - toe.s[None, :]).astype(np.float64) + (t1.frac[:, None] - toe.frac[None, :])
         dist = np.abs(dt)
         dist = np.where(dist <= max_age[None, :], dist, np.inf)
-        best = np.argmin(dist, axis=1)  # first minimum = preferred by the candidate order
+        nearest = np.argmin(dist, axis=1)  # first minimum = preferred by the candidate order
+        since_tx = (t1.s[:, None] - trans.s[None, :]).astype(np.float64) + (t1.frac[:, None] - trans.frac[None, :])
+        tx_sane = np.abs((trans.s - toe.s).astype(np.float64)) < 7 * 86400.0
+        sent = np.isfinite(dist) & tx_sane[None, :] & (since_tx >= 0.0)
+        latest = np.argmax(np.where(sent, -since_tx, -np.inf), axis=1)
+        best = np.where(sent.any(axis=1), latest, nearest)
         ok = np.isfinite(dist[np.arange(len(t1)), best])
         out = np.where(ok, cand[best], -1)
     return int(out[0]) if scalar else out
