@@ -190,17 +190,21 @@ def gather(rt, ctx, function: str, payloads: list[dict], progress_span: tuple[fl
 
 
 def reap_tasks(rt) -> int:
-    """Put tasks whose worker died back to pending (and ring the queue); returns how many."""
+    """Put tasks whose worker died back to pending (and ring the queue); returns how many.
+    Conditional on the state and lease that were read, like the job reaper."""
     now = utcnow()
+    ids = []
     with rt.Session.begin() as s:
-        q = select(JobTask).where(JobTask.state == "running", JobTask.lease_expires_at < now)
+        q = select(JobTask.id, JobTask.lease_owner).where(JobTask.state == "running", JobTask.lease_expires_at < now)
         if rt.engine.dialect.name == "postgresql":
             q = q.with_for_update(skip_locked=True)
-        stale = s.execute(q).scalars().all()
-        ids = []
-        for t in stale:
-            t.state, t.lease_owner, t.lease_expires_at = "pending", None, None
-            ids.append(t.id)
+        for task_id, owner in s.execute(q).all():
+            res = s.execute(update(JobTask).where(JobTask.id == task_id, JobTask.state == "running",
+                                                  JobTask.lease_owner == owner, JobTask.lease_expires_at < now)
+                            .values(state="pending", lease_owner=None, lease_expires_at=None)
+                            .execution_options(synchronize_session=False))
+            if res.rowcount == 1:
+                ids.append(task_id)
     from worker.queue import enqueue_task
     for task_id in ids:
         enqueue_task(rt.huey, task_id)

@@ -241,7 +241,12 @@ def execute_job(rt: Runtime, job_id: str) -> str | None:
 # --- the reaper -----------------------------------------------------------------------------------
 
 def reap(rt: Runtime) -> dict[str, int]:
-    """Requeue jobs whose lease ran out (their worker died) and re-ring jobs whose message was lost."""
+    """Requeue jobs whose lease ran out (their worker died) and re-ring jobs whose message was lost.
+
+    Every change is a conditional UPDATE that re-checks what was read (state, expired lease, same owner),
+    so reapers on many machines, and a worker claiming the job meanwhile, can never be overwritten by a
+    stale read; on PostgreSQL the candidates are also read with FOR UPDATE SKIP LOCKED.
+    """
     from worker.queue import enqueue
 
     now = utcnow()
@@ -249,34 +254,39 @@ def reap(rt: Runtime) -> dict[str, int]:
     counts = {"requeued": 0, "failed": 0, "cancelled": 0, "rerung": 0}
     pg = rt.engine.dialect.name == "postgresql"
     with rt.Session.begin() as s:
-        q = select(Job).where(Job.state == "running", Job.lease_expires_at < now)
+        q = select(Job.id, Job.lease_owner, Job.cancel_requested, Job.attempts, Job.max_attempts).where(
+            Job.state == "running", Job.lease_expires_at < now)
         if pg:
             q = q.with_for_update(skip_locked=True)
-        for job in s.execute(q).scalars().all():
-            job.lease_owner = None
-            job.lease_expires_at = None
-            if job.cancel_requested:
-                job.state, job.finished_at, job.stage = "cancelled", now, "cancelled"
-                counts["cancelled"] += 1
-            elif job.attempts >= job.max_attempts:
-                job.state, job.finished_at = "failed", now
-                job.error = {"type": "https://gnssatt.dev/problems/worker-lost", "status": 500,
-                             "title": "The worker running this job was lost",
-                             "detail": f"the worker running this job stopped responding {job.attempts} "
-                                       f"times (max_attempts {job.max_attempts})", "job_id": job.id}
-                counts["failed"] += 1
+        for job_id, owner, cancel, attempts, max_attempts in s.execute(q).all():
+            still = (Job.id == job_id, Job.state == "running", Job.lease_owner == owner, Job.lease_expires_at < now)
+            if cancel:
+                kind, values = "cancelled", {"state": "cancelled", "finished_at": now, "stage": "cancelled"}
+            elif attempts >= max_attempts:
+                kind, values = "failed", {"state": "failed", "finished_at": now, "error": {
+                    "type": "https://gnssatt.dev/problems/worker-lost", "status": 500,
+                    "title": "The worker running this job was lost",
+                    "detail": f"the worker running this job stopped responding {attempts} times "
+                              f"(max_attempts {max_attempts})", "job_id": job_id}}
             else:
-                job.state, job.stage, job.enqueued_at = "queued", "requeued after lost worker", now
-                to_enqueue.append(job.id)
-                counts["requeued"] += 1
+                kind, values = "requeued", {"state": "queued", "stage": "requeued after lost worker",
+                                            "enqueued_at": now}
+            res = s.execute(update(Job).where(*still).values(lease_owner=None, lease_expires_at=None, **values)
+                            .execution_options(synchronize_session=False))
+            if res.rowcount == 1:
+                counts[kind] += 1
+                if kind == "requeued":
+                    to_enqueue.append(job_id)
         stale = now - timedelta(seconds=rt.settings.requeue_after_seconds)
-        q = select(Job).where(Job.state == "queued", Job.enqueued_at < stale)
+        q = select(Job.id).where(Job.state == "queued", Job.enqueued_at < stale)
         if pg:
             q = q.with_for_update(skip_locked=True)
-        for job in s.execute(q).scalars().all():
-            job.enqueued_at = now
-            to_enqueue.append(job.id)
-            counts["rerung"] += 1
+        for job_id in s.execute(q).scalars().all():
+            res = s.execute(update(Job).where(Job.id == job_id, Job.state == "queued", Job.enqueued_at < stale)
+                            .values(enqueued_at=now).execution_options(synchronize_session=False))
+            if res.rowcount == 1:
+                to_enqueue.append(job_id)
+                counts["rerung"] += 1
     for job_id in to_enqueue:
         enqueue(rt.huey, job_id)
     from worker.fanout import reap_tasks

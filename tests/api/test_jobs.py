@@ -197,3 +197,27 @@ def test_lost_queue_message_is_rerung_by_the_reaper(api, monkeypatch):
     counts = runner.reap(api.rt)  # immediate mode: re-ringing runs the job
     assert counts["rerung"] == 1
     assert api.get(f"/v1/jobs/{job_id}").json()["state"] == "succeeded"
+
+
+def test_reaper_leaves_a_reclaimed_job_alone(api):
+    """A job whose dead worker's lease was taken over by a live claim is not requeued again."""
+    from datetime import timedelta
+
+    from sqlalchemy import update
+
+    from app.models import Job, utcnow
+    from worker import runner
+
+    job_id = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]
+    with api.rt.Session.begin() as s:  # pretend a worker died holding it
+        s.execute(update(Job).where(Job.id == job_id).values(
+            state="running", lease_owner="dead/1", lease_expires_at=utcnow() - timedelta(seconds=5)))
+    # another worker's reaper requeued it and a worker claimed it again, with a fresh lease
+    with api.rt.Session.begin() as s:
+        s.execute(update(Job).where(Job.id == job_id).values(
+            state="running", lease_owner="alive/2", lease_expires_at=utcnow() + timedelta(seconds=60)))
+    counts = runner.reap(api.rt)
+    assert counts["requeued"] == 0
+    with api.rt.Session() as s:
+        job = s.get(Job, job_id)
+        assert job.state == "running" and job.lease_owner == "alive/2"
