@@ -1,0 +1,168 @@
+"""Shared helpers of the plots: CSV products as column arrays, GPS-time axes, titles, PNG encoding."""
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass, field
+from typing import Any, Iterable, Mapping
+
+import numpy as np
+from matplotlib import dates as mdates
+from matplotlib.figure import Figure
+
+#: One product table: column name -> 1-D array (float64 where every non-empty cell is a number, else str).
+Table = dict[str, np.ndarray]
+
+#: Colours of seed 000 Figs. 5-7: yaw red, pitch green, roll blue.
+EULER_COLOURS = {"yaw": "#d62728", "pitch": "#2ca02c", "roll": "#1f77b4"}
+DPI = 100
+
+
+@dataclass(frozen=True)
+class PlotContext:
+    """What a plot's title names: the observation set, the job and its configuration."""
+
+    set_name: str | None = None
+    job_id: str | None = None
+    config: Mapping[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, context: "PlotContext | Mapping[str, Any] | None") -> "PlotContext":
+        if context is None:
+            return cls()
+        if isinstance(context, PlotContext):
+            return context
+        return cls(set_name=context.get("set_name") or context.get("set"),
+                   job_id=context.get("job_id") or context.get("job"),
+                   config=dict(context.get("config") or {}))
+
+    def subtitle(self, max_chars: int = 110) -> str:
+        """'set NAME · job 1a2b3c4d · mode=kinematic, frequencies=L1+L2' (config shortened to max_chars)."""
+        parts = []
+        if self.set_name:
+            parts.append(f"set {self.set_name}")
+        if self.job_id:
+            parts.append(f"job {self.job_id[:8]}")
+        if self.config:
+            cfg = ", ".join(f"{k}={_short(v)}" for k, v in self.config.items())
+            parts.append(cfg if len(cfg) <= max_chars else cfg[:max_chars - 1] + "…")
+        else:
+            parts.append("default configuration")
+        return " · ".join(parts)
+
+
+def _short(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:g}"
+    if isinstance(value, (list, tuple)):
+        return "+".join(str(v) for v in value)
+    return str(value)
+
+
+def set_title(fig: Figure, what: str, context: "PlotContext | Mapping[str, Any] | None") -> None:
+    """Figure title: what is shown (first line) and set, job and configuration (second line)."""
+    fig.suptitle(f"{what}\n{PlotContext.of(context).subtitle()}", fontsize=10)
+
+
+def new_figure(width_in: float = 10.0, height_in: float = 6.0) -> Figure:
+    """A pyplot-free Figure (thread-safe; rendered by the Agg canvas on savefig)."""
+    return Figure(figsize=(width_in, height_in), dpi=DPI, layout="constrained")
+
+
+def figure_png(fig: Figure, dpi: int = DPI) -> bytes:
+    """The figure as PNG bytes (no timestamp or software metadata, so equal figures give equal bytes)."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi, metadata={"Software": None})
+    return buf.getvalue()
+
+
+def read_csv_table(data: "str | bytes | Table | Iterable[Mapping[str, Any]] | None") -> Table:
+    """Column arrays of a CSV product (text with a header line), a list of row dicts, or a ready Table.
+
+    Columns whose every non-empty cell parses as a number become float64 with NaN for empty cells;
+    others stay as str arrays. Column names are stripped of blanks.
+    """
+    if data is None:
+        return {}
+    if isinstance(data, dict):
+        return {str(k): np.asarray(v) for k, v in data.items()}
+    if isinstance(data, bytes):
+        data = data.decode("utf-8")
+    if isinstance(data, str):
+        reader = csv.DictReader(io.StringIO(data))
+        rows = list(reader)
+        names = [n.strip() for n in (reader.fieldnames or [])]
+        raw = {n: [(r.get(orig) or "").strip() for r in rows] for n, orig in zip(names, reader.fieldnames or [])}
+    else:
+        rows = [dict(r) for r in data]
+        names = list(dict.fromkeys(k for r in rows for k in r))
+        raw = {n: ["" if r.get(n) is None else str(r.get(n)).strip() for r in rows] for n in names}
+    return {n: _column_array(v) for n, v in raw.items()}
+
+
+def _column_array(cells: list[str]) -> np.ndarray:
+    try:
+        return np.array([float(c) if c != "" else np.nan for c in cells], dtype=np.float64)
+    except ValueError:
+        return np.array(cells, dtype=str)
+
+
+def column(table: Table, *names: str) -> np.ndarray | None:
+    """The first of `names` present in `table` (case-insensitive), or None."""
+    lower = {k.lower(): k for k in table}
+    for n in names:
+        if n.lower() in lower:
+            return table[lower[n.lower()]]
+    return None
+
+
+def numeric(table: Table, *names: str) -> np.ndarray | None:
+    """Like `column` but as float64 (None when absent)."""
+    col = column(table, *names)
+    if col is None:
+        return None
+    if col.dtype.kind == "f":
+        return col
+    out = np.full(len(col), np.nan)
+    for i, c in enumerate(col):
+        try:
+            out[i] = float(c)
+        except ValueError:
+            pass
+    return out
+
+
+def truthy(values: np.ndarray) -> np.ndarray:
+    """bool array of a 0/1 or true/false column (NaN / empty -> False)."""
+    if values.dtype.kind == "f":
+        return np.nan_to_num(values, nan=0.0) != 0
+    return np.isin(np.char.lower(values.astype(str)), ["1", "true", "yes", "y", "t"])
+
+
+def gps_time(table: Table) -> np.ndarray:
+    """datetime64[ms] of the `time_gps` column (ISO 8601 in GPS time, CONVENTIONS.md); plotted as written,
+    i.e. the axis is GPS time, not UTC."""
+    col = column(table, "time_gps")
+    if col is None:
+        raise KeyError("the table has no time_gps column")
+    return np.array([str(c) for c in col], dtype="datetime64[ms]")
+
+
+def time_axis(ax, t: np.ndarray, label: bool = True) -> None:
+    """Format an x axis holding GPS datetimes: HH:MM:SS ticks, label naming GPS time and the date."""
+    locator = mdates.AutoDateLocator(minticks=4, maxticks=9)
+    ax.xaxis.set_major_locator(locator)
+    ax.xaxis.set_major_formatter(mdates.DateFormatter("%H:%M:%S"))
+    if label:
+        day = str(np.min(t))[:10] if len(t) else ""
+        ax.set_xlabel(f"GPS time [hh:mm:ss] on {day}" if day else "GPS time [hh:mm:ss]")
+
+
+def no_data(ax, message: str = "no data") -> None:
+    ax.text(0.5, 0.5, message, ha="center", va="center", transform=ax.transAxes, color="0.4")
+
+
+def wrap_deg(angle_deg: np.ndarray) -> np.ndarray:
+    """Angles wrapped into (-180, 180] degrees."""
+    wrapped = np.mod(np.asarray(angle_deg, dtype=np.float64) + 180.0, 360.0) - 180.0
+    return np.where(wrapped == -180.0, 180.0, wrapped)
