@@ -8,6 +8,7 @@ import numpy as np
 
 from worker.context import JobContext
 from worker.gnss.tracking import tracking_table
+from worker.plots.inspect import tracking_arrays
 
 
 def run(ctx: JobContext, config) -> None:
@@ -18,12 +19,14 @@ def run(ctx: JobContext, config) -> None:
     other = [f for f in obs_set.files if f.kind != "rinex_obs"]
     rows: list[dict] = []
     files_summary: list[dict] = []
+    tracking: list[dict] = []  # per receiver, for the plots (worker/plots/inspect.py)
     for i, f in enumerate(obs_files):
         ctx.progress(i / max(len(obs_files), 1) * 0.9, f"parsing {f.name}")
         obs = read_rinex_obs(f.path, name=f.name)
         ctx.check()
         table = tracking_table(obs, gap_factor=config.gap_factor)
         receiver = obs.header.marker_name or f.name
+        tracking.append(tracking_arrays(obs, receiver))
         for r in table:
             rows.append({"file": f.name, "receiver": receiver, **r})
         files_summary.append({
@@ -49,4 +52,18 @@ def run(ctx: JobContext, config) -> None:
     for r in rows:
         writer.writerow({k: ("" if v is None else v) for k, v in r.items()})
     ctx.write_product("observations.csv", buf.getvalue())
+    _write_plots(ctx, config, obs_set, tracking, buf.getvalue())
     ctx.progress(1.0, "done")
+
+
+def _write_plots(ctx: JobContext, config, obs_set, tracking: list[dict], observations_csv: str) -> None:
+    """tracking.csv (per receiver and epoch: satellites, mean C/N0; feeds the job page's interactive chart),
+    tracking.png (satellites x GPS time coloured by C/N0) and cn0.png (mean C/N0 per satellite and receiver)."""
+    from worker.plots import PlotContext
+    from worker.plots.inspect import cn0_overview_plot, tracking_plot, tracking_series_csv
+
+    ctx.progress(0.95, "plotting")
+    context = PlotContext(set_name=obs_set.name or obs_set.id, job_id=ctx.job_id, config=config.model_dump())
+    ctx.write_product("tracking.csv", tracking_series_csv(tracking))
+    ctx.write_product("tracking.png", tracking_plot(tracking, context))
+    ctx.write_product("cn0.png", cn0_overview_plot(observations_csv, context))
