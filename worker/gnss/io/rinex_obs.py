@@ -50,8 +50,8 @@ SUPPORTED_VERSIONS: dict[float, int] = {
 }
 _SYSTEMS = "GRECJSI"
 _GPS_EPOCH_UNIX_DAYS = 3657  # 1970-01-01 -> 1980-01-06, as in worker.gnss.time
-#: Characters converted per block (about 16 MB of float64 temporaries) whatever the file size.
-_CHUNK_ELEMENTS = 2**21
+#: Characters converted per block (~15 MB of temporaries) whatever the file size.
+_CHUNK_ELEMENTS = 2**20
 
 _V3_EPOCH_LAYOUT = ("> yyyy mm dd hh mm ss.sssssss  f nnn      [receiver clock offset F15.12]  "
                     "(RINEX 3.04 Table A3: A1,1X,I4,4(1X,I2.2),F11.7,2X,I1,I3,6X,F15.12)")
@@ -557,12 +557,18 @@ def _parse_header(lines: list[bytes], name: str) -> ObsHeader:
 
 # --- shared pieces -------------------------------------------------------------------------------
 
-def _split_lines(body: bytes):
-    """(list of lines, starts, lengths, buffer) of `body`; a final empty line after the last newline is dropped."""
-    lines = body.split(b"\n")
+def _split_lines(body):
+    """(list of lines, starts, lengths, buffer) of the data section; a final empty line is dropped.
+
+    body: (data, offset, n_header_lines): the whole file and where its data section starts; the section is
+    not copied (its lines are split from the whole file and the header lines dropped).
+    """
+    data, offset, n_header = body
+    lines = data.split(b"\n")
+    del lines[:n_header]
     if lines and lines[-1] == b"":
         lines.pop()
-    buf = np.frombuffer(body, dtype=np.uint8)
+    buf = np.frombuffer(data, dtype=np.uint8, offset=offset)
     nl = np.flatnonzero(buf == 10)
     starts = np.concatenate(([0], nl + 1))[:len(lines)]
     ends = np.concatenate((nl, [len(buf)]))[:len(lines)]
@@ -631,7 +637,7 @@ def _parse_v3_epoch_python(line: str, name: str, line_no: int):
         raise ParseError(name, line_no, "an epoch line: " + _V3_EPOCH_LAYOUT, line) from None
 
 
-def _read_body_v3(hdr: ObsHeader, body: bytes, name: str):
+def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
     n0 = hdr.n_header_lines  # line number offset (body line i is file line n0 + i + 1)
     lines, starts, lens, buf = _split_lines(body)
     n_lines = len(lines)
@@ -889,7 +895,7 @@ def _v2_sat(txt: str, default: str, name: str, line_no: int, line: str) -> int:
     return ord(letter) * 100 + int(prn)
 
 
-def _read_body_v2(hdr: ObsHeader, body: bytes, name: str):
+def _read_body_v2(hdr: ObsHeader, body: tuple, name: str):
     n0 = hdr.n_header_lines
     lines, starts, lens, buf = _split_lines(body)
     n_lines = len(lines)
@@ -1049,8 +1055,8 @@ def read_rinex_obs(source, *, name: str | None = None) -> RinexObs:
     if header_lines and header_lines[-1] == b"":
         header_lines.pop()
     hdr = _parse_header(header_lines, label)
-    body = data[split_at:]
-    if body.strip() and not body.endswith(b"\n"):
+    body = (data, split_at, hdr.n_header_lines)
+    if not data.endswith(b"\n") and data[split_at:].strip():
         hdr.warnings.append(ParseWarning("no-final-newline", "the file does not end with a newline: its last "
                                          "record may be cut (a record cut between fields reads as blanks)"))
     if SUPPORTED_VERSIONS[hdr.version] == 2:
