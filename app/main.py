@@ -10,6 +10,7 @@ from app.db import make_engine, make_sessionmaker
 from app.migrate import migrate
 from app.problems import install_problem_handlers
 from app.routes import health, job_types, jobs, observation_sets, pcv_maps
+from app.routes.pages import install_pages
 from app.settings import Settings
 from app.store.blobs import BlobStore
 from worker.queue import make_huey
@@ -47,6 +48,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(observation_sets.router)
     app.include_router(jobs.router)
     app.include_router(job_types.router)
+    install_pages(app)  # /ui pages, /static assets, CSRF guard for cookie-authenticated /v1 calls
     app.include_router(pcv_maps.router)
     app.openapi = lambda: _openapi_with_problems(app)  # type: ignore[method-assign]
     return app

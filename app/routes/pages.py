@@ -1,0 +1,334 @@
+"""Server-rendered pages under /ui (Jinja2), on the same API keys and team scoping as /v1.
+
+Sign-in: the login form checks the key and keeps it in the `gnssatt_key` cookie (HttpOnly, SameSite=Strict,
+Secure over https), which `app.deps.get_team` already accepts, so the pages' small scripts call /v1 like
+any client. Cookie authentication is ambient, so every state-changing request that relies on it must carry
+a CSRF token: a random value kept in the HttpOnly `gnssatt_csrf` cookie and repeated by the page (form field
+`csrf_token`, or the `X-CSRF-Token` header that the pages' fetch() calls set, read from a <meta> tag).
+`CsrfMiddleware` enforces that on /v1; requests that authenticate with `Authorization: Bearer` or `X-API-Key`
+(scripts, the CLI) are untouched.
+
+Pages read the database directly (team-scoped like the API) and never run science: plots are products made
+by the worker (worker/plots); the interactive charts (static/charts.js, uPlot) read the job's own CSV products
+through the download URLs.
+"""
+from __future__ import annotations
+
+import json
+import secrets
+from pathlib import Path
+from typing import Any
+from urllib.parse import quote
+
+from fastapi import APIRouter, FastAPI, Request
+from fastapi.responses import HTMLResponse, RedirectResponse, Response
+from fastapi.staticfiles import StaticFiles
+from fastapi.templating import Jinja2Templates
+from sqlalchemy import func, select
+from starlette.datastructures import Headers
+
+from app.deps import SessionDep
+from app.keys import team_for_key
+from app.models import Job, JobSet, ObservationSet, PcvMap, Product, Team
+from app.problems import ProblemError, problem_response
+
+APP_DIR = Path(__file__).resolve().parents[1]
+TEMPLATES = Jinja2Templates(directory=str(APP_DIR / "templates"))
+STATIC_DIR = APP_DIR / "static"
+
+KEY_COOKIE = "gnssatt_key"
+CSRF_COOKIE = "gnssatt_csrf"
+CSRF_HEADER = "X-CSRF-Token"
+CSRF_FIELD = "csrf_token"
+#: How long a browser keeps the key after sign-in [s] (a working day); sign out clears it at once.
+KEY_COOKIE_MAX_AGE_S = 8 * 3600
+SAFE_METHODS = frozenset({"GET", "HEAD", "OPTIONS", "TRACE"})
+TERMINAL = ("succeeded", "failed", "cancelled")
+PAGE_SIZE = 50
+#: summary.json is read for the job page up to this size [bytes]; larger ones are only linked.
+MAX_SUMMARY_BYTES = 2 * 1024 * 1024
+#: Content-Security-Policy of every page: nothing from other origins, no inline scripts.
+CSP = ("default-src 'self'; script-src 'self'; style-src 'self'; img-src 'self' data: blob:; connect-src 'self'; "
+       "font-src 'self'; object-src 'none'; base-uri 'none'; form-action 'self'; frame-ancestors 'none'")
+
+router = APIRouter(prefix="/ui", include_in_schema=False)
+
+
+# --- wiring --------------------------------------------------------------------------------------------------
+
+def install_pages(app: FastAPI) -> None:
+    """Add the /ui pages, the /static assets, `/` -> /ui and the CSRF guard of cookie-authenticated /v1 calls."""
+    app.include_router(router)
+    app.mount("/static", StaticFiles(directory=str(STATIC_DIR)), name="static")
+    app.add_api_route("/", lambda: RedirectResponse("/ui", status_code=307), methods=["GET"],
+                      include_in_schema=False)
+    app.add_middleware(CsrfMiddleware)
+
+
+class CsrfMiddleware:
+    """Refuse (403 problem) a state-changing /v1 request authenticated by the `gnssatt_key` cookie alone
+    unless its `X-CSRF-Token` header equals the `gnssatt_csrf` cookie (double submit; both cookies are
+    SameSite=Strict). Pure ASGI, so streamed uploads pass through untouched."""
+
+    def __init__(self, app):
+        self.app = app
+
+    async def __call__(self, scope, receive, send):
+        if scope["type"] == "http" and scope["method"] not in SAFE_METHODS and scope["path"].startswith("/v1/"):
+            headers = Headers(scope=scope)
+            bearer = headers.get("authorization", "")
+            explicit = (bearer.lower().startswith("bearer ") and bearer[7:].strip()) or headers.get("x-api-key")
+            cookies = _cookies(headers)
+            if not explicit and cookies.get(KEY_COOKIE) and not csrf_ok(cookies.get(CSRF_COOKIE),
+                                                                        headers.get(CSRF_HEADER)):
+                body = ProblemError(403, "csrf-token-invalid", "CSRF token missing or invalid",
+                                    "Requests authenticated by the sign-in cookie must send the page's CSRF "
+                                    f"token in the {CSRF_HEADER} header. Scripts should authenticate with "
+                                    "'Authorization: Bearer KEY' instead.").body(scope["path"])
+                await problem_response(403, body)(scope, receive, send)
+                return
+        await self.app(scope, receive, send)
+
+
+def _cookies(headers: Headers) -> dict[str, str]:
+    from http.cookies import SimpleCookie
+
+    jar: SimpleCookie = SimpleCookie()
+    for raw in headers.getlist("cookie"):
+        try:
+            jar.load(raw)
+        except Exception:  # noqa: BLE001 - a malformed cookie header counts as no cookie
+            continue
+    return {k: m.value for k, m in jar.items()}
+
+
+def csrf_ok(expected: str | None, given: str | None) -> bool:
+    return bool(expected) and bool(given) and secrets.compare_digest(str(expected), str(given))
+
+
+# --- helpers ---------------------------------------------------------------------------------------------------
+
+def _secure(request: Request) -> bool:
+    return request.url.scheme == "https"
+
+
+def _csrf_token(request: Request) -> str:
+    token = request.cookies.get(CSRF_COOKIE)
+    if not token or len(token) < 20:
+        token = getattr(request.state, "new_csrf", None) or secrets.token_urlsafe(32)
+        request.state.new_csrf = token
+    return token
+
+
+def _finish(request: Request, response: Response) -> Response:
+    """Security headers of every page, and the CSRF cookie when this request minted one."""
+    response.headers["Content-Security-Policy"] = CSP
+    response.headers["X-Content-Type-Options"] = "nosniff"
+    response.headers["Referrer-Policy"] = "same-origin"
+    response.headers["Cache-Control"] = "no-store"
+    new = getattr(request.state, "new_csrf", None)
+    if new:
+        response.set_cookie(CSRF_COOKIE, new, httponly=True, samesite="strict", secure=_secure(request), path="/")
+    return response
+
+
+def render(request: Request, template: str, status_code: int = 200, team: Team | None = None,
+           **context: Any) -> Response:
+    context.update(team=team, csrf_token=_csrf_token(request), nav=template.split(".")[0])
+    return _finish(request, TEMPLATES.TemplateResponse(request, template, context, status_code=status_code))
+
+
+def page_team(request: Request, session) -> Team | None:
+    key = request.cookies.get(KEY_COOKIE)
+    return team_for_key(session, key) if key else None
+
+
+def to_login(request: Request) -> Response:
+    target = request.url.path + (f"?{request.url.query}" if request.url.query else "")
+    return _finish(request, RedirectResponse(f"/ui/login?next={quote(target, safe='')}", status_code=303))
+
+
+def problem_page(request: Request, team: Team | None, exc: ProblemError) -> Response:
+    return render(request, "error.html", status_code=exc.status, team=team,
+                  problem=exc.body(str(request.url.path)))
+
+
+def _safe_next(target: str | None) -> str:
+    """Only same-site page paths are followed after sign-in (no open redirect)."""
+    if target and target.startswith("/ui") and not target.startswith("//") and "\\" not in target:
+        return target
+    return "/ui"
+
+
+def product_url(job_id: str, name: str) -> str:
+    return f"/v1/jobs/{quote(job_id, safe='')}/products/{quote(name, safe='')}"
+
+
+def job_view(job: Job) -> dict[str, Any]:
+    return {"id": job.id, "type": job.type, "state": job.state, "progress": float(job.progress or 0.0),
+            "stage": job.stage, "created_at": job.created_at, "started_at": job.started_at,
+            "finished_at": job.finished_at, "attempts": job.attempts, "error": job.error,
+            "config": job.config or {}, "set_ids": list(job.set_ids or []), "terminal": job.state in TERMINAL}
+
+
+def summary_items(summary: Any, prefix: str = "", depth: int = 3) -> list[tuple[str, str]]:
+    """(dotted key, text) of the scalar numbers of a summary document; long lists are counted, not shown."""
+    items: list[tuple[str, str]] = []
+    if not isinstance(summary, dict):
+        return items
+    for key, value in summary.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            if depth > 1:
+                items.extend(summary_items(value, name + ".", depth - 1))
+        elif isinstance(value, list):
+            if all(not isinstance(v, (dict, list)) for v in value) and len(value) <= 12:
+                items.append((name, ", ".join(_fmt(v) for v in value)))
+            else:
+                items.append((name, f"{len(value)} entries"))
+        else:
+            items.append((name, _fmt(value)))
+    return items
+
+
+def _fmt(value: Any) -> str:
+    if value is None:
+        return "–"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    return str(value)
+
+
+# --- sign-in ---------------------------------------------------------------------------------------------------
+
+@router.get("/login", response_class=HTMLResponse)
+def login_form(request: Request, session: SessionDep, next: str | None = None):
+    return render(request, "login.html", team=page_team(request, session), next=_safe_next(next), error=None)
+
+
+@router.post("/login", response_class=HTMLResponse)
+async def login(request: Request, session: SessionDep):
+    form = await request.form()
+    target = _safe_next(str(form.get("next") or ""))
+    if not csrf_ok(request.cookies.get(CSRF_COOKIE), str(form.get(CSRF_FIELD) or "")):
+        return render(request, "login.html", status_code=403, next=target,
+                      error={"title": "Sign-in form expired", "detail": "Reload the page and sign in again "
+                             "(the form's CSRF token did not match; cookies must be enabled)."})
+    key = str(form.get("api_key") or "").strip()
+    team = team_for_key(session, key) if key else None
+    if team is None:
+        return render(request, "login.html", status_code=401, next=target,
+                      error={"title": "Invalid API key", "detail": "This API key is unknown or revoked. An "
+                             "operator mints keys with 'gnssatt admin create-key --team NAME'."})
+    response = RedirectResponse(target, status_code=303)
+    response.set_cookie(KEY_COOKIE, key, max_age=KEY_COOKIE_MAX_AGE_S, httponly=True, samesite="strict",
+                        secure=_secure(request), path="/")
+    # a fresh CSRF token per sign-in (no token fixation)
+    request.state.new_csrf = secrets.token_urlsafe(32)
+    return _finish(request, response)
+
+
+@router.post("/logout")
+async def logout(request: Request):
+    form = await request.form()
+    if not csrf_ok(request.cookies.get(CSRF_COOKIE), str(form.get(CSRF_FIELD) or "")):
+        exc = ProblemError(403, "csrf-token-invalid", "CSRF token missing or invalid", "Reload the page and try again.")
+        return problem_page(request, None, exc)
+    response = RedirectResponse("/ui/login", status_code=303)
+    response.delete_cookie(KEY_COOKIE, path="/", samesite="strict", secure=_secure(request), httponly=True)
+    response.delete_cookie(CSRF_COOKIE, path="/", samesite="strict", secure=_secure(request), httponly=True)
+    return _finish(request, response)
+
+
+# --- pages -----------------------------------------------------------------------------------------------------
+
+@router.get("", response_class=HTMLResponse)
+def dashboard(request: Request, session: SessionDep, sets_offset: int = 0, jobs_offset: int = 0):
+    team = page_team(request, session)
+    if team is None:
+        return to_login(request)
+    sets_offset, jobs_offset = max(0, min(sets_offset, 2**31)), max(0, min(jobs_offset, 2**31))
+    sets_q = select(ObservationSet).where(ObservationSet.team_id == team.id)
+    jobs_q = select(Job).where(Job.team_id == team.id)
+    n_sets = session.execute(select(func.count()).select_from(sets_q.subquery())).scalar_one()
+    n_jobs = session.execute(select(func.count()).select_from(jobs_q.subquery())).scalar_one()
+    sets = session.execute(sets_q.order_by(ObservationSet.created_at.desc(), ObservationSet.id)
+                           .limit(PAGE_SIZE).offset(sets_offset)).scalars().all()
+    jobs = session.execute(jobs_q.order_by(Job.created_at.desc(), Job.id)
+                           .limit(PAGE_SIZE).offset(jobs_offset)).scalars().all()
+    return render(request, "dashboard.html", team=team, sets=sets, jobs=[job_view(j) for j in jobs],
+                  n_sets=n_sets, n_jobs=n_jobs, sets_offset=sets_offset, jobs_offset=jobs_offset,
+                  page_size=PAGE_SIZE)
+
+
+@router.get("/sets/{set_id}", response_class=HTMLResponse)
+def set_page(set_id: str, request: Request, session: SessionDep):
+    team = page_team(request, session)
+    if team is None:
+        return to_login(request)
+    obs_set = session.get(ObservationSet, set_id)
+    if obs_set is None or obs_set.team_id != team.id:
+        return problem_page(request, team, ProblemError(404, "not-found", "Observation set not found",
+                                                        f"No observation set with id {set_id!r} is visible to "
+                                                        "your team."))
+    jobs = session.execute(select(Job).join(JobSet, JobSet.job_id == Job.id)
+                           .where(JobSet.set_id == set_id, Job.team_id == team.id)
+                           .order_by(Job.created_at.desc()).limit(PAGE_SIZE)).scalars().all()
+    summary = {k: v for k, v in (obs_set.summary or {}).items() if k != "files"}
+    return render(request, "set.html", team=team, obs_set=obs_set, files=obs_set.files,
+                  summary=summary_items(summary), jobs=[job_view(j) for j in jobs])
+
+
+@router.get("/jobs/{job_id}", response_class=HTMLResponse)
+def job_page(job_id: str, request: Request, session: SessionDep):
+    team = page_team(request, session)
+    if team is None:
+        return to_login(request)
+    job = session.get(Job, job_id)
+    if job is None or job.team_id != team.id:
+        return problem_page(request, team, ProblemError(404, "not-found", "Job not found",
+                                                        f"No job with id {job_id!r} is visible to your team."))
+    products = session.execute(select(Product).where(Product.job_id == job.id).order_by(Product.name)).scalars().all()
+    rows = [{"name": p.name, "media_type": p.media_type, "size_bytes": p.size_bytes,
+             "url": product_url(job.id, p.name)} for p in products]
+    summary, summary_note = None, None
+    by_name = {p.name: p for p in products}
+    if "summary.json" in by_name:
+        p = by_name["summary.json"]
+        if p.size_bytes <= MAX_SUMMARY_BYTES:
+            try:
+                summary = json.loads(request.app.state.blobs.path(p.sha256).read_text())
+            except (OSError, ValueError) as exc:
+                summary_note = f"summary.json could not be read ({exc.__class__.__name__})"
+        else:
+            summary_note = "summary.json is large; download it below"
+    sets = session.execute(select(ObservationSet).where(ObservationSet.id.in_(list(job.set_ids or [])),
+                                                        ObservationSet.team_id == team.id)).scalars().all()
+    images = [r for r in rows if r["media_type"] == "image/png"]
+    charts = [r for r in rows if r["name"].endswith(".csv")]
+    return render(request, "job.html", team=team, job=job_view(job), products=rows, images=images,
+                  charts=charts, summary=summary_items(summary) if summary is not None else [],
+                  summary_note=summary_note, sets=sets,
+                  config_text=json.dumps(job.config or {}, indent=2, sort_keys=True))
+
+
+@router.get("/new", response_class=HTMLResponse)
+def new_page(request: Request, session: SessionDep, set: str | None = None):
+    team = page_team(request, session)
+    if team is None:
+        return to_login(request)
+    sets = session.execute(select(ObservationSet).where(ObservationSet.team_id == team.id)
+                           .order_by(ObservationSet.created_at.desc()).limit(200)).scalars().all()
+    return render(request, "new.html", team=team, sets=sets, selected=set)
+
+
+@router.get("/pcv-maps", response_class=HTMLResponse)
+def pcv_maps_page(request: Request, session: SessionDep):
+    team = page_team(request, session)
+    if team is None:
+        return to_login(request)
+    maps = session.execute(select(PcvMap).where(PcvMap.team_id == team.id)
+                           .order_by(PcvMap.platform, PcvMap.name, PcvMap.version.desc())).scalars().all()
+    return render(request, "pcv_maps.html", team=team, maps=maps)

@@ -1,0 +1,227 @@
+/* gnssatt pages: live job progress (SSE), upload and job forms, cancel. Vanilla JS, no framework.
+ * Every state-changing call sends the page's CSRF token (X-CSRF-Token), as the server requires for
+ * requests authenticated by the sign-in cookie. */
+(function () {
+  "use strict";
+  const TERMINAL = ["succeeded", "failed", "cancelled"];
+  const MAX_STREAMS = 4; // browsers allow ~6 connections per host; keep some for fetches and images
+  const meta = document.querySelector('meta[name="csrf-token"]');
+  const csrf = meta ? meta.content : "";
+
+  function el(tag, attrs, text) {
+    const e = document.createElement(tag);
+    for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, v);
+    if (text !== undefined) e.textContent = text;
+    return e;
+  }
+
+  async function api(method, url, body) {
+    const headers = {"Accept": "application/json, application/problem+json", "X-CSRF-Token": csrf};
+    const init = {method, headers, credentials: "same-origin"};
+    if (body instanceof FormData) init.body = body;
+    else if (body !== undefined) { headers["Content-Type"] = "application/json"; init.body = JSON.stringify(body); }
+    const resp = await fetch(url, init);
+    let doc = null;
+    try { doc = await resp.json(); } catch (e) { doc = null; }
+    if (!resp.ok) {
+      const problem = doc && doc.title ? doc : {title: `HTTP ${resp.status}`, status: resp.status,
+                                                 detail: "The server answered without a problem document."};
+      const err = new Error(problem.title);
+      err.problem = problem;
+      throw err;
+    }
+    return {status: resp.status, headers: resp.headers, body: doc};
+  }
+
+  /* Show an RFC 9457 problem document: title, detail, file, line, field and per-field errors. */
+  function showProblem(box, problem) {
+    if (!box) return;
+    box.replaceChildren();
+    box.appendChild(el("b", {}, problem.title || "Error"));
+    if (problem.detail) box.appendChild(el("div", {class: "detail"}, problem.detail));
+    if (problem.file) {
+      const d = el("div", {class: "where"}, "file ");
+      d.appendChild(el("code", {}, problem.file));
+      if (problem.line) d.appendChild(document.createTextNode(`, line ${problem.line}`));
+      box.appendChild(d);
+    }
+    if (problem.field) {
+      const d = el("div", {class: "field"}, "field ");
+      d.appendChild(el("code", {}, problem.field));
+      box.appendChild(d);
+    }
+    if (Array.isArray(problem.errors) && problem.errors.length > 1) {
+      const ul = el("ul");
+      for (const e of problem.errors.slice(0, 20)) ul.appendChild(el("li", {}, `${e.field || ""}: ${e.message || ""}`));
+      box.appendChild(ul);
+    }
+    box.hidden = false;
+  }
+
+  /* --- live progress ------------------------------------------------------------------------------- */
+  function paint(node, job) {
+    node.dataset.state = job.state;
+    const bar = node.querySelector(".js-progress");
+    if (bar) bar.value = job.progress;
+    const pct = node.querySelector(".js-percent");
+    if (pct) pct.textContent = `${Math.round(job.progress * 100)}%`;
+    const stage = node.querySelector(".js-stage");
+    if (stage) stage.textContent = job.stage || "";
+    const state = node.querySelector(".js-state");
+    if (state) {
+      const badge = el("span", {class: `state state-${job.state}`}, job.state);
+      state.replaceChildren(badge);
+    }
+    const prob = node.querySelector(".js-problem");
+    if (prob && job.error) showProblem(prob, job.error);
+  }
+
+  function follow(node, onEnd) {
+    const id = node.dataset.jobId;
+    const source = new EventSource(`/v1/jobs/${encodeURIComponent(id)}/events`);
+    source.addEventListener("progress", (ev) => paint(node, JSON.parse(ev.data)));
+    source.addEventListener("end", (ev) => {
+      const job = JSON.parse(ev.data);
+      paint(node, job);
+      source.close();
+      if (onEnd) onEnd(job);
+    });
+    source.onerror = () => { if (TERMINAL.includes(node.dataset.state)) source.close(); };
+    return source;
+  }
+
+  function startLiveProgress() {
+    const status = document.getElementById("job-status");
+    if (status) {
+      if (!TERMINAL.includes(status.dataset.state)) {
+        follow(status, () => setTimeout(() => window.location.reload(), 400));
+      }
+      return;
+    }
+    const rows = Array.from(document.querySelectorAll("tr.job[data-job-id]"))
+      .filter((r) => !TERMINAL.includes(r.dataset.state)).slice(0, MAX_STREAMS);
+    rows.forEach((r) => follow(r));
+  }
+
+  /* --- cancel ------------------------------------------------------------------------------------- */
+  function wireCancel() {
+    const button = document.getElementById("cancel-job");
+    if (!button) return;
+    button.addEventListener("click", async () => {
+      if (!window.confirm("Cancel this job?")) return;
+      button.disabled = true;
+      try {
+        await api("POST", `/v1/jobs/${encodeURIComponent(button.dataset.jobId)}/cancel`);
+      } catch (e) {
+        showProblem(document.querySelector("#job-status .js-problem"), e.problem || {title: String(e)});
+        button.disabled = false;
+      }
+    });
+  }
+
+  /* --- upload and job forms ------------------------------------------------------------------------ */
+  function defaultsOf(schema) {
+    const out = {};
+    for (const [name, prop] of Object.entries((schema && schema.properties) || {})) {
+      if (Object.prototype.hasOwnProperty.call(prop, "default")) out[name] = prop.default;
+    }
+    return out;
+  }
+
+  function wireNewPage() {
+    const uploadForm = document.getElementById("upload-form");
+    const jobForm = document.getElementById("job-form");
+    if (!uploadForm || !jobForm) return;
+    const typeSelect = document.getElementById("job-type");
+    const setsSelect = document.getElementById("job-sets");
+    const config = document.getElementById("job-config");
+    const help = jobForm.querySelector(".js-type-help");
+    const fieldHelp = jobForm.querySelector(".js-config-help");
+    const jobProblem = jobForm.parentElement.querySelector(".js-problem");
+    let types = {};
+
+    function describe() {
+      const t = types[typeSelect.value];
+      fieldHelp.replaceChildren();
+      if (!t) { help.textContent = ""; return; }
+      const sets = t.max_sets === 0 ? "no observation set" :
+        (t.min_sets === t.max_sets ? `${t.min_sets} observation set(s)` :
+          `${t.min_sets} to ${t.max_sets === null ? "any number of" : t.max_sets} observation sets`);
+      help.textContent = `${t.description} Takes ${sets}.`;
+      config.value = JSON.stringify(defaultsOf(t.config_schema), null, 2);
+      for (const [name, prop] of Object.entries((t.config_schema && t.config_schema.properties) || {})) {
+        const li = el("li");
+        li.appendChild(el("code", {}, name));
+        li.appendChild(document.createTextNode(` ${prop.description || prop.title || ""}`));
+        fieldHelp.appendChild(li);
+      }
+    }
+
+    api("GET", "/v1/job-types").then(({body}) => {
+      typeSelect.replaceChildren(el("option", {value: ""}, "choose a job type…"));
+      for (const t of body) {
+        types[t.name] = t;
+        typeSelect.appendChild(el("option", {value: t.name}, `${t.name} · ${t.title}`));
+      }
+      typeSelect.dataset.loaded = "1";
+    }).catch((e) => showProblem(jobProblem, e.problem || {title: String(e)}));
+    typeSelect.addEventListener("change", describe);
+
+    uploadForm.addEventListener("submit", async (ev) => {
+      ev.preventDefault();
+      const box = uploadForm.parentElement.querySelector(".js-problem");
+      const ok = uploadForm.parentElement.querySelector(".js-ok");
+      const busy = uploadForm.querySelector(".js-busy");
+      const button = document.getElementById("upload-button");
+      box.hidden = true; ok.hidden = true; busy.hidden = false; button.disabled = true;
+      const data = new FormData();
+      const name = document.getElementById("set-name").value.trim();
+      if (name) data.append("name", name);
+      for (const f of document.getElementById("set-files").files) data.append("files", f, f.name);
+      try {
+        const {body} = await api("POST", "/v1/observation-sets", data);
+        ok.replaceChildren(document.createTextNode("Uploaded and checked: "));
+        const a = el("a", {href: `/ui/sets/${body.id}`, id: "uploaded-set"}, body.name || body.id);
+        a.dataset.setId = body.id;
+        ok.appendChild(a);
+        ok.appendChild(document.createTextNode(` (${body.files.length} files${body.platform_name ? ", " + body.platform_name : ""}).`));
+        ok.hidden = false;
+        for (const o of setsSelect.options) o.selected = false;
+        const opt = el("option", {value: body.id}, `${body.name || body.id.slice(0, 8)} · ${body.platform_name || ""} · new`);
+        opt.selected = true;
+        setsSelect.prepend(opt);
+      } catch (e) {
+        showProblem(box, e.problem || {title: String(e)});
+      } finally {
+        busy.hidden = true; button.disabled = false;
+      }
+    });
+
+    jobForm.addEventListener("submit", async (ev) => {
+      ev.preventDefault();
+      jobProblem.hidden = true;
+      let cfg;
+      try {
+        cfg = config.value.trim() ? JSON.parse(config.value) : {};
+      } catch (e) {
+        showProblem(jobProblem, {title: "Configuration is not valid JSON", detail: String(e.message || e), field: "config"});
+        return;
+      }
+      const ids = Array.from(setsSelect.selectedOptions).map((o) => o.value);
+      const button = document.getElementById("submit-job");
+      button.disabled = true;
+      try {
+        const {body} = await api("POST", "/v1/jobs", {type: typeSelect.value, observation_set_ids: ids, config: cfg});
+        window.location.assign(`/ui/jobs/${body.id}`);
+      } catch (e) {
+        showProblem(jobProblem, e.problem || {title: String(e)});
+        button.disabled = false;
+      }
+    });
+  }
+
+  window.gnssatt = {api, showProblem};
+  startLiveProgress();
+  wireCancel();
+  wireNewPage();
+})();

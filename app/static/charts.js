@@ -1,0 +1,313 @@
+/* gnssatt job page: interactive time series (uPlot, vendored in /static/vendor/uplot) fed by the job's own
+ * CSV products through their download URLs.
+ *
+ *   attitude.csv   Euler angles; errors (<axis>_error_deg columns) or formal 1-sigma; fix status + satellites
+ *   errors.csv     any CSV with time_gps and <axis>_error_deg columns: Euler angle errors
+ *   baselines.csv  azimuth, elevation, length per baseline; fixed + satellites per baseline
+ *   residuals.csv  RMS per epoch of the used phase [mm] and code [m] residuals per baseline and signal
+ *   tracking.csv   (inspect) satellites tracked and mean C/N0 per receiver
+ *
+ * Interaction: drag to zoom (x), Shift+drag to pan, mouse wheel to zoom around the cursor, double-click to
+ * reset; the legend shows the values under the cursor; all charts share one time axis (zoom and cursor).
+ * Times are GPS time, shown as written (no leap-second shift).  window.GnssattCharts.instances lists the
+ * charts ({name, title, plot}) for tests. */
+(function () {
+  "use strict";
+  const HEIGHT = 230;
+  const MAX_BYTES = 80 * 1024 * 1024; // larger CSVs are linked, not charted (browser memory)
+  const COLOURS = ["#d62728", "#2ca02c", "#1f77b4", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
+                   "#7f7f7f", "#bcbd22"];
+  const EULER = {yaw: "#d62728", pitch: "#2ca02c", roll: "#1f77b4"};
+  const registry = {instances: [], mount, parseCSV};
+  window.GnssattCharts = registry;
+
+  /* --- CSV ------------------------------------------------------------------------------------------ */
+  function splitQuoted(line) {
+    const out = [];
+    let cur = "", quoted = false;
+    for (let i = 0; i < line.length; i++) {
+      const c = line[i];
+      if (quoted) {
+        if (c === '"') { if (line[i + 1] === '"') { cur += '"'; i++; } else quoted = false; }
+        else cur += c;
+      } else if (c === '"') quoted = true;
+      else if (c === ",") { out.push(cur); cur = ""; }
+      else cur += c;
+    }
+    out.push(cur);
+    return out;
+  }
+
+  /** {header: [...], col(name) -> array of strings, n} (quoted fields with commas handled). */
+  function parseCSV(text) {
+    const lines = text.split(/\r?\n/).filter((l) => l.length);
+    const header = lines.length ? splitQuoted(lines[0]).map((h) => h.trim()) : [];
+    const rows = [];
+    for (let i = 1; i < lines.length; i++) {
+      const l = lines[i];
+      rows.push(l.indexOf('"') >= 0 ? splitQuoted(l) : l.split(","));
+    }
+    const index = Object.fromEntries(header.map((h, i) => [h.toLowerCase(), i]));
+    return {
+      header, n: rows.length,
+      has: (name) => Object.prototype.hasOwnProperty.call(index, name.toLowerCase()),
+      col: (name) => { const k = index[name.toLowerCase()]; return k === undefined ? null : rows.map((r) => r[k]); },
+      num: (name) => {
+        const k = index[name.toLowerCase()];
+        if (k === undefined) return null;
+        return rows.map((r) => { const v = r[k]; return v === undefined || v === "" ? null : Number(v); });
+      },
+    };
+  }
+
+  const gpsSeconds = (iso) => Date.parse(iso.endsWith("Z") ? iso : iso + "Z") / 1000;
+
+  /* Insert a null row where consecutive times are more than 1.5 median steps apart, so lines break at gaps. */
+  function withGaps(x, ys) {
+    if (x.length < 3) return [x, ys];
+    const steps = [];
+    for (let i = 1; i < x.length; i++) steps.push(x[i] - x[i - 1]);
+    const med = steps.slice().sort((a, b) => a - b)[Math.floor(steps.length / 2)];
+    const nx = [], nys = ys.map(() => []);
+    for (let i = 0; i < x.length; i++) {
+      if (i > 0 && med > 0 && x[i] - x[i - 1] > 1.5 * med) {
+        nx.push((x[i] + x[i - 1]) / 2);
+        nys.forEach((a) => a.push(null));
+      }
+      nx.push(x[i]);
+      nys.forEach((a, k) => a.push(ys[k][i]));
+    }
+    return [nx, nys];
+  }
+
+  /* Long table (time, key, value) -> aligned x and one series per key. */
+  function pivot(times, keys, values) {
+    const uniq = Array.from(new Set(times)).sort((a, b) => a - b);
+    const at = new Map(uniq.map((t, i) => [t, i]));
+    const names = Array.from(new Set(keys));
+    const series = names.map(() => new Array(uniq.length).fill(null));
+    const idx = new Map(names.map((n, i) => [n, i]));
+    for (let r = 0; r < times.length; r++) {
+      if (values[r] === null || Number.isNaN(values[r])) continue;
+      series[idx.get(keys[r])][at.get(times[r])] = values[r];
+    }
+    return {x: uniq, names, series};
+  }
+
+  /* RMS per (time, key) of values (used rows only). */
+  function rmsPerEpoch(times, keys, values, used) {
+    const acc = new Map();
+    for (let r = 0; r < times.length; r++) {
+      const v = values[r];
+      if (v === null || Number.isNaN(v) || (used && !used[r])) continue;
+      const k = times[r] + "|" + keys[r];
+      const a = acc.get(k) || [times[r], keys[r], 0, 0];
+      a[2] += v * v; a[3] += 1;
+      acc.set(k, a);
+    }
+    const t = [], k = [], v = [];
+    for (const a of acc.values()) { t.push(a[0]); k.push(a[1]); v.push(Math.sqrt(a[2] / a[3])); }
+    return pivot(t, k, v);
+  }
+
+  const truthy = (s) => ["1", "true", "yes", "y", "t"].includes(String(s).trim().toLowerCase());
+
+  /* --- chart definitions per product ------------------------------------------------------------------ */
+  function chartsFor(name, t) {
+    const out = [];
+    if (!t.has("time_gps") || t.n === 0) return out;
+    const times = t.col("time_gps").map(gpsSeconds);
+    const lower = name.toLowerCase();
+    const errorCols = ["yaw", "pitch", "roll"].filter((a) => t.has(`${a}_error_deg`));
+    if (lower === "attitude.csv" && t.has("yaw_deg")) {
+      out.push({title: "Euler angles (3-2-1) [deg]", y: "deg", x: times,
+                series: ["yaw", "pitch", "roll"].map((a) => ({label: a, values: t.num(`${a}_deg`), stroke: EULER[a]}))});
+      if (!errorCols.length && t.has("sigma_yaw_deg")) {
+        out.push({title: "Formal 1σ of the Euler angles [deg]", y: "deg", x: times,
+                  series: ["yaw", "pitch", "roll"].map((a) => ({label: `σ ${a}`, values: t.num(`sigma_${a}_deg`), stroke: EULER[a]}))});
+      }
+      if (t.has("fixed") || t.has("n_sats")) {
+        const series = [];
+        if (t.has("n_sats")) series.push({label: "satellites used", values: t.num("n_sats"), stroke: "#1f77b4"});
+        if (t.has("fixed")) series.push({label: "fixed (1) / float (0)", values: t.col("fixed").map((v) => (truthy(v) ? 1 : 0)),
+                                         stroke: "#2ca02c", scale: "fix", step: true});
+        out.push({title: "Fix status and satellites used", y: "satellites", y2: "fixed", x: times, series});
+      }
+    }
+    if (errorCols.length) {
+      out.push({title: "Euler angle errors (estimate − reference) [deg]", y: "deg", x: times,
+                series: errorCols.map((a) => ({label: `${a} error`, values: t.num(`${a}_error_deg`), stroke: EULER[a], points: true}))});
+    }
+    if (lower === "baselines.csv" && t.has("baseline")) {
+      const keys = t.col("baseline");
+      for (const [col, title] of [["azimuth_deg", "Baseline azimuth (heading) [deg]"],
+                                  ["elevation_deg", "Baseline elevation [deg]"], ["length_m", "Baseline length [m]"]]) {
+        if (!t.has(col)) continue;
+        const p = pivot(times, keys, t.num(col));
+        out.push({title, y: col.endsWith("_m") ? "m" : "deg", x: p.x,
+                  series: p.names.map((n, i) => ({label: n, values: p.series[i]}))});
+      }
+      if (t.has("fixed")) {
+        const p = pivot(times, keys, t.col("fixed").map((v) => (truthy(v) ? 1 : 0)));
+        out.push({title: "Baselines fixed (1) / float (0)", y: "fixed", x: p.x,
+                  series: p.names.map((n, i) => ({label: n, values: p.series[i], step: true}))});
+      }
+    }
+    if (lower === "residuals.csv") {
+      const keys = (t.col("baseline") || times.map(() => "all")).map((b, i) => `${b} ${(t.col("signal") || [])[i] || ""}`.trim());
+      const used = t.has("used") ? t.col("used").map(truthy) : null;
+      let phase = t.num("phase_residual_mm");
+      if (!phase && t.has("phase_residual_m")) phase = t.num("phase_residual_m").map((v) => (v === null ? null : 1000 * v));
+      if (phase) {
+        const p = rmsPerEpoch(times, keys, phase, used);
+        out.push({title: "Phase residual RMS per epoch [mm]", y: "mm", x: p.x,
+                  series: p.names.map((n, i) => ({label: n, values: p.series[i]}))});
+      }
+      const code = t.num("code_residual_m");
+      if (code) {
+        const p = rmsPerEpoch(times, keys, code, used);
+        out.push({title: "Code residual RMS per epoch [m]", y: "m", x: p.x,
+                  series: p.names.map((n, i) => ({label: n, values: p.series[i]}))});
+      }
+    }
+    if (lower === "tracking.csv" && t.has("receiver")) {
+      const keys = t.col("receiver");
+      const n = pivot(times, keys, t.num("n_sats"));
+      out.push({title: "Satellites tracked per receiver", y: "satellites", x: n.x,
+                series: n.names.map((r, i) => ({label: r, values: n.series[i], step: true}))});
+      if (t.has("mean_cn0_dbhz")) {
+        const c = pivot(times, keys, t.num("mean_cn0_dbhz"));
+        out.push({title: "Mean C/N0 per receiver [dB-Hz]", y: "dB-Hz", x: c.x,
+                  series: c.names.map((r, i) => ({label: r, values: c.series[i]}))});
+      }
+    }
+    return out;
+  }
+
+  /* --- uPlot glue ----------------------------------------------------------------------------------------- */
+  let syncing = false;
+
+  function syncX(u) {
+    if (syncing) return;
+    syncing = true;
+    const {min, max} = u.scales.x;
+    for (const c of registry.instances) if (c.plot !== u) c.plot.setScale("x", {min, max});
+    syncing = false;
+  }
+
+  /* Shift+drag pans, the wheel zooms around the cursor (uPlot's own drag zooms, double-click resets). */
+  function panZoomPlugin() {
+    return {
+      hooks: {
+        ready: (u) => {
+          const over = u.over;
+          over.addEventListener("wheel", (e) => {
+            e.preventDefault();
+            const {min, max} = u.scales.x;
+            const at = u.posToVal(e.offsetX, "x");
+            const f = e.deltaY < 0 ? 0.8 : 1.25;
+            u.setScale("x", {min: at - (at - min) * f, max: at + (max - at) * f});
+          }, {passive: false});
+          over.addEventListener("mousedown", (e) => {
+            if (!e.shiftKey) return;
+            e.preventDefault();
+            const x0 = e.clientX, {min, max} = u.scales.x;
+            const perPx = (max - min) / over.getBoundingClientRect().width;
+            const move = (m) => u.setScale("x", {min: min - (m.clientX - x0) * perPx, max: max - (m.clientX - x0) * perPx});
+            const up = () => { document.removeEventListener("mousemove", move); document.removeEventListener("mouseup", up); };
+            document.addEventListener("mousemove", move);
+            document.addEventListener("mouseup", up);
+          });
+        },
+      },
+    };
+  }
+
+  function fmt(v) {
+    if (v === null || v === undefined || Number.isNaN(v)) return "–";
+    const a = Math.abs(v);
+    return a !== 0 && (a < 1e-3 || a >= 1e6) ? v.toExponential(3) : Number(v.toFixed(a < 1 ? 4 : 3)).toString();
+  }
+
+  function draw(container, productName, def) {
+    const box = document.createElement("div");
+    box.className = "chart";
+    box.dataset.chartTitle = def.title;
+    box.dataset.product = productName;
+    const h = document.createElement("h3");
+    h.textContent = `${def.title}  ·  ${productName}`;
+    box.appendChild(h);
+    container.appendChild(box);
+    const [x, ys] = withGaps(def.x, def.series.map((s) => s.values));
+    const scales = {x: {time: true}};
+    const axes = [{label: "GPS time", labelSize: 18, size: 42}, {label: def.y, labelSize: 18, size: 56}];
+    if (def.series.some((s) => s.scale === "fix")) {
+      scales.fix = {range: [-0.1, 1.1]};
+      axes.push({scale: "fix", side: 1, label: def.y2 || "", labelSize: 18, size: 40, grid: {show: false},
+                 values: (u, vals) => vals.map((v) => (v === 0 || v === 1 ? String(v) : ""))});
+    }
+    const series = [{label: "GPS time", value: "{YYYY}-{MM}-{DD} {HH}:{mm}:{ss}"}].concat(def.series.map((s, i) => ({
+      label: s.label, stroke: s.stroke || COLOURS[i % COLOURS.length], width: 1.25, scale: s.scale || "y",
+      spanGaps: false, value: (u, v) => fmt(v),
+      paths: s.step ? uPlot.paths.stepped({align: 1}) : undefined,
+      points: s.points ? {show: true, size: 3} : {show: false},
+    })));
+    if (!scales.y) scales.y = {auto: true};
+    const opts = {
+      width: Math.max(container.clientWidth - 4, 320), height: HEIGHT, series, axes, scales,
+      tzDate: (ts) => uPlot.tzDate(new Date(ts * 1e3), "Etc/UTC"),
+      cursor: {sync: {key: "gnssatt-job", setSeries: false}, drag: {x: true, y: false, setScale: true},
+               bind: {mousedown: (u, targ, handler) => (e) => { if (!e.shiftKey) handler(e); return null; }}},
+      legend: {live: true},
+      hooks: {setScale: [(u, key) => { if (key === "x") syncX(u); }]},
+      plugins: [panZoomPlugin()],
+    };
+    const plot = new uPlot(opts, [x, ...ys], box);
+    registry.instances.push({name: productName, title: def.title, plot});
+    return plot;
+  }
+
+  async function mount(container, products) {
+    const order = ["attitude.csv", "errors.csv", "baselines.csv", "residuals.csv", "tracking.csv"];
+    const sorted = products.slice().sort((a, b) => {
+      const ia = order.indexOf(a.name), ib = order.indexOf(b.name);
+      return (ia < 0 ? 99 : ia) - (ib < 0 ? 99 : ib) || a.name.localeCompare(b.name);
+    });
+    const status = document.createElement("p");
+    status.className = "chart-note";
+    status.textContent = "loading time series…";
+    container.appendChild(status);
+    let drawn = 0;
+    for (const p of sorted) {
+      if (p.size_bytes && p.size_bytes > MAX_BYTES) {
+        const note = document.createElement("p");
+        note.className = "chart-note";
+        note.textContent = `${p.name} is too large to chart in the browser; download it below.`;
+        container.appendChild(note);
+        continue;
+      }
+      try {
+        const resp = await fetch(p.url, {credentials: "same-origin"});
+        if (!resp.ok) throw new Error(`HTTP ${resp.status}`);
+        const defs = chartsFor(p.name, parseCSV(await resp.text()));
+        for (const d of defs) { draw(container, p.name, d); drawn++; }
+      } catch (e) {
+        const note = document.createElement("p");
+        note.className = "chart-note";
+        note.textContent = `${p.name}: could not be charted (${e.message || e}).`;
+        container.appendChild(note);
+      }
+    }
+    status.textContent = drawn ? "" : "No time series among this job's products.";
+    status.hidden = drawn > 0;
+    container.dataset.ready = String(drawn);
+    window.addEventListener("resize", () => {
+      for (const c of registry.instances) c.plot.setSize({width: Math.max(container.clientWidth - 4, 320), height: HEIGHT});
+    });
+    return drawn;
+  }
+
+  const container = document.getElementById("charts");
+  const data = document.getElementById("chart-products");
+  if (container && data) mount(container, JSON.parse(data.textContent));
+})();
