@@ -39,7 +39,8 @@ def test_upload_inspect_products(service, tmp_path):
         job = _wait_job(c, resp.json()["id"])
         assert job["state"] == "succeeded", (job, service.logs_text())
         products = {p["name"]: p for p in c.get(f"/v1/jobs/{job['id']}/products").json()}
-        assert set(products) == {"summary.json", "observations.csv"}
+        assert set(products) == {"summary.json", "observations.csv", "tracking.csv", "tracking.png", "cn0.png"}
+        assert products["tracking.png"]["media_type"] == "image/png" and products["tracking.png"]["size_bytes"] > 1000
         rows = list(csv.DictReader(io.StringIO(c.get(products["observations.csv"]["url"]).text)))
         # 3 receivers x 4 satellites x 2 signals (1C, 2W), every epoch observed
         assert len(rows) == 24 and {r["epochs"] for r in rows} == {"40"}
@@ -213,7 +214,8 @@ def test_cli_submit_status_fetch_and_revoke(service, tmp_path):
 
     out = cli("submit", "--type", "inspect", "--out", str(tmp_path / "products"), *paths)
     assert out.returncode == 0, out.stderr
-    assert sorted(p.name for p in (tmp_path / "products").iterdir()) == ["observations.csv", "summary.json"]
+    assert sorted(p.name for p in (tmp_path / "products").iterdir()) == [
+        "cn0.png", "observations.csv", "summary.json", "tracking.csv", "tracking.png"]
     assert "100.0%" in out.stderr  # the progress bar reached the end
     job_id = out.stderr.split("job ")[1].split()[0]
     status = cli("status")
