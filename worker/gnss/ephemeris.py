@@ -61,6 +61,13 @@ class SatState:
     def __iter__(self):
         return iter((self.r_ecef_m, self.v_ecef_m_s, self.clock_s, self.valid))
 
+    def __len__(self) -> int:
+        return 4
+
+    def __getitem__(self, i):
+        """Tuple-like access, so a SatState is a `sat_state` result for worker.gnss.geometry."""
+        return (self.r_ecef_m, self.v_ecef_m_s, self.clock_s, self.valid)[i]
+
 
 @runtime_checkable
 class SatelliteEphemeris(Protocol):

@@ -312,7 +312,8 @@ def spp(obs, ephemeris, *, systems=("G",), iono_free: bool = True, elevation_mas
         systems: satellite systems to use ('G', 'J'); the first is the clock reference, each other system gets an
             inter-system bias unknown (QZSS is on GPS time but its receiver biases differ).
         iono_free: use the L1/L2 ionosphere-free code combination where both bands are present (else
-            single-frequency L1 everywhere).
+            single-frequency L1 everywhere); single-frequency rows are then dropped at epochs that have at least
+            unknowns + 1 ionosphere-free rows.
         elevation_mask_deg: local-horizon mask; default 10 deg for ground receivers and none above 100 km.
         sigma_code_m: zenith code noise of one signal (m); sigma_ure_m: orbit + clock error (m), default 1.0 for
             broadcast and 0.1 for precise ephemerides (the class name decides), else 1.0.
@@ -387,6 +388,12 @@ def spp(obs, ephemeris, *, systems=("G",), iono_free: bool = True, elevation_mas
         P1s, P_ifs = P1, P_if
     P_raw = np.where(np.isfinite(P1), P1, P2)  # for the emission time only (10 m -> 0.1 mm of orbit)
     has = np.isfinite(P1) | use_if
+    if iono_free:
+        # Ionosphere-free rows only, where an epoch has enough of them for a tested fix (unknowns + 1): a single-
+        # frequency row keeps the ionospheric delay (metres; for a spacecraft nothing models it), which biases
+        # the fix more than the lost geometry costs. Epochs short of IF rows keep their single-frequency rows.
+        n_if = use_if.sum(axis=1)
+        has = np.where((n_if >= 4 + n_isb + 1)[:, None], use_if, has)
     P_obs = np.where(use_if, P_ifs, P1s)
 
     # --- satellite states at emission (t_tx = T_tag - P/c - dt_sv, two passes for dt_sv) ---
