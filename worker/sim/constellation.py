@@ -219,4 +219,57 @@ def synthetic_gps(t_ref: GpsTime, seed: int = 2018) -> Constellation:
         af2=np.zeros(n), tgd=np.round(rng.uniform(-1.2e-8, 8e-9, n) / 2 ** -31) * 2 ** -31)
 
 
-__all__ = ["BroadcastRecord", "Constellation", "synthetic_gps", "RECORD_INTERVAL_S"]
+def gps_from_nav(nav_path, t0: GpsTime) -> Constellation:
+    """The GPS constellation of a real RINEX navigation file, as continuous models referenced at the 2 h
+    boundary at or before t0: per healthy satellite, the record whose toe is nearest t0, its elements carried
+    to that reference time (the inverse of `Constellation.records`), so that the simulated orbits are exactly
+    the broadcast model of that record and the navigation file the simulator writes reproduces it.
+
+    Args:
+        nav_path: RINEX 2/3/4 navigation file (plain or compressed) holding GPS LNAV records.
+        t0: start of the pass; records farther than 4 h from it are not used.
+    Implements: IS-GPS-200 Table 20-IV (Omega_0 referenced to the week start, so moving the reference by dT
+    adds Omega_dot dT and subtracts omega_E times the change of week start).
+    """
+    from worker.gnss.io.rinex_nav import read_rinex_nav
+
+    nav = read_rinex_nav(nav_path)
+    kep = nav.kepler.get("G")
+    if kep is None or len(kep) == 0:
+        raise ValueError(f"nav_file {nav_path}: no GPS records")
+    s = int(t0.s)
+    t_ref = GpsTime(s - s % RECORD_INTERVAL_S)
+    ws_ref = int(t_ref.s) - int(t_ref.s) % SECONDS_PER_WEEK
+    toe = kep.toe_gpst()
+    toc = kep.toc_gpst()
+    chosen: dict[str, int] = {}
+    for i, sat in enumerate(kep.sat.tolist()):
+        if int(kep.health[i]) != 0 or abs(float(toe[i] - t0)) > 4 * 3600:
+            continue
+        if sat not in chosen or abs(float(toe[i] - t0)) < abs(float(toe[chosen[sat]] - t0)):
+            chosen[sat] = i
+    if len(chosen) < 4:
+        raise ValueError(f"nav_file {nav_path}: only {len(chosen)} healthy GPS satellites within 4 h of "
+                         f"{t0.iso()}; choose start_gps inside the file's span")
+    sats = sorted(chosen)
+    idx = np.array([chosen[x] for x in sats])
+    take = {f: np.asarray(getattr(kep, f), dtype=np.float64)[idx] for f in (
+        "sqrt_a_sqrt_m", "e", "i0_rad", "omega0_rad", "omega_rad", "m0_rad", "delta_n_rad_s", "omega_dot_rad_s",
+        "idot_rad_s", "cuc_rad", "cus_rad", "crc_m", "crs_m", "cic_rad", "cis_rad", "af0_s", "af1_s_s",
+        "af2_s_s2", "tgd_s")}
+    dT = np.array([float(t_ref - toe[i]) for i in idx])
+    dTc = np.array([float(t_ref - toc[i]) for i in idx])
+    ws_j = np.array([int(toe[i].s) - int(toe[i].s) % SECONDS_PER_WEEK for i in idx], dtype=np.float64)
+    n = np.sqrt(GM_GPS_M3_S2 / take["sqrt_a_sqrt_m"] ** 6) + take["delta_n_rad_s"]
+    af2 = take["af2_s_s2"]
+    return Constellation(
+        sats=sats, t_ref=t_ref, sqrt_a=take["sqrt_a_sqrt_m"], e=take["e"], i0=take["i0_rad"] + take["idot_rad_s"] * dT,
+        omega0=_wrap(take["omega0_rad"] + take["omega_dot_rad_s"] * dT - OMEGA_E_RAD_S * (ws_ref - ws_j)),
+        omega=take["omega_rad"], m0=_wrap(take["m0_rad"] + n * dT), delta_n=take["delta_n_rad_s"],
+        omega_dot=take["omega_dot_rad_s"], idot=take["idot_rad_s"], cuc=take["cuc_rad"], cus=take["cus_rad"],
+        crc=take["crc_m"], crs=take["crs_m"], cic=take["cic_rad"], cis=take["cis_rad"],
+        af0=take["af0_s"] + take["af1_s_s"] * dTc + af2 * dTc ** 2, af1=take["af1_s_s"] + 2 * af2 * dTc, af2=af2,
+        tgd=take["tgd_s"])
+
+
+__all__ = ["BroadcastRecord", "Constellation", "synthetic_gps", "gps_from_nav", "RECORD_INTERVAL_S"]

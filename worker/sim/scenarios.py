@@ -63,7 +63,7 @@ class SimParams:
     slew_back_hold_s: float = 60.0
     # --- constellation ---
     constellation_seed: int = 2018
-    nav_file: str = ""                           # reserved: use a given RINEX nav instead (not implemented)
+    nav_file: str = ""                           # a real RINEX nav file: its GPS records drive the orbits
     # --- receivers / tracking ---
     signals: list = field(default_factory=lambda: ["L1", "L2"])
     clock_mode: str = "steered"                  # steered | free

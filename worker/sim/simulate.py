@@ -24,7 +24,7 @@ from worker.sim import observables as ob
 from worker.sim._constants import C_M_S, F_L1_HZ, F_L2_HZ, GAMMA_L2, LEAP_TABLE_EXPIRES
 from worker.sim._frames import EarthRotation
 from worker.sim._rinex_obs_out import write_obs
-from worker.sim.constellation import synthetic_gps
+from worker.sim.constellation import gps_from_nav, synthetic_gps
 from worker.sim.scenarios import SimParams, list_scenarios, make_params
 from worker.sim.trajectory import (AttitudeProfile, Platform, orbit_from_sp3_file, orbit_kepler_j2, orbit_tle,
                                    read_quaternion_csv, terrestrial_from_csv, terrestrial_static)
@@ -130,7 +130,7 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
                else terrestrial_static(earth, p.lat_deg, p.lon_deg, p.height_m))
     platform = Platform(p.kind, com, attitude, earth)
 
-    const = synthetic_gps(t0, seed=p.constellation_seed)
+    const = gps_from_nav(p.nav_file, t0) if p.nav_file else synthetic_gps(t0, seed=p.constellation_seed)
     off = float(t0 - const.t_ref)                   # const time = off + dt
     n_sv = const.n
     ant_ids = list(p.antennas)
@@ -370,7 +370,8 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
     write_rinex_nav_gps(set_dir / "nav" / "brdc.rnx", recs, date_text=_date_text(t0),
                         iono_alpha=[1.1176e-08, 7.4506e-09, -5.9605e-08, -5.9605e-08],
                         iono_beta=[9.0112e+04, 1.6384e+04, -1.9661e+05, -6.5536e+04], leap_seconds=earth.leap_s,
-                        comments=["synthetic GPS constellation, gnssatt simulator"])
+                        comments=[f"GPS constellation from {Path(p.nav_file).name}, gnssatt simulator" if p.nav_file
+                                  else "synthetic GPS constellation, gnssatt simulator"])
     # --- platform.json ---
     pj = {"name": p.platform_name, "kind": p.kind,
           "antennas": {a: {"position_m": [float(v) for v in antennas[a]["pos"]],
