@@ -1,0 +1,542 @@
+"""The attitude EKF of seed 000 sec. 2 over single-differenced carrier phase and code, with quality control and
+integer ambiguity resolution.
+
+State (fixed layout with index maps; ambiguities appended and removed as satellites come and go):
+    [omega (3, dynamic mode only)] + per baseline j: [b_j ECEF (3), c*dt_j (1), code bias of signal 2 (1, dual
+    frequency only)] + SD ambiguities (cycles), one per (baseline, satellite, signal) in use.
+Measurement model of a single difference (second antenna minus first) of satellite s, signal f, after removing
+an epoch clock estimate c*dt0 from code:
+    SD_code  = -u_s . b_j + (1 - rho_dot_s / c) (c dt_j) [+ B_j for signal 2] + e
+    SD_phase = -u_s . b_j + (1 - rho_dot_s / c) (c dt_j) + lambda_f A_jsf + e
+The factor (1 - rho_dot/c) makes the model exact for receivers whose clocks differ by up to a millisecond: the
+second antenna measured at t - dt_j relative to the first, and the range moved by rho_dot dt_j meanwhile (so
+free-running receiver clocks need no resampling of observations). The model is linear in the state.
+Dynamics: b' = omega x b, omega random walk (dynamic); b random walk, no omega (kinematic); c*dt white noise.
+
+Implements: seed 000 sec. 2 eq. 1-2, Table 1 (noise), Table 2 (editing: local / antenna elevation, C/N0,
+triple differences of code and phase, baseline-length acceptance), fixed-step RK4 propagation, MLAMBDA on DD of
+float SD ambiguities with a zero-variance pseudo-measurement for accepted fixes, sec. 3.2 compromise (all
+satellites until fixed, then only those above the antenna horizon).
+Neglects: differential troposphere/ionosphere (baselines of metres); correlation of the baselines through the
+common master antenna's noise (each SD is treated as independent, as in the paper).
+"""
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from worker.attitude.ambiguity import resolve_lambda, round_newcomers
+from worker.attitude.settings import AttitudeSettings
+from worker.estimation.ekf import joseph_update_sparse, rotation_rk4_stm
+from worker.gnss.constants import C_M_S
+
+__all__ = ["FilterResult", "run_filter", "REASONS"]
+
+DEG = np.pi / 180.0
+#: reason codes of residuals.csv (0 = used)
+REASONS = {0: "used", 1: "elevation_local", 2: "elevation_antenna", 3: "cn0", 4: "td_code", 5: "td_phase",
+           6: "half_cycle", 7: "missing_partner", 8: "no_geometry", 9: "innovation"}
+TD_MAX_DT_S = 3.0   # triple differences need consecutive epochs; beyond this the arc restarts (see module doc)
+NOISE_EPOCHS = 300.0  # memory of the noise estimator (epochs)
+NOISE_MIN_EPOCHS = 10  # epochs of triple differences before the estimate replaces the configured sigma
+CLOCK_JUMP_M = 0.5e-3 * C_M_S * 0.5   # a change of the epoch clock estimate above 75 km (0.25 ms) is a jump
+
+
+@dataclass
+class FilterResult:
+    """Per epoch (n_ep) and baseline (n_bl) outputs of the filter; see run_filter."""
+
+    ok: np.ndarray              # (n_ep, n_bl) bool: a baseline solution exists at this epoch
+    b_ecef_m: np.ndarray        # (n_ep, n_bl, 3)
+    P_b_m2: np.ndarray          # (n_ep, 3 n_bl, 3 n_bl) joint covariance of the baselines
+    fixed: np.ndarray           # (n_ep, n_bl) bool
+    n_sats: np.ndarray          # (n_ep, n_bl) int: satellites with a phase used in the update
+    ratio: np.ndarray           # (n_ep, n_bl) ratio of the AR attempt at this epoch (nan if none)
+    omega_ecef_rad_s: np.ndarray  # (n_ep, 3) (nan in kinematic mode)
+    residuals: dict             # column arrays for residuals.csv
+    events: list = field(default_factory=list)
+    first_fix_epoch: np.ndarray = None    # (n_bl,) int epoch index of the first accepted fix, -1 never
+    first_data_epoch: np.ndarray = None   # (n_bl,) int
+
+
+class _State:
+    """x, P and the index maps."""
+
+    def __init__(self, n_bl: int, n_sat: int, n_sig: int, dynamic: bool):
+        self.n_bl, self.n_sat, self.n_sig, self.dynamic = n_bl, n_sat, n_sig, dynamic
+        self.off_w = 0
+        blk = 4 + (1 if n_sig > 1 else 0)
+        base0 = 3 if dynamic else 0
+        self.b_off = base0 + blk * np.arange(n_bl)            # baseline j: b at b_off[j]..+2, clock +3, bias +4
+        self.clk = self.b_off + 3
+        self.bias = self.b_off + 4 if n_sig > 1 else np.full(n_bl, -1)
+        self.n_fixed_part = base0 + blk * n_bl
+        self.x = np.zeros(self.n_fixed_part)
+        self.P = np.zeros((self.n_fixed_part, self.n_fixed_part))
+        self.amb_index = np.full((n_bl, n_sat, n_sig), -1, dtype=np.int64)
+        self.amb_key = np.zeros((0, 3), dtype=np.int64)        # per ambiguity state: (bl, sat, sig)
+        self.amb_fixed = np.zeros(0, bool)
+        self.amb_last_t = np.zeros(0)
+
+    @property
+    def n(self) -> int:
+        return self.x.size
+
+    def add_ambiguities(self, keys: np.ndarray, values: np.ndarray, sigma0: float, t: float) -> None:
+        n0 = self.n
+        k = keys.shape[0]
+        self.x = np.concatenate([self.x, values])
+        P = np.zeros((n0 + k, n0 + k))
+        P[:n0, :n0] = self.P
+        P[np.arange(n0, n0 + k), np.arange(n0, n0 + k)] = sigma0 ** 2
+        self.P = P
+        self.amb_key = np.concatenate([self.amb_key, keys])
+        self.amb_fixed = np.concatenate([self.amb_fixed, np.zeros(k, bool)])
+        self.amb_last_t = np.concatenate([self.amb_last_t, np.full(k, t)])
+        self.amb_index[keys[:, 0], keys[:, 1], keys[:, 2]] = n0 + np.arange(k)
+
+    def remove_ambiguities(self, state_idx: np.ndarray) -> None:
+        keep = np.ones(self.n, bool)
+        keep[state_idx] = False
+        self.x = self.x[keep]
+        self.P = self.P[np.ix_(keep, keep)]
+        ka = keep[self.n_fixed_part:]
+        gone = self.amb_key[~ka]
+        self.amb_index[gone[:, 0], gone[:, 1], gone[:, 2]] = -1
+        self.amb_key = self.amb_key[ka]
+        self.amb_fixed = self.amb_fixed[ka]
+        self.amb_last_t = self.amb_last_t[ka]
+        self.amb_index[self.amb_key[:, 0], self.amb_key[:, 1], self.amb_key[:, 2]] = \
+            self.n_fixed_part + np.arange(self.amb_key.shape[0])
+
+
+def _cn0_factor(cn0_dbhz: np.ndarray) -> np.ndarray:
+    """Variance factor 10^((45 - C/N0)/10), clipped to [0.25, 16] (noise doubles per -6 dB; 45 dB-Hz = Table 1)."""
+    return np.clip(10.0 ** ((45.0 - np.nan_to_num(cn0_dbhz, nan=45.0)) / 10.0), 0.25, 16.0)
+
+
+def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: np.ndarray,
+               boresight_body: np.ndarray, settings: AttitudeSettings, R_body_from_ecef_0: np.ndarray,
+               attitude_fn=None, progress=None) -> FilterResult:
+    """FilterResult of the EKF over all epochs of `pobs` (PlatformObs) with `geom` (EpochGeometry).
+
+    Args:
+        baselines: (first, second) antenna indices into pobs.antennas.
+        body_baselines_m: (n_bl, 3) known body-frame baselines (a priori or calibrated).
+        boresight_body: (n_ant, 3) antenna boresights, for the antenna-frame elevation mask.
+        R_body_from_ecef_0: (3, 3) initial attitude (Earth pointing or given) for the initial baselines.
+        attitude_fn: callable (b_ecef (n_bl, 3), fixed (n_bl,)) -> R_body_from_ecef (3, 3) or None; used for
+            the antenna-frame mask once every baseline is fixed. None: no antenna-frame mask.
+        progress: callable(fraction) called every ~200 epochs.
+    """
+    s = settings
+    n_ant, n_ep, n_sat, n_sig = pobs.code_m.shape
+    n_bl = len(baselines)
+    dynamic = s.mode == "dynamic"
+    st = _State(n_bl, n_sat, n_sig, dynamic)
+    lam = pobs.wavelength_m
+    t_s = (pobs.time - pobs.time[0]) if n_ep else np.zeros(0)
+    t_s = np.asarray(t_s, dtype=np.float64)
+    lengths = np.linalg.norm(body_baselines_m, axis=1)
+    sig_cn0 = np.array([s.cn0_mask_dbhz.get(sig, -np.inf) for sig in pobs.signals])
+    ia = np.array([b[0] for b in baselines])
+    ib = np.array([b[1] for b in baselines])
+    # --- initial state ---
+    b0 = body_baselines_m @ R_body_from_ecef_0        # b_ecef = R^T b_body (rows)
+    for j in range(n_bl):
+        o = st.b_off[j]
+        st.x[o:o + 3] = b0[j]
+        sig0 = max(s.sigma0_baseline_m, 1.2 * lengths[j])
+        st.P[np.arange(o, o + 3), np.arange(o, o + 3)] = sig0 ** 2
+        if n_sig > 1:
+            st.P[st.bias[j], st.bias[j]] = s.sigma0_code_bias_m ** 2
+    if dynamic:
+        st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
+    q_w = (s.sigma_omega_deg_s * DEG) ** 2 / s.tau_omega_s          # rad^2/s^2 per s
+    q_b = s.sigma_baseline_kinematic_m ** 2 / s.tau_baseline_s       # m^2 per s
+    var_clk = (s.sigma_clock_s * C_M_S) ** 2
+    # --- outputs ---
+    out_ok = np.zeros((n_ep, n_bl), bool)
+    out_b = np.full((n_ep, n_bl, 3), np.nan)
+    out_P = np.full((n_ep, 3 * n_bl, 3 * n_bl), np.nan)
+    out_fixed = np.zeros((n_ep, n_bl), bool)
+    out_n = np.zeros((n_ep, n_bl), np.int64)
+    out_ratio = np.full((n_ep, n_bl), np.nan)
+    out_w = np.full((n_ep, 3), np.nan)
+    res_cols: dict[str, list] = {k: [] for k in ("epoch", "bl", "sat", "sig", "kind", "residual_m", "reason",
+                                                  "el_ant_deg", "az_ant_deg", "cn0_dbhz")}
+    events: list[dict] = []
+    first_fix = np.full(n_bl, -1)
+    first_data = np.full(n_bl, -1)
+    b_idx = st.b_off[:, None] + np.arange(3)[None, :]                 # (n_bl, 3)
+    all_b_idx = b_idx.ravel()
+    prev_t = None
+    prev_sdc = np.full((n_bl, n_sat, n_sig), np.nan)       # clock-corrected SD of the previous epoch
+    prev_sdp = np.full((n_bl, n_sat, n_sig), np.nan)
+    prev_clk0 = np.full(n_bl, np.nan)
+    prev_b = None
+    prev_ub = None
+    R_mask = None                                           # attitude for the antenna-frame mask
+    ever_fixed = np.zeros(n_bl, bool)
+    # per-signal white-noise estimates (variance of one SD) from the triple differences: robust, exponentially
+    # weighted over NOISE_EPOCHS epochs; used once NOISE_MIN_SAMPLES TDs have been seen
+    est_var_c = np.full(n_sig, s.sigma_code_m ** 2)
+    est_var_p = np.full(n_sig, s.sigma_phase_m ** 2)
+    est_n = np.zeros(n_sig)
+
+    def ev(k, kind, j=None, sat=None, sig=None, detail=""):
+        events.append({"epoch": k, "event": kind, "baseline": j, "sat": sat, "signal": sig, "detail": detail})
+
+    for k in range(n_ep):
+        if progress is not None and k % 200 == 0:
+            progress(k / max(n_ep, 1))
+        t = t_s[k]
+        # ---------------- propagation ----------------
+        if prev_t is not None:
+            dt = t - prev_t
+            if dynamic:
+                w = st.x[0:3]
+                bb = st.x[all_b_idx].reshape(n_bl, 3)
+                b1, Pbb, Pbw = rotation_rk4_stm(bb, w, dt, s.rk4_step_s)
+                st.x[all_b_idx] = b1.ravel()
+                sub = np.concatenate([np.arange(3), all_b_idx])
+                Phi = np.eye(sub.size)
+                for j in range(n_bl):
+                    r = 3 + 3 * j
+                    Phi[r:r + 3, r:r + 3] = Pbb[j]
+                    Phi[r:r + 3, 0:3] = Pbw[j]
+                st.P[sub, :] = Phi @ st.P[sub, :]
+                st.P[:, sub] = st.P[:, sub] @ Phi.T
+                # discrete process noise of the omega random walk and its effect on b (integrated over dt)
+                Q = np.zeros((sub.size, sub.size))
+                Q[0:3, 0:3] = np.eye(3) * q_w * dt
+                for j in range(n_bl):
+                    r = 3 + 3 * j
+                    Bx = -_skew(b1[j])
+                    Q[r:r + 3, 0:3] = Bx * q_w * dt ** 2 / 2
+                    Q[0:3, r:r + 3] = Q[r:r + 3, 0:3].T
+                    for i in range(n_bl):
+                        ri = 3 + 3 * i
+                        Q[r:r + 3, ri:ri + 3] = Bx @ (-_skew(b1[i])).T * q_w * dt ** 3 / 3
+                st.P[np.ix_(sub, sub)] += Q
+            else:
+                st.P[all_b_idx, all_b_idx] += q_b * dt
+        # white-noise clocks: reset every epoch
+        st.x[st.clk] = 0.0
+        st.P[st.clk, :] = 0.0
+        st.P[:, st.clk] = 0.0
+        st.P[st.clk, st.clk] = var_clk
+
+        # ---------------- single differences and QC ----------------
+        pa = pobs.present[ia, k] & pobs.present[ib, k]                     # (n_bl,)
+        gv = geom.valid[k]                                                  # (n_sat,)
+        u = np.where(gv[:, None], geom.los_ecef[k], 0.0)                    # (n_sat, 3)
+        rdot = geom.range_rate_m_s[k]
+        cfac = 1.0 - rdot / C_M_S                                           # clock partial
+        sdc = pobs.code_m[ib, k] - pobs.code_m[ia, k]                       # (n_bl, n_sat, n_sig)
+        sdp = pobs.phase_m[ib, k] - pobs.phase_m[ia, k]
+        cn0 = np.fmin(pobs.cn0_dbhz[ia, k], pobs.cn0_dbhz[ib, k])
+        lli = np.maximum(pobs.lli[ia, k], 0) | np.maximum(pobs.lli[ib, k], 0)
+        avail_c = np.isfinite(sdc) & pa[:, None, None] & gv[None, :, None]
+        avail_p = np.isfinite(sdp) & avail_c
+        reason = np.where(avail_c, 0, 8)
+        # local horizon
+        el_loc = geom.elevation_local_rad[k]
+        bad_el = ~(el_loc >= s.elevation_mask_local_deg * DEG)
+        reason = np.where((reason == 0) & bad_el[None, :, None], 1, reason)
+        # antenna frame, once fixed (sec. 3.2 compromise)
+        el_ant = np.full((n_bl, n_sat), np.nan)
+        az_ant = np.full((n_bl, n_sat), np.nan)
+        if R_mask is not None:
+            los_b = u @ R_mask.T                                           # (n_sat, 3) body
+            for j in range(n_bl):
+                e1 = np.arcsin(np.clip(los_b @ boresight_body[ia[j]], -1, 1))
+                e2 = np.arcsin(np.clip(los_b @ boresight_body[ib[j]], -1, 1))
+                el_ant[j] = np.fmin(e1, e2)
+                az_ant[j] = np.arctan2(los_b[:, 1], los_b[:, 0])
+            below = ever_fixed[:, None] & ~(el_ant >= s.elevation_mask_antenna_deg * DEG)
+            reason = np.where((reason == 0) & below[:, :, None], 2, reason)
+        # C/N0
+        low = cn0 < sig_cn0[None, None, :]
+        reason = np.where((reason == 0) & low, 3, reason)
+        use_c = reason == 0
+        use_p = use_c & avail_p
+        # epoch clock estimate from code (first signal): c dt0 = median(SD_code + u.b) / (1 - rdot/c)
+        b_pred = st.x[all_b_idx].reshape(n_bl, 3)
+        ub = b_pred @ u.T                                                   # (n_bl, n_sat)
+        c0 = np.where(use_c[:, :, 0], (sdc[:, :, 0] + ub) / cfac[None, :], np.nan)
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            clk0 = np.nanmedian(np.where(np.isfinite(c0), c0, np.nan), axis=1) if n_sat else np.zeros(n_bl)
+        clk0 = np.nan_to_num(clk0)
+        corr = cfac[None, :, None] * clk0[:, None, None]
+        sdc_c = sdc - corr
+        sdp_c = sdp - corr
+        for j in np.flatnonzero(np.isfinite(prev_clk0) & (np.abs(clk0 - prev_clk0) > CLOCK_JUMP_M) & pa):
+            ev(k, "clock_jump", j, detail=f"differential clock changed by {(clk0[j] - prev_clk0[j]) / C_M_S * 1e3:.3f} ms")
+        # triple differences (time differences of SDs with the predicted geometry change, median-referenced)
+        slip = (lli & 1).astype(bool) & avail_p
+        half = (lli & 2).astype(bool) & avail_p
+        reason = np.where((reason == 0) & half, 6, reason)
+        use_p &= ~half
+        consecutive = prev_t is not None and (t - prev_t) <= TD_MAX_DT_S
+        td_p = np.full(sdp.shape, np.nan)
+        if consecutive and prev_b is not None:
+            dgeo = -(ub - prev_ub)                                          # predicted SD change from geometry
+            td_c = sdc_c - prev_sdc - dgeo[:, :, None]
+            td_p = sdp_c - prev_sdp - dgeo[:, :, None]
+            td_c_ok = np.isfinite(td_c) & use_c
+            td_p_ok = np.isfinite(td_p) & use_p
+            with np.errstate(all="ignore"), warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                mc = np.nanmedian(np.where(td_c_ok, td_c, np.nan), axis=1)      # (n_bl, n_sig)
+                mp = np.nanmedian(np.where(td_p_ok, td_p, np.nan), axis=1)
+            # a common phase jump without a code jump: a receiver clock jump not applied to phase -> integer shift
+            common = np.nan_to_num(mp - mc)
+            for j, f in zip(*np.nonzero(np.abs(common) > 1000.0)):
+                n_cyc = np.round(common[j, f] / lam[f])
+                sel = (st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f)
+                st.x[st.n_fixed_part + np.flatnonzero(sel)] += n_cyc
+                mp[j, f] -= n_cyc * lam[f]
+                td_p[j, :, f] -= n_cyc * lam[f]
+                ev(k, "phase_clock_jump", j, sig=pobs.signals[f], detail=f"{n_cyc:.0f} cycles common to all satellites")
+            if s.noise_estimation:
+                wfac = _cn0_factor(cn0) if s.weighting == "cn0" else np.ones(cn0.shape)
+                for f in range(n_sig):
+                    dc = ((td_c - np.nan_to_num(mc)[:, None, :]) / np.sqrt(wfac))[..., f][td_c_ok[..., f]]
+                    dp = ((td_p - np.nan_to_num(mp)[:, None, :]) / np.sqrt(wfac))[..., f][td_p_ok[..., f]]
+                    if dp.size >= 3 and dc.size >= 3:
+                        a = 1.0 / min(est_n[f] + 1.0, NOISE_EPOCHS)
+                        # MAD -> sigma of a TD = sqrt(2) sigma of one SD (white noise)
+                        vp = (np.median(np.abs(dp)) / 0.6745) ** 2 / 2.0
+                        vc = (np.median(np.abs(dc)) / 0.6745) ** 2 / 2.0
+                        est_var_p[f] += a * (vp - est_var_p[f])
+                        est_var_c[f] += a * (vc - est_var_c[f])
+                        est_n[f] += 1
+            bad_tc = td_c_ok & (np.abs(td_c - np.nan_to_num(mc)[:, None, :]) > s.td_code_m)
+            bad_tp = td_p_ok & (np.abs(td_p - np.nan_to_num(mp)[:, None, :]) > s.td_phase_cyc * lam[None, None, :])
+            reason = np.where((reason == 0) & bad_tc, 4, reason)
+            use_c &= ~bad_tc
+            slip |= bad_tp
+            for j, sat, f in zip(*np.nonzero(bad_tp & ~((lli & 1).astype(bool)) & (st.amb_index >= 0))):
+                ev(k, "cycle_slip", j, pobs.sats[sat], pobs.signals[f], "triple-difference test")
+        for j, sat, f in zip(*np.nonzero((lli & 1).astype(bool) & avail_p & (st.amb_index >= 0))):
+            ev(k, "cycle_slip", j, pobs.sats[sat], pobs.signals[f], "loss-of-lock indicator")
+        # ---------------- ambiguity bookkeeping ----------------
+        # restart an arc (new float from code-carrier) on a slip or where no triple difference could check it;
+        # drop states of satellites no longer observed, or unused for max_gap_s
+        have = st.amb_index >= 0
+        td_possible = np.isfinite(td_p) if (consecutive and prev_b is not None) else np.zeros(have.shape, bool)
+        restart = have & use_p & (slip | ~td_possible)
+        n_gap = int((have & use_p & ~slip & ~td_possible).sum())
+        if n_gap:
+            ev(k, "arc_restart", detail=f"{n_gap} ambiguities without a triple-difference check (data gap)")
+        last_t = np.full(have.shape, np.inf)
+        last_t[have] = st.amb_last_t[st.amb_index[have] - st.n_fixed_part]
+        drop_mask = restart | (have & ~avail_p) | (have & ~use_p & (last_t < t - s.max_gap_s))
+        lost_fix = np.zeros(n_bl, bool)
+        if drop_mask.any():
+            drop = st.amb_index[drop_mask]
+            for j in np.unique(np.nonzero(drop_mask)[0]):
+                if st.amb_fixed[st.amb_index[j][drop_mask[j]] - st.n_fixed_part].any():
+                    lost_fix[j] = True
+            st.remove_ambiguities(drop)
+        need = use_p & (st.amb_index < 0)
+        if need.any():
+            jj, ss, ff = np.nonzero(need)
+            vals = (sdp_c[jj, ss, ff] - sdc_c[jj, ss, ff]) / lam[ff]
+            st.add_ambiguities(np.stack([jj, ss, ff], 1), vals, s.sigma0_ambiguity_cyc, t)
+        # ---------------- measurement update ----------------
+        jc, sc, fc = np.nonzero(use_c)
+        jp, sp, fp = np.nonzero(use_p)
+        mc_n, mp_n = jc.size, jp.size
+        m = mc_n + mp_n
+        if m:
+            cols = np.full((m, 5), -1, dtype=np.int64)
+            coef = np.zeros((m, 5))
+            jb = np.concatenate([jc, jp])
+            sb = np.concatenate([sc, sp])
+            cols[:, 0:3] = b_idx[jb]
+            coef[:, 0:3] = -u[sb]
+            cols[:, 3] = st.clk[jb]
+            coef[:, 3] = cfac[sb]
+            if n_sig > 1:
+                is2 = fc > 0
+                cols[:mc_n, 4] = np.where(is2, st.bias[jc], -1)
+                coef[:mc_n, 4] = 1.0
+            cols[mc_n:, 4] = st.amb_index[jp, sp, fp]
+            coef[mc_n:, 4] = lam[fp]
+            z = np.concatenate([sdc_c[jc, sc, fc], sdp_c[jp, sp, fp]])
+            if s.noise_estimation:
+                vc_f = np.where(est_n >= NOISE_MIN_EPOCHS, est_var_c, s.sigma_code_m ** 2)
+                vp_f = np.where(est_n >= NOISE_MIN_EPOCHS, est_var_p, s.sigma_phase_m ** 2)
+                var = np.concatenate([vc_f[fc], vp_f[fp]])
+            else:
+                var = np.concatenate([np.full(mc_n, s.sigma_code_m ** 2), np.full(mp_n, s.sigma_phase_m ** 2)])
+            if s.weighting == "cn0":
+                var *= np.concatenate([_cn0_factor(cn0[jc, sc, fc]), _cn0_factor(cn0[jp, sp, fp])])
+            elif s.weighting == "elevation" and R_mask is not None:
+                e = np.concatenate([el_ant[jc, sc], el_ant[jp, sp]])
+                var *= np.clip(1.0 / np.sin(np.clip(np.nan_to_num(e, nan=0.5), 0.05, None)) ** 2, 1.0, 16.0)
+            ok_cols = np.where(cols >= 0, cols, 0)
+            hx = np.einsum("mk,mk->m", np.where(cols >= 0, coef, 0.0), st.x[ok_cols])
+            innov = z - hx
+            x1, P1, S, good = joseph_update_sparse(st.x, st.P, cols, coef, var, innov)
+            if good:
+                st.x, st.P = x1, P1
+            st.amb_last_t[cols[mc_n:, 4] - st.n_fixed_part] = t
+            post = z - np.einsum("mk,mk->m", np.where(cols >= 0, coef, 0.0), st.x[ok_cols])
+        else:
+            post = np.zeros(0)
+        # ---------------- ambiguity resolution ----------------
+        n_used = np.zeros(n_bl, np.int64)
+        n_fixed_used = np.zeros(n_bl, np.int64)
+        if mp_n:
+            used_amb = cols[mc_n:, 4]
+            afix = st.amb_fixed[used_amb - st.n_fixed_part]
+            for j in range(n_bl):
+                sel = jp == j
+                n_used[j] = np.unique(sp[sel]).size
+                n_fixed_used[j] = np.unique(sp[sel & afix]).size
+        for j in range(n_bl):
+            if n_used[j] and first_data[j] < 0:
+                first_data[j] = k
+            if not pa[j] or n_used[j] < s.ar_min_sats:
+                continue
+            sel_j = jp == j
+            idx_j = cols[mc_n:, 4][sel_j]
+            fixed_j = st.amb_fixed[idx_j - st.n_fixed_part]
+            if fixed_j.all():
+                continue
+            el_j = el_loc[sp[sel_j]]
+            sig_j = fp[sel_j]
+            has_group = [bool(np.any(st.amb_fixed[(st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f)]))
+                         for f in range(n_sig)]
+            if not any(has_group):
+                groups = []
+                for f in range(n_sig):
+                    g = idx_j[sig_j == f]
+                    if g.size >= 2:
+                        groups.append((g, int(np.argmax(el_j[sig_j == f]))))
+                if not groups or sum(g.size - 1 for g, _ in groups) < 3:
+                    continue
+                outcome = resolve_lambda(st.x, st.P, groups, b_idx[j], lengths[j], s.max_length_error_m,
+                                         s.min_ratio)
+                out_ratio[k, j] = outcome.ratio
+                if outcome.accepted:
+                    _pseudo_update(st, outcome.D, outcome.a_fix)
+                    for g, _ in groups:
+                        st.amb_fixed[g - st.n_fixed_part] = True
+                    ev(k, "fix", j, detail=f"{outcome.n_dd} DD ambiguities, ratio {outcome.ratio:.2f}, "
+                                         f"length {outcome.length_m:.4f} m")
+                    if first_fix[j] < 0:
+                        first_fix[j] = k
+                else:
+                    ev(k, "fix_rejected", j, detail=f"ratio {outcome.ratio:.2f}, {outcome.reason}")
+            else:
+                Ds, vs = [], []
+                for f in range(n_sig):
+                    grp = np.flatnonzero((st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f) & st.amb_fixed)
+                    cand = idx_j[(sig_j == f) & ~fixed_j]
+                    if cand.size == 0:
+                        continue
+                    if grp.size:
+                        ref = st.n_fixed_part + grp[0]
+                    else:
+                        # first fix on this signal for a fixed baseline: the highest newcomer is the reference
+                        sel_f = (sig_j == f) & ~fixed_j
+                        ref = idx_j[sel_f][int(np.argmax(el_j[sel_f]))]
+                        cand = cand[cand != ref]
+                        var_ref = st.P[ref, ref]
+                        if cand.size == 0:
+                            continue
+                    D, v, okm = round_newcomers(st.x, st.P, cand, ref, s.new_amb_round_sigma_cyc,
+                                                s.new_amb_round_frac_cyc)
+                    if okm.any():
+                        Ds.append(D)
+                        vs.append(v)
+                        st.amb_fixed[cand[okm] - st.n_fixed_part] = True
+                        st.amb_fixed[ref - st.n_fixed_part] = True
+                if Ds:
+                    _pseudo_update(st, np.concatenate(Ds), np.concatenate(vs))
+                    ev(k, "fix_added", j, detail=f"{sum(len(v) for v in vs)} newcomers fixed by rounding")
+        # recount fixed after AR
+        had_fix = ever_fixed
+        ever_fixed = np.array([bool(np.any(st.amb_fixed[st.amb_key[:, 0] == j])) for j in range(n_bl)])
+        for j in np.flatnonzero(had_fix & ~ever_fixed):
+            ev(k, "fix_lost", j, detail="no fixed ambiguity left (slips, gaps or setting satellites)")
+        if mp_n:
+            afix = st.amb_fixed[cols[mc_n:, 4] - st.n_fixed_part]
+            for j in range(n_bl):
+                n_fixed_used[j] = np.unique(sp[(jp == j) & afix]).size
+        # ---------------- outputs ----------------
+        okb = pa & (n_used >= 3)
+        out_ok[k] = okb
+        out_b[k] = st.x[all_b_idx].reshape(n_bl, 3)
+        out_P[k] = st.P[np.ix_(all_b_idx, all_b_idx)]
+        fixed_now = ever_fixed & (n_fixed_used >= s.fixed_min_sats)
+        out_fixed[k] = fixed_now & okb
+        out_n[k] = n_used
+        if dynamic:
+            out_w[k] = st.x[0:3]
+        if attitude_fn is not None and np.all(fixed_now) and k % 5 == 0:
+            R_mask = attitude_fn(out_b[k], fixed_now)
+        # residual records (used and rejected)
+        jr, sr, fr = np.nonzero(avail_c)
+        if jr.size:
+            rc = np.full(jr.size, np.nan)
+            lookup_c = np.full((n_bl, n_sat, n_sig), np.nan)
+            lookup_p = np.full((n_bl, n_sat, n_sig), np.nan)
+            if m:
+                lookup_c[jc, sc, fc] = post[:mc_n]
+                lookup_p[jp, sp, fp] = post[mc_n:]
+            rc = lookup_c[jr, sr, fr]
+            rp = lookup_p[jr, sr, fr]
+            rsn = np.where(use_c[jr, sr, fr], 0, reason[jr, sr, fr])
+            rsn_p = np.where(use_p[jr, sr, fr], 0, np.where(reason[jr, sr, fr] == 0, 5, reason[jr, sr, fr]))
+            keep_p = avail_p[jr, sr, fr]
+            for kind, r, rs, sel in ((0, rc, rsn, np.ones(jr.size, bool)), (1, rp, rsn_p, keep_p)):
+                res_cols["epoch"].append(np.full(sel.sum(), k))
+                res_cols["bl"].append(jr[sel])
+                res_cols["sat"].append(sr[sel])
+                res_cols["sig"].append(fr[sel])
+                res_cols["kind"].append(np.full(sel.sum(), kind))
+                res_cols["residual_m"].append(r[sel])
+                res_cols["reason"].append(rs[sel])
+                res_cols["el_ant_deg"].append(np.degrees(el_ant[jr[sel], sr[sel]]))
+                res_cols["az_ant_deg"].append(np.degrees(np.mod(az_ant[jr[sel], sr[sel]], 2 * np.pi)))
+                res_cols["cn0_dbhz"].append(cn0[jr[sel], sr[sel], fr[sel]])
+        # memory for the triple differences
+        prev_t = t
+        prev_sdc = np.where(avail_c, sdc_c, np.nan)
+        prev_sdp = np.where(avail_p, sdp_c, np.nan)
+        prev_clk0 = np.where(pa, clk0, np.nan)
+        prev_b = out_b[k].copy()
+        prev_ub = prev_b @ u.T
+    if progress is not None:
+        progress(1.0)
+    residuals = {kk: (np.concatenate(v) if v else np.zeros(0)) for kk, v in res_cols.items()}
+    return FilterResult(out_ok, out_b, out_P, out_fixed, out_n, out_ratio, out_w, residuals, events,
+                        first_fix, first_data)
+
+
+def _pseudo_update(st: _State, D: np.ndarray, a_fix: np.ndarray) -> None:
+    """Constrain DD ambiguities D x = a_fix with a (numerically) zero-variance pseudo-measurement (Joseph form)."""
+    nz = [np.flatnonzero(row) for row in D]
+    kmax = max(len(z) for z in nz)
+    cols = np.full((D.shape[0], kmax), -1, dtype=np.int64)
+    coef = np.zeros((D.shape[0], kmax))
+    for i, z in enumerate(nz):
+        cols[i, :len(z)] = z
+        coef[i, :len(z)] = D[i, z]
+    innov = a_fix - D @ st.x
+    # 1e-6 cycles^2 keeps S positive definite in float64 without loosening the constraint noticeably
+    x1, P1, _, good = joseph_update_sparse(st.x, st.P, cols, coef, np.full(D.shape[0], 1e-6), innov)
+    if good:
+        st.x, st.P = x1, P1
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])

@@ -1,0 +1,148 @@
+"""Extended Kalman filter building blocks: Joseph-form measurement update (dense and sparse-row), RK4.
+
+The attitude filter (worker.attitude.filter) keeps a fixed-layout state with index maps and calls these with
+measurement matrices whose rows touch only a few states (a baseline, a clock, one ambiguity). `joseph_update_sparse`
+exploits that: H is given as (m, k) column indices and (m, k) coefficients, so P H^T and H P H^T are gathers, not
+dense products, and only the O(n^2 m) products of the Joseph form remain (bench/design notes in docs/attitude.md).
+
+Implements: Kalman (1960) update; Joseph form P+ = (I - K H) P (I - K H)^T + K R K^T (Bucy & Joseph 1968;
+Gelb 1974 eq. 4.2-21), valid for any gain, so it also serves the zero-variance ambiguity pseudo-measurement;
+classical fourth-order Runge-Kutta with a fixed step (Butcher 2008, eq. 235a).
+"""
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+import scipy.linalg as sla
+
+__all__ = ["joseph_update", "joseph_update_sparse", "rk4_step", "rk4_integrate", "rotation_rk4_stm",
+           "sparse_rows_to_dense"]
+
+
+def sparse_rows_to_dense(cols: np.ndarray, coef: np.ndarray, n: int) -> np.ndarray:
+    """Dense H (m, n) from column indices cols (m, k) and coefficients coef (m, k) (-1 columns are skipped)."""
+    m = cols.shape[0]
+    H = np.zeros((m, n))
+    ok = cols >= 0
+    rows = np.broadcast_to(np.arange(m)[:, None], cols.shape)
+    np.add.at(H, (rows[ok], cols[ok]), coef[ok])
+    return H
+
+
+def joseph_update(x: np.ndarray, P: np.ndarray, H: np.ndarray, R: np.ndarray, innovation: np.ndarray):
+    """(x_plus (n,), P_plus (n, n), S (m, m)) after a linear(ised) update with dense H (m, n).
+
+    Args:
+        x, P: prior state and covariance.
+        H: measurement partials; R: (m,) variances (diagonal) or (m, m) covariance (may be singular, e.g. 0 for
+            a pseudo-measurement, as long as H P H^T + R is positive definite).
+        innovation: (m,) observed minus computed at x.
+    Implements: K = P H^T S^-1, S = H P H^T + R; P+ = (I - K H) P (I - K H)^T + K R K^T (Joseph).
+    """
+    PHt = P @ H.T
+    S = H @ PHt
+    Rm = np.diag(R) if np.ndim(R) == 1 else R
+    S = S + Rm
+    c = sla.cho_factor(S, lower=True, check_finite=False)
+    K = sla.cho_solve(c, PHt.T, check_finite=False).T
+    A = -K @ H
+    A[np.diag_indices_from(A)] += 1.0
+    P_new = A @ P @ A.T + K @ Rm @ K.T
+    P_new = 0.5 * (P_new + P_new.T)
+    return x + K @ innovation, P_new, S
+
+
+def joseph_update_sparse(x: np.ndarray, P: np.ndarray, cols: np.ndarray, coef: np.ndarray, R: np.ndarray,
+                         innovation: np.ndarray):
+    """(x_plus, P_plus, S, ok) after an update whose H rows have at most k non-zeros.
+
+    Args:
+        x (n,), P (n, n): prior.
+        cols (m, k) int: state index of each non-zero of each row (-1 = unused, coefficient ignored).
+        coef (m, k): the non-zero partials.
+        R (m,): measurement variances (diagonal R; zero allowed if S stays positive definite).
+        innovation (m,): observed minus computed.
+    Returns ok = False (and the prior unchanged) if S is not positive definite.
+    Implements: the Joseph form as in `joseph_update`, with P H^T = sum_j coef[:, j] P[:, cols[:, j]] computed
+    by gathers (O(n m k)) and the three O(n^2 m) products  A P = P - K (P H^T)^T,  (A P) A^T = A P - (A P H^T) K^T,
+    and K R K^T.
+    """
+    c = np.where(cols >= 0, cols, 0)
+    w = np.where(cols >= 0, coef, 0.0)
+    # P H^T (n, m): gather columns
+    PHt = np.einsum("nmk,mk->nm", P[:, c], w)
+    # S = H P H^T + R (m, m): gather rows of PHt
+    S = np.einsum("mkj,mk->mj", PHt[c, :], w)
+    S = 0.5 * (S + S.T)
+    S[np.diag_indices_from(S)] += R
+    try:
+        cf = sla.cho_factor(S, lower=True, check_finite=False)
+    except np.linalg.LinAlgError:
+        return x, P, S, False
+    K = sla.cho_solve(cf, PHt.T, check_finite=False).T          # (n, m)
+    AP = P - K @ PHt.T                                           # (I - K H) P
+    APHt = np.einsum("nmk,mk->nm", AP[:, c], w)                  # (A P) H^T
+    P_new = AP - APHt @ K.T + (K * R) @ K.T                      # A P A^T + K R K^T
+    P_new = 0.5 * (P_new + P_new.T)
+    return x + K @ innovation, P_new, S, True
+
+
+def rk4_step(f: Callable[[np.ndarray], np.ndarray], y: np.ndarray, h: float) -> np.ndarray:
+    """y(t + h) by one classical Runge-Kutta step of the autonomous ODE y' = f(y)."""
+    k1 = f(y)
+    k2 = f(y + 0.5 * h * k1)
+    k3 = f(y + 0.5 * h * k2)
+    k4 = f(y + h * k3)
+    return y + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+def rk4_integrate(f: Callable[[np.ndarray], np.ndarray], y: np.ndarray, dt: float, max_step: float) -> np.ndarray:
+    """y(t + dt) by fixed-step RK4 with ceil(|dt| / max_step) equal steps."""
+    n = max(1, int(np.ceil(abs(dt) / max_step - 1e-12)))
+    h = dt / n
+    for _ in range(n):
+        y = rk4_step(f, y, h)
+    return y
+
+
+def rotation_rk4_stm(b_m: np.ndarray, omega_rad_s: np.ndarray, dt_s: float, max_step_s: float = 1.0):
+    """(b(t + dt) (n_b, 3), Phi_bb (n_b, 3, 3), Phi_bw (n_b, 3, 3)) of  b' = omega x b, omega' = 0  (seed 000 eq. 2).
+
+    Args:
+        b_m: (n_b, 3) baseline vectors (ECEF) at t; omega_rad_s: (3,) common angular velocity of the baselines
+            as seen in ECEF (the platform rate relative to the Earth), constant over the step.
+        dt_s: step; max_step_s: RK4 step size limit.
+    Returns the propagated baselines and the state transition blocks d b(t+dt) / d b(t) and d b(t+dt) / d omega,
+    integrated together with the variational equations Phi' = F Phi, F = [[ [omega x], -[b x] ], [0, 0]].
+    Implements: seed 000 sec. 2 eq. 2 and "fixed step Runge-Kutta integrator"; the variational equations of
+    the same system (Montenbruck & Gill 2000, sec. 7.1).
+    """
+    b = np.asarray(b_m, dtype=np.float64)
+    w = np.asarray(omega_rad_s, dtype=np.float64)
+    nb = b.shape[0]
+    Wx = _skew(w)
+
+    # augmented y: per baseline [b (3), Phi_bb (9), Phi_bw (9)]
+    def f(y):
+        yb = y[:, :3]
+        pbb = y[:, 3:12].reshape(nb, 3, 3)
+        pbw = y[:, 12:21].reshape(nb, 3, 3)
+        db = yb @ Wx.T                                  # omega x b
+        dpbb = Wx @ pbb                                 # d/dt Phi_bb = [w x] Phi_bb
+        dpbw = Wx @ pbw - _skew_batch(yb)               # d/dt Phi_bw = [w x] Phi_bw - [b x]
+        return np.concatenate([db, dpbb.reshape(nb, 9), dpbw.reshape(nb, 9)], axis=1)
+
+    y0 = np.concatenate([b, np.tile(np.eye(3).ravel(), (nb, 1)), np.zeros((nb, 9))], axis=1)
+    y1 = rk4_integrate(f, y0, dt_s, max_step_s)
+    return y1[:, :3], y1[:, 3:12].reshape(nb, 3, 3), y1[:, 12:21].reshape(nb, 3, 3)
+
+
+def _skew(v: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def _skew_batch(v: np.ndarray) -> np.ndarray:
+    z = np.zeros(v.shape[0])
+    return np.stack([np.stack([z, -v[:, 2], v[:, 1]], -1), np.stack([v[:, 2], z, -v[:, 0]], -1),
+                     np.stack([-v[:, 1], v[:, 0], z], -1)], -2)
