@@ -182,14 +182,22 @@ def _permute(L: np.ndarray, d: np.ndarray, Z: np.ndarray, Z_inv: np.ndarray, j: 
     lam = d[j + 1] * L[j + 1, j] / delta
     d[j] = eta * d[j + 1]
     d[j + 1] = delta
-    a0 = L[j, :j].copy()
-    a1 = L[j + 1, :j].copy()
-    L[j, :j] = -L[j + 1, j] * a0 + a1
-    L[j + 1, :j] = eta * a0 + lam * a1
+    if j > 0:
+        a0 = L[j, :j].copy()
+        a1 = L[j + 1, :j].copy()
+        L[j, :j] = a1 - L[j + 1, j] * a0
+        L[j + 1, :j] = eta * a0 + lam * a1
     L[j + 1, j] = lam
-    L[j + 2:, [j, j + 1]] = L[j + 2:, [j + 1, j]]
-    Z[:, [j, j + 1]] = Z[:, [j + 1, j]]
-    Z_inv[[j, j + 1], :] = Z_inv[[j + 1, j], :]
+    _swap(L[j + 2:, j], L[j + 2:, j + 1])
+    _swap(Z[:, j], Z[:, j + 1])
+    _swap(Z_inv[j], Z_inv[j + 1])
+
+
+def _swap(u: np.ndarray, v: np.ndarray) -> None:
+    """Swap the contents of two equal-shape views in place (cheaper than fancy indexing)."""
+    t = u.copy()
+    u[...] = v
+    v[...] = t
 
 
 def decorrelate(Q: np.ndarray) -> Decorrelation:
@@ -217,7 +225,8 @@ def decorrelate(Q: np.ndarray) -> Decorrelation:
     Z_inv = Z.T.copy()
     j = n - 2
     while j >= 0:
-        _gauss(L, Z, Z_inv, j + 1, j)
+        if abs(L[j + 1, j]) > 0.5:                   # (the test avoids a call for mu = 0)
+            _gauss(L, Z, Z_inv, j + 1, j)
         delta = d[j] + L[j + 1, j] ** 2 * d[j + 1]   # the conditional variance z_{j+1} would get after a swap
         if delta < d[j + 1] * (1.0 - PERM_RTOL):
             _permute(L, d, Z, Z_inv, j, delta)
@@ -226,7 +235,8 @@ def decorrelate(Q: np.ndarray) -> Decorrelation:
             j -= 1
     for j in range(n - 2, -1, -1):                   # full size reduction: does not change d
         for i in range(j + 1, n):
-            _gauss(L, Z, Z_inv, i, j)
+            if abs(L[i, j]) > 0.5:
+                _gauss(L, Z, Z_inv, i, j)
     return Decorrelation(Z=Z, Z_inv=Z_inv, L=L, d=d)
 
 
