@@ -1,0 +1,72 @@
+"""Simulated calibration campaigns for the calibration tests and bench: sets made by the project simulator, read
+back as InputSets exactly as the service would hand them to a pipeline.
+
+Each set is simulated as pass 0 of its own run (`count: 1`) with its own start time and orbit phase, so all sets
+share the antennas' hidden offsets, PCO and PCV: the simulator draws PCO/PCV per pass index (see
+worker/sim/simulate.py `_rng(seed, pidx, ai, "pcv")`), so its own multi-pass `count` would give every pass
+different antennas.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from worker.context import InputFile, InputSet
+from worker.gnss.io.sniff import identify
+from worker.gnss.time import GpsTime
+
+SPACING_S = 2 * 86400.0 + 5 * 3600.0 + 11 * 60.0  # the calibration preset's pass spacing
+
+
+def simulate_campaign(out: Path, n_sets: int, duration_s: float, *, seed: int = 7, overrides: dict | None = None,
+                      spacing_s: float = SPACING_S, start_gps: str = "2018-01-10T03:00:00") -> list[Path]:
+    """Directories of n_sets simulated calibration passes (reused when already there)."""
+    from worker.sim import simulate_scenario
+
+    dirs = []
+    t0 = GpsTime.from_iso(start_gps)
+    for i in range(n_sets):
+        d = Path(out) / f"set_{i:03d}"
+        if not (d / "truth" / "model.json").exists():
+            ov = {"count": 1, "duration_s": float(duration_s), "start_gps": (t0 + i * spacing_s).iso(0),
+                  "mean_anomaly_deg": (133.2 * i) % 360.0}
+            ov.update(overrides or {})
+            simulate_scenario("calibration", d, seed=seed, overrides=ov)
+        dirs.append(d)
+    return dirs
+
+
+def input_set(directory: Path, set_id: str | None = None, skip: tuple = ()) -> InputSet:
+    """The InputSet of a directory (every file but truth/, identified and summarised like an upload)."""
+    directory = Path(directory)
+    files = []
+    for p in sorted(directory.rglob("*")):
+        rel = str(p.relative_to(directory))
+        if p.is_file() and not rel.startswith("truth") and rel not in skip:
+            kind, summary = identify(p, rel)
+            files.append(InputFile(rel, kind, p, summary))
+    sid = set_id or directory.name
+    return InputSet(sid, sid, files, {})
+
+
+def truth_of(directory: Path) -> dict:
+    """Truth of a simulated set: per baseline the physical body baseline per frequency (ARP + PCO) and their
+    mean, and the differential PCV grids (second minus first) with their nodes."""
+    model = json.loads((Path(directory) / "truth" / "model.json").read_text())
+    A = model["antennas"]
+    out = {"baselines": {}, "pcv": {}}
+    plat = json.loads((Path(directory) / "platform.json").read_text())
+    for first, second in plat["baselines"]:
+        R1 = np.asarray(A[first]["R_ant_from_body"])
+        R2 = np.asarray(A[second]["R_ant_from_body"])
+        arp = np.asarray(A[second]["arp_true_body_m"]) - np.asarray(A[first]["arp_true_body_m"])
+        per_f = {f: arp + R2.T @ np.asarray(A[second]["pco_ant_m"][f]) - R1.T @ np.asarray(A[first]["pco_ant_m"][f])
+                 for f in model["signals"]}
+        out["baselines"][(first, second)] = {"arp_m": arp, "per_frequency_m": per_f,
+                                             "mean_m": np.mean(list(per_f.values()), axis=0)}
+        for f in model["signals"]:
+            doc = json.loads((Path(directory) / "truth" / "pcv" / f"{first}_{second}_{f}.json").read_text())
+            out["pcv"][(first, second, f)] = doc
+    return out
