@@ -64,14 +64,21 @@ class FilterResult:
 class _State:
     """x, P and the index maps."""
 
-    def __init__(self, n_bl: int, n_sat: int, n_sig: int, dynamic: bool):
+    def __init__(self, n_bl: int, n_sat: int, n_sig: int, dynamic: bool, phase_clock: bool):
         self.n_bl, self.n_sat, self.n_sig, self.dynamic = n_bl, n_sat, n_sig, dynamic
         self.off_w = 0
-        blk = 4 + (1 if n_sig > 1 else 0)
+        n_pc = n_sig if phase_clock else 0
+        blk = 4 + (1 if n_sig > 1 else 0) + n_pc
         base0 = 3 if dynamic else 0
-        self.b_off = base0 + blk * np.arange(n_bl)            # baseline j: b at b_off[j]..+2, clock +3, bias +4
+        # baseline j: b at b_off[j]..+2, clock +3, [code bias of signal 2 +4], [phase clock per signal]
+        self.b_off = base0 + blk * np.arange(n_bl)
         self.clk = self.b_off + 3
         self.bias = self.b_off + 4 if n_sig > 1 else np.full(n_bl, -1)
+        first_pc = 4 + (1 if n_sig > 1 else 0)
+        # (n_bl, n_sig) state index of the phase clock of each signal; the code clock when not separate
+        self.pclk = (self.b_off[:, None] + first_pc + np.arange(n_sig)[None, :]) if phase_clock \
+            else np.repeat(self.clk[:, None], n_sig, axis=1)
+        self.white = np.unique(np.concatenate([self.clk, self.pclk.ravel()]))
         self.n_fixed_part = base0 + blk * n_bl
         self.x = np.zeros(self.n_fixed_part)
         self.P = np.zeros((self.n_fixed_part, self.n_fixed_part))
@@ -135,7 +142,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     n_ant, n_ep, n_sat, n_sig = pobs.code_m.shape
     n_bl = len(baselines)
     dynamic = s.mode == "dynamic"
-    st = _State(n_bl, n_sat, n_sig, dynamic)
+    st = _State(n_bl, n_sat, n_sig, dynamic, s.separate_phase_clock)
     lam = pobs.wavelength_m
     t_s = (pobs.time - pobs.time[0]) if n_ep else np.zeros(0)
     t_s = np.asarray(t_s, dtype=np.float64)
@@ -224,10 +231,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             else:
                 st.P[all_b_idx, all_b_idx] += q_b * dt
         # white-noise clocks: reset every epoch
-        st.x[st.clk] = 0.0
-        st.P[st.clk, :] = 0.0
-        st.P[:, st.clk] = 0.0
-        st.P[st.clk, st.clk] = var_clk
+        st.x[st.white] = 0.0
+        st.P[st.white, :] = 0.0
+        st.P[:, st.white] = 0.0
+        st.P[st.white, st.white] = var_clk
 
         # ---------------- single differences and QC ----------------
         pa = pobs.present[ia, k] & pobs.present[ib, k]                     # (n_bl,)
@@ -360,7 +367,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             sb = np.concatenate([sc, sp])
             cols[:, 0:3] = b_idx[jb]
             coef[:, 0:3] = -u[sb]
-            cols[:, 3] = st.clk[jb]
+            cols[:mc_n, 3] = st.clk[jc]
+            cols[mc_n:, 3] = st.pclk[jp, fp]
             coef[:, 3] = cfac[sb]
             if n_sig > 1:
                 is2 = fc > 0
@@ -370,15 +378,21 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             coef[mc_n:, 4] = lam[fp]
             z = np.concatenate([sdc_c[jc, sc, fc], sdp_c[jp, sp, fp]])
             if s.noise_estimation:
-                vc_f = np.where(est_n >= NOISE_MIN_EPOCHS, est_var_c, s.sigma_code_m ** 2)
-                vp_f = np.where(est_n >= NOISE_MIN_EPOCHS, est_var_p, s.sigma_phase_m ** 2)
+                # the configured sigmas are floors: receivers smooth their code (tiny code TDs), and time-
+                # correlated errors (multipath) never show in a triple difference
+                vc_f = np.where(est_n >= NOISE_MIN_EPOCHS, np.maximum(est_var_c, s.sigma_code_m ** 2),
+                                s.sigma_code_m ** 2)
+                vp_f = np.where(est_n >= NOISE_MIN_EPOCHS, np.maximum(est_var_p, s.sigma_phase_m ** 2),
+                                s.sigma_phase_m ** 2)
                 var = np.concatenate([vc_f[fc], vp_f[fp]])
             else:
                 var = np.concatenate([np.full(mc_n, s.sigma_code_m ** 2), np.full(mp_n, s.sigma_phase_m ** 2)])
             if s.weighting == "cn0":
                 var *= np.concatenate([_cn0_factor(cn0[jc, sc, fc]), _cn0_factor(cn0[jp, sp, fp])])
-            elif s.weighting == "elevation" and R_mask is not None:
-                e = np.concatenate([el_ant[jc, sc], el_ant[jp, sp]])
+            elif s.weighting == "elevation":
+                # antenna-frame elevation once an attitude exists, else the local horizon (ground platforms)
+                el_w = el_ant if R_mask is not None else np.broadcast_to(el_loc, (n_bl, n_sat))
+                e = np.concatenate([el_w[jc, sc], el_w[jp, sp]])
                 var *= np.clip(1.0 / np.sin(np.clip(np.nan_to_num(e, nan=0.5), 0.05, None)) ** 2, 1.0, 16.0)
             ok_cols = np.where(cols >= 0, cols, 0)
             hx = np.einsum("mk,mk->m", np.where(cols >= 0, coef, 0.0), st.x[ok_cols])

@@ -23,6 +23,9 @@ class AttitudeSettings:
     sigma_code_m: float = 0.30
     sigma_phase_m: float = 0.003
     weighting: str = "none"                     # none | cn0 | elevation (antenna frame)
+    separate_phase_clock: bool = True           # phase gets its own white-noise clock per signal, so the phase
+                                                # enters as double differences and code multipath cannot leak
+                                                # into the baseline through the common-mode ambiguity
     noise_estimation: bool = True               # per-signal white-noise sigma from the triple differences (honest
                                                 # sigmas when the receiver is noisier than Table 1 says)
     # --- Table 1: initial and process noise ---

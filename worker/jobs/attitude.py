@@ -1,0 +1,78 @@
+"""Job type `attitude`: multi-antenna carrier-phase attitude (seed 000 EKF, MLAMBDA, QUEST), the product's main job."""
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from worker.jobs.registry import JobType
+
+
+class AttitudeConfig(BaseModel):
+    """Filter settings; defaults are seed 000 Table 1 (noise) and Table 2 (editing limits)."""
+
+    model_config = ConfigDict(extra="forbid")
+    mode: Literal["dynamic", "kinematic"] = Field(
+        "dynamic", description="dynamic: common angular velocity, no baseline process noise; kinematic: baseline "
+                               "process noise (sigma_baseline_kinematic_m per tau), no angular velocity.")
+    signals: list[Literal["L1", "L2"]] = Field(["L1", "L2"], min_length=1, max_length=2,
+                                               description="GPS L1 C/A and/or L2 P(Y) (L2C if P(Y) is absent).")
+    sigma_code_m: float = Field(0.30, gt=0, le=100, description="Single-difference code noise (m).")
+    sigma_phase_m: float = Field(0.003, gt=0, le=1, description="Single-difference phase noise (m).")
+    weighting: Literal["none", "cn0", "elevation"] = Field("none", description="Observation weighting.")
+    noise_estimation: bool = Field(True, description="Estimate the white noise per signal from triple differences "
+                                                     "(keeps the predicted sigmas honest).")
+    sigma0_baseline_m: float = Field(2.0, gt=0, le=1000)
+    sigma_clock_s: float = Field(1e-6, gt=0, le=1e-2)
+    sigma0_omega_deg_s: float = Field(1.0, gt=0, le=100)
+    sigma_omega_deg_s: float = Field(0.03, ge=0, le=100, description="Angular velocity random walk per tau.")
+    tau_omega_s: float = Field(1.0, gt=0, le=3600)
+    sigma0_ambiguity_cyc: float = Field(500.0, gt=0, le=1e6)
+    sigma_baseline_kinematic_m: float = Field(1.0, gt=0, le=100)
+    adaptive_process_noise: bool = Field(False, description="Raise the angular-velocity noise while the phase "
+                                                            "innovations show the filter lagging a manoeuvre.")
+    elevation_mask_local_deg: float = Field(-90.0, ge=-90, le=90)
+    elevation_mask_antenna_deg: float = Field(0.0, ge=-90, le=90)
+    cn0_mask_l1_dbhz: float = Field(35.0, ge=0, le=70)
+    cn0_mask_l2_dbhz: float = Field(30.0, ge=0, le=70)
+    td_code_m: float = Field(0.5, gt=0, le=1000)
+    td_phase_cyc: float = Field(0.25, gt=0, le=100)
+    max_length_error_m: float = Field(0.03, gt=0, le=10)
+    min_ratio: float = Field(0.0, ge=0, le=1000, description="Also require this ratio (0: ratio only reported).")
+    attitude_method: Literal["quest", "triad"] = "quest"
+    initial_q_body_from_ecef: list[float] | None = Field(
+        None, min_length=4, max_length=4, description="Initial attitude; default Earth pointing (spacecraft) or "
+                                                      "level heading north (terrestrial).")
+    calibrated_baselines: dict | None = Field(
+        None, description="A calibration job's baselines.json object (CONVENTIONS.md) replacing the a priori "
+                          "antenna positions.")
+
+    @field_validator("signals")
+    @classmethod
+    def _unique(cls, v):
+        if len(set(v)) != len(v):
+            raise ValueError("signals must not repeat")
+        return v
+
+    def to_settings(self):
+        from worker.attitude.settings import AttitudeSettings
+
+        d = self.model_dump()
+        cn0 = {"L1": d.pop("cn0_mask_l1_dbhz"), "L2": d.pop("cn0_mask_l2_dbhz")}
+        cal = d.pop("calibrated_baselines") or {}
+        cal_map = {}
+        for b in cal.get("baselines", []) if isinstance(cal, dict) else []:
+            if {"from", "to", "calibrated_m"} <= set(b):
+                cal_map[(b["from"], b["to"])] = b["calibrated_m"]
+        return AttitudeSettings(cn0_mask_dbhz=cn0, calibrated_baselines=cal_map, **d)
+
+
+JOB_TYPE = JobType(
+    name="attitude", title="Attitude from multi-antenna GNSS",
+    description="Carrier-phase attitude of a rigid platform with two or more antennas: the CASSIOPE/GAP filter "
+                "(seed 000) over single differences, MLAMBDA with baseline-length validation, QUEST, honest "
+                "sigmas. Products: attitude.csv, baselines.csv, residuals.csv, events.csv, summary.json, and "
+                "attitude.aem (spacecraft) or heading.nmea (terrestrial).",
+    config_model=AttitudeConfig, pipeline="worker.pipelines.attitude:run", min_sets=1, max_sets=1,
+    produces=("attitude.csv", "baselines.csv", "residuals.csv", "events.csv", "summary.json", "attitude.aem",
+              "heading.nmea"))
