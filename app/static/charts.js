@@ -156,14 +156,18 @@
     if (lower === "residuals.csv") {
       const keys = (t.col("baseline") || times.map(() => "all")).map((b, i) => `${b} ${(t.col("signal") || [])[i] || ""}`.trim());
       const used = t.has("used") ? t.col("used").map(truthy) : null;
-      let phase = t.num("phase_residual_mm");
+      let phase = t.num("phase_residual_mm"), code = t.num("code_residual_m");
       if (!phase && t.has("phase_residual_m")) phase = t.num("phase_residual_m").map((v) => (v === null ? null : 1000 * v));
+      if (t.has("observable") && t.has("residual_m")) { // long layout: one row per observable (worker/attitude)
+        const kind = t.col("observable").map((k) => k.trim().toLowerCase()), r = t.num("residual_m");
+        phase = r.map((v, i) => (kind[i] === "phase" && v !== null ? 1000 * v : null));
+        code = r.map((v, i) => (kind[i] === "code" ? v : null));
+      }
       if (phase) {
         const p = rmsPerEpoch(times, keys, phase, used);
         out.push({title: "Phase residual RMS per epoch [mm]", y: "mm", x: p.x,
                   series: p.names.map((n, i) => ({label: n, values: p.series[i]}))});
       }
-      const code = t.num("code_residual_m");
       if (code) {
         const p = rmsPerEpoch(times, keys, code, used);
         out.push({title: "Code residual RMS per epoch [m]", y: "m", x: p.x,
@@ -240,7 +244,10 @@
     container.appendChild(box);
     const [x, ys] = withGaps(def.x, def.series.map((s) => s.values));
     const scales = {x: {time: true}};
-    const axes = [{label: "GPS time", labelSize: 18, size: 42}, {label: def.y, labelSize: 18, size: 56}];
+    const hms = uPlot.fmtDate("{HH}:{mm}:{ss}");
+    const axes = [{label: "GPS time [hh:mm:ss]", labelSize: 18, size: 42,
+                   values: (u, splits) => splits.map((v) => (v == null ? "" : hms(uPlot.tzDate(new Date(v * 1e3), "Etc/UTC"))))},
+                  {label: def.y, labelSize: 18, size: 56}];
     if (def.series.some((s) => s.scale === "fix")) {
       scales.fix = {range: [-0.1, 1.1]};
       axes.push({scale: "fix", side: 1, label: def.y2 || "", labelSize: 18, size: 40, grid: {show: false},

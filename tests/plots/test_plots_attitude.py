@@ -185,3 +185,33 @@ def test_plots_accept_empty_products():
     for png in (A.residuals_plot("time_gps,baseline\n"), A.skyplot_plot(""), A.dop_plot(None),
                 A.fix_status_plot()):
         assert png.startswith(PNG_MAGIC)
+
+
+def _long_layout(wide_csv: str) -> str:
+    """The wide builder rows rewritten as worker/attitude writes residuals.csv: one row per observable
+    (observable = code | phase, residual_m), sat / az_ant_deg / el_ant_deg column names."""
+    table = read_csv_table(wide_csv)
+    out = ["time_gps,gps_sow,baseline,sat,signal,observable,residual_m,az_ant_deg,el_ant_deg,cn0_dbhz,used,reason"]
+    for i in range(len(table["time_gps"])):
+        common = [table["time_gps"][i], f"{table['gps_sow'][i]:.3f}", table["baseline"][i], table["satellite"][i],
+                  table["signal"][i]]
+        tail = [f"{table['azimuth_deg'][i]:.3f}", f"{table['elevation_deg'][i]:.3f}", f"{table['cn0_dbhz'][i]:.1f}",
+                f"{int(table['used'][i])}", table["reason"][i]]
+        out.append(",".join(common + ["code", f"{table['code_residual_m'][i]:.4f}"] + tail))
+        out.append(",".join(common + ["phase", f"{table['phase_residual_mm'][i] / 1000.0:.6f}"] + tail))
+    return "\n".join(out) + "\n"
+
+
+def test_long_residual_layout_of_the_attitude_job():
+    wide, truth = residuals_case(n=20)
+    long = _long_layout(wide)
+    phase, code = A.residual_values(read_csv_table(long))
+    assert np.isfinite(phase).sum() == np.isfinite(code).sum() == len(read_csv_table(wide)["time_gps"])
+    fig = A.residuals_figure(long)
+    ax = [a for a in fig.axes if a.get_title().startswith("GPS-2>GPS-0 · phase")][0]
+    np.testing.assert_allclose(_line(ax, "L2W").get_ydata(), truth["phase"][("GPS-2>GPS-0", "L2W")], atol=1e-9)
+    code_ax = [a for a in fig.axes if a.get_title().startswith("GPS-2>GPS-1 · code")][0]
+    np.testing.assert_allclose(_line(code_ax, "L1C").get_ydata(), truth["code"][("GPS-2>GPS-1", "L1C")])
+    sky = A.skyplot_figure(long).axes[0].collections[0]
+    assert len(sky.get_offsets()) == 20 * len(SATS)
+    assert set(A.dop_series(long)) == {"GPS-2>GPS-0", "GPS-2>GPS-1"}

@@ -37,8 +37,8 @@ RESIDUAL_COLUMNS = {
     "code_m": ("code_residual_m", "code_res_m", "residual_code_m"),
     "phase_mm": ("phase_residual_mm", "phase_res_mm", "residual_phase_mm"),
     "phase_m": ("phase_residual_m", "phase_res_m", "residual_phase_m"),
-    "azimuth_deg": ("azimuth_deg", "azimuth_antenna_deg", "az_deg", "az_antenna_deg"),
-    "elevation_deg": ("elevation_deg", "elevation_antenna_deg", "el_deg", "el_antenna_deg"),
+    "azimuth_deg": ("azimuth_deg", "az_ant_deg", "azimuth_antenna_deg", "az_deg", "az_antenna_deg"),
+    "elevation_deg": ("elevation_deg", "el_ant_deg", "elevation_antenna_deg", "el_deg", "el_antenna_deg"),
     "cn0_dbhz": ("cn0_dbhz", "cn0", "snr_dbhz"),
     "used": ("used",),
 }
@@ -54,6 +54,21 @@ def _residual(table: Table, key: str) -> np.ndarray | None:
 
 def _residual_num(table: Table, key: str) -> np.ndarray | None:
     return numeric(table, *RESIDUAL_COLUMNS[key])
+
+
+def residual_values(table: Table) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(phase_mm, code_m) per row of residuals.csv, NaN where a row holds the other observable.
+
+    Two layouts are read: wide (`phase_residual_mm` or `phase_residual_m`, and `code_residual_m` columns) and
+    long (`observable` = code | phase with `residual_m`, one row per observable, as worker/attitude writes)."""
+    kind, value = column(table, "observable"), numeric(table, "residual_m")
+    if kind is not None and value is not None:
+        kind = np.char.lower(kind.astype(str))
+        return np.where(kind == "phase", value * 1000.0, np.nan), np.where(kind == "code", value, np.nan)
+    phase = _residual_num(table, "phase_mm")
+    if phase is None and _residual_num(table, "phase_m") is not None:
+        phase = _residual_num(table, "phase_m") * 1000.0
+    return phase, _residual_num(table, "code_m")
 
 
 # --- Euler angles and errors -------------------------------------------------------------------------------
@@ -195,9 +210,14 @@ def euler_figure(attitude_csv: Any, reference: Any = None, context: PlotContext 
             stats = (f": bias {np.mean(e[good]):+.3f}°, std {np.std(e[good]):.3f}°" if good.sum() > 1 else "")
             bottom.plot(t, e + off, ".", ms=2.5, color=colour, label=f"{ax} error{off_txt}{stats}")
             if sigma is not None and np.isfinite(sigma).any():
-                bottom.fill_between(t, off - sigma, off + sigma, color=colour, alpha=0.12, lw=0)
+                bottom.fill_between(t, off - sigma, off + sigma, where=fixed, color=colour, alpha=0.12, lw=0)
         elif sigma is not None:
             bottom.plot(t, sigma, "-", lw=1.0, color=colour, label=f"formal 1σ {ax}")
+    _focus_on_fixed(top, [numeric(att, f"{ax}_deg")[fixed] for ax in AXES]
+                    + ([ref[f"{ax}_deg"] for ax in AXES] if ref is not None else []), margin_frac=0.08)
+    if errors is not None and fixed.any():
+        _focus_on_fixed(bottom, [errors[f"{ax}_deg"][fixed] + float(error_offsets_deg.get(ax, 0.0)) for ax in AXES],
+                        margin_abs=0.5)
     if errors is not None:
         bottom.set_ylabel("error (estimate − reference) [deg]")
     elif any(numeric(att, f"sigma_{ax}_deg") is not None for ax in AXES):
@@ -211,6 +231,26 @@ def euler_figure(attitude_csv: Any, reference: Any = None, context: PlotContext 
     time_axis(bottom, t)
     set_title(fig, "Euler angles (3-2-1, body vs orbital/NED frame) and errors", context)
     return fig
+
+
+def _focus_on_fixed(ax, arrays, margin_frac: float = 0.0, margin_abs: float = 0.0) -> None:
+    """Set the y range to the finite values given (the fixed epochs: float epochs before the first fix can
+    be off by tens of degrees and would flatten everything else); says how many drawn points fall outside."""
+    values = np.concatenate([np.asarray(a, dtype=np.float64).ravel() for a in arrays]) if arrays else np.zeros(0)
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        return
+    lo, hi = float(values.min()), float(values.max())
+    pad = max((hi - lo) * margin_frac, margin_abs, 1e-3)
+    lo, hi = lo - pad, hi + pad
+    outside = 0
+    for line in ax.get_lines():
+        y = np.asarray(line.get_ydata(), dtype=np.float64)
+        outside += int(np.sum(np.isfinite(y) & ((y < lo) | (y > hi))))
+    ax.set_ylim(lo, hi)
+    if outside:
+        ax.text(0.01, 0.02, f"{outside} float-epoch points outside this range", transform=ax.transAxes,
+                fontsize=7, color="0.35")
 
 
 def euler_plot(attitude_csv: Any, reference: Any = None, context: PlotContext | Mapping | None = None,
@@ -436,10 +476,7 @@ def residuals_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
     sig = _residual(res, "signal")
     sig = sig.astype(str) if sig is not None else np.array(["?"] * len(t))
     used = truthy(_residual(res, "used")) if _residual(res, "used") is not None else np.ones(len(t), bool)
-    phase = _residual_num(res, "phase_mm")
-    if phase is None and _residual_num(res, "phase_m") is not None:
-        phase = _residual_num(res, "phase_m") * 1000.0
-    code = _residual_num(res, "code_m")
+    phase, code = residual_values(res)
     for row, name in enumerate(names):
         for col, (values, unit, what) in enumerate(((phase, "mm", "phase"), (code, "m", "code"))):
             ax = axes[row, col]
@@ -447,7 +484,7 @@ def residuals_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
                 no_data(ax, f"no {what} residual column")
                 continue
             sel = base == name
-            n_rejected = int((sel & ~used).sum())
+            n_rejected = int((sel & ~used & np.isfinite(values)).sum())
             for s in sorted(set(sig[sel])):
                 m = np.flatnonzero(sel & used & (sig == s) & np.isfinite(values))
                 if not len(m):
