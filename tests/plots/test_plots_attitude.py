@@ -215,3 +215,18 @@ def test_long_residual_layout_of_the_attitude_job():
     sky = A.skyplot_figure(long).axes[0].collections[0]
     assert len(sky.get_offsets()) == 20 * len(SATS)
     assert set(A.dop_series(long)) == {"GPS-2>GPS-0", "GPS-2>GPS-1"}
+
+
+def test_attitude_plots_bundle_and_report():
+    from worker.report import html_report
+
+    att, ref_q, _, _ = attitude_case(n=40)
+    res, _ = residuals_case(n=40)
+    pngs = A.attitude_plots({"attitude.csv": att, "residuals.csv": res, "baselines.csv": baselines_case(n=40),
+                             "events.csv": events_case()}, ref_q, CTX)
+    assert list(pngs) == ["euler.png", "fix_status.png", "dop.png", "residuals.png", "skyplot.png"]
+    assert all(p.startswith(PNG_MAGIC) for p in pngs.values())
+    one_baseline = A.attitude_plots({"baselines.csv": baselines_case(n=10, names=("A>B",))})
+    assert list(one_baseline) == ["fix_status.png"]
+    doc = html_report("Attitude", {"epochs": 40}, pngs)
+    assert doc.count("data:image/png;base64,") == 5

@@ -195,3 +195,14 @@ def test_plots_and_report_import_no_web_code():
     out = subprocess.run([sys.executable, "-c", code], cwd=REPO_ROOT, capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == ""
+
+
+def test_calibration_and_ttff_bundles():
+    from worker.plots.calibration import calibration_plots
+    from worker.plots.ttff import ttff_plots
+
+    doc = {"platform": "P", "frames": "body", "baselines": [{"from": "A", "to": "B", "a_priori_m": [1, 0, 0],
+                                                            "calibrated_m": [1.001, 0, 0], "sigma_m": [1e-4] * 3,
+                                                            "n_epochs": 10}]}
+    assert list(calibration_plots([pcv_map()], doc)) == ["pcv_maps.png", "pcv_counts.png", "baselines_table.png"]
+    assert list(ttff_plots(ttff_runs())) == ["ttff_table.png", "ttff_histogram.png"]

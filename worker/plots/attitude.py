@@ -571,3 +571,26 @@ def skyplot_figure(residuals_csv: Any, context: PlotContext | Mapping | None = N
 def skyplot_plot(residuals_csv: Any, context: PlotContext | Mapping | None = None) -> bytes:
     """PNG of `skyplot_figure`."""
     return figure_png(skyplot_figure(residuals_csv, context))
+
+
+def attitude_plots(products: Mapping[str, Any], reference: Any = None,
+                   context: PlotContext | Mapping | None = None) -> dict[str, bytes]:
+    """Every attitude PNG that the given products allow, by product name, in report order.
+
+    products: {"attitude.csv": text, "baselines.csv": text, "residuals.csv": text, "events.csv": text}
+        (any may be missing; a one-baseline platform has no attitude.csv).
+    reference: the set's reference attitude CSV text (CONVENTIONS.md) or None.
+    Returns e.g. {"euler.png", "fix_status.png", "dop.png", "residuals.png", "skyplot.png"}.
+    """
+    att, bl = products.get("attitude.csv"), products.get("baselines.csv")
+    res, ev = products.get("residuals.csv"), products.get("events.csv")
+    out: dict[str, bytes] = {}
+    if att is not None and len(read_csv_table(att).get("time_gps", [])):
+        out["euler.png"] = euler_plot(att, reference, context)
+    if att is not None or bl is not None:
+        out["fix_status.png"] = fix_status_plot(att, bl, ev, context)
+    if res is not None:
+        out["dop.png"] = dop_plot(res, att, context)
+        out["residuals.png"] = residuals_plot(res, context)
+        out["skyplot.png"] = skyplot_plot(res, context)
+    return out

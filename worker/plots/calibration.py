@@ -202,3 +202,15 @@ def baselines_table_figure(baselines_json: Any, context: PlotContext | Mapping |
 def baselines_table_plot(baselines_json: Any, context: PlotContext | Mapping | None = None) -> bytes:
     """PNG of `baselines_table_figure`."""
     return figure_png(baselines_table_figure(baselines_json, context))
+
+
+def calibration_plots(maps: Sequence[Any], baselines_json: Any = None,
+                      context: PlotContext | Mapping | None = None) -> dict[str, bytes]:
+    """{"pcv_maps.png", "pcv_counts.png", "baselines_table.png"} (those the inputs allow)."""
+    out: dict[str, bytes] = {}
+    if maps:
+        out["pcv_maps.png"] = pcv_maps_plot(maps, context=context)
+        out["pcv_counts.png"] = pcv_counts_plot(maps, context=context)
+    if baselines_json is not None:
+        out["baselines_table.png"] = baselines_table_plot(baselines_json, context)
+    return out

@@ -139,3 +139,8 @@ def ttff_histogram_figure(runs: Any, context: PlotContext | Mapping | None = Non
 def ttff_histogram_plot(runs: Any, context: PlotContext | Mapping | None = None) -> bytes:
     """PNG of `ttff_histogram_figure`."""
     return figure_png(ttff_histogram_figure(runs, context))
+
+
+def ttff_plots(runs: Any, context: PlotContext | Mapping | None = None) -> dict[str, bytes]:
+    """{"ttff_table.png", "ttff_histogram.png"}."""
+    return {"ttff_table.png": ttff_table_plot(runs, context), "ttff_histogram.png": ttff_histogram_plot(runs, context)}
