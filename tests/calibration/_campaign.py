@@ -70,3 +70,30 @@ def truth_of(directory: Path) -> dict:
             doc = json.loads((Path(directory) / "truth" / "pcv" / f"{first}_{second}_{f}.json").read_text())
             out["pcv"][(first, second, f)] = doc
     return out
+
+
+def truth_map_mm(truth: dict, key: tuple, b_calibrated_m: np.ndarray, az_deg: np.ndarray, el_deg: np.ndarray,
+                 boresight_first=(0.0, 0.0, -1.0)) -> np.ndarray:
+    """The injected differential PCV of (first, second, signal) at (az, el) in the antenna frame of the first
+    antenna, expressed in the decomposition the calibration uses: with baseline b_cal instead of the physical
+    (ARP + PCO of that frequency) baseline b_f the map must also hold -g.(b_f - b_cal) (g the unit line of sight,
+    body frame), and it is defined up to a constant (the per-epoch clock). mm."""
+    from worker.gnss.geometry import R_antenna_from_body
+    from worker.sim.observables import bilinear_pcv_mm
+
+    doc = truth["pcv"][key]
+    grid = np.array([[np.nan if v is None else v for v in row] for row in doc["values_mm"]], float)
+    pcv = bilinear_pcv_mm(grid, np.asarray(az_deg), np.asarray(el_deg))
+    a, e = np.radians(az_deg), np.radians(el_deg)
+    d_ant = np.stack([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)], axis=-1)
+    g_body = d_ant @ R_antenna_from_body(np.asarray(boresight_first, float))  # R^T d
+    b_f = truth["baselines"][key[:2]]["per_frequency_m"][key[2]]
+    return pcv - (g_body @ (b_f - np.asarray(b_calibrated_m))) * 1e3
+
+
+def compare_maps_mm(values_mm: np.ndarray, truth_mm: np.ndarray, weight: np.ndarray) -> float:
+    """RMS (mm) of estimated minus truth over bins with a value, after removing the weighted mean difference."""
+    ok = np.isfinite(values_mm) & np.isfinite(truth_mm) & (weight > 0)
+    d = values_mm[ok] - truth_mm[ok]
+    d = d - np.average(d, weights=weight[ok])
+    return float(np.sqrt(np.mean(d ** 2)))

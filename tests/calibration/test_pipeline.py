@@ -1,0 +1,150 @@
+"""The `calibration` job on small simulated campaigns, run in-process through the pipeline (fan-out run locally):
+recovery of injected offsets and maps, identical maps on a re-run, refusals naming the set."""
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.calibration._campaign import compare_maps_mm, input_set, simulate_campaign, truth_map_mm, truth_of
+from worker.context import JobContext
+from worker.errors import JobInputError
+from worker.jobs.calibration import CalibrationConfig
+from worker.pipelines.calibration import run
+
+BENIGN = {"noise": False, "multipath": False, "cn0_jitter_db": 0.0}
+FAST_CFG = {"azimuth_step_deg": 10.0, "elevation_step_deg": 5.0, "min_count": 10}
+
+
+def _ctx(tmp: Path, sets) -> JobContext:
+    tmp.mkdir(parents=True, exist_ok=True)
+
+    def store(path: Path):
+        data = Path(path).read_bytes()
+        return hashlib.sha256(data).hexdigest(), len(data)
+
+    return JobContext(job_id="test", attempt=1, sets=sets, workdir=tmp, _store_blob=store)
+
+
+def _products(ctx) -> dict:
+    out = {}
+    for name in ctx.products:
+        p = ctx.workdir / "products" / name
+        out[name] = p.read_bytes()
+    return out
+
+
+@pytest.fixture(scope="module")
+def pcv_campaign(tmp_path_factory):
+    """Four 10-minute benign passes (no noise, no multipath) with the preset's offsets, PCO and 35 mm PCV."""
+    root = tmp_path_factory.mktemp("cal_pcv")
+    return simulate_campaign(root, 4, 600.0, seed=11, overrides=BENIGN)
+
+
+def test_campaign_recovers_offsets_without_pcv(tmp_path):
+    dirs = simulate_campaign(tmp_path / "sets", 3, 600.0, seed=5, overrides={**BENIGN, "pcv": False})
+    ctx = _ctx(tmp_path / "job", [input_set(d) for d in dirs])
+    run(ctx, CalibrationConfig(**FAST_CFG))
+    doc = json.loads(_products(ctx)["baselines.json"])
+    truth = truth_of(dirs[0])
+    assert doc["frames"] == "body" and len(doc["baselines"]) == 2
+    for b in doc["baselines"]:
+        t = truth["baselines"][(b["from"], b["to"])]
+        err_mm = (np.asarray(b["calibrated_m"]) - t["mean_m"]) * 1e3
+        moved_mm = (np.asarray(b["a_priori_m"]) - t["mean_m"]) * 1e3
+        # the a priori is several mm off (seed 000 Table 3 offsets); the calibration lands within 0.5 mm (only the
+        # L1/L2 PCO difference is left without PCV and noise)
+        assert np.max(np.abs(moved_mm)) > 4.0
+        assert np.all(np.abs(err_mm) < 0.5), err_mm
+
+
+def test_campaign_recovers_maps_and_is_deterministic(tmp_path, pcv_campaign):
+    sets = [input_set(d) for d in pcv_campaign]
+    cfg = CalibrationConfig(**FAST_CFG, held_out_set=sets[-1].id)
+    ctx = _ctx(tmp_path / "a", sets)
+    run(ctx, cfg)
+    prod = _products(ctx)
+    for name in ("baselines.json", "baselines.csv", "residual_statistics.json", "held_out_attitude.json",
+                 "calibration_summary.json", "pcv_maps.png", "pcv_counts.png"):
+        assert name in prod, name
+    assert len(ctx.pcv_maps) == 4 and ctx.pcv_maps[0][0].startswith("CASSIOPE-like calibration GPS-2>GPS-0 ")
+    truth = truth_of(pcv_campaign[0])
+    cal = {(b["from"], b["to"]): np.asarray(b["calibrated_m"]) for b in json.loads(prod["baselines.json"])["baselines"]}
+    for first, second in cal:
+        for sig in ("L1", "L2"):
+            doc = json.loads(prod[f"pcv_{first}_{second}_{sig}.json"])
+            values = np.array([[np.nan if v is None else v for v in row] for row in doc["values_mm"]])
+            count = np.asarray(doc["count"])
+            az, el = np.meshgrid(doc["azimuth_deg"], doc["elevation_deg"])
+            want = truth_map_mm(truth, (first, second, sig), cal[(first, second)], az, el)
+            rms = compare_maps_mm(values, want, count)
+            print(first, second, sig, "map rms vs truth mm", round(rms, 3))
+            # 10 x 5 deg bins averaging a bilinear 5-deg pattern with up to 50 mm p-p: a few mm of smoothing
+            assert rms < 2.5, (first, second, sig, rms)
+            assert np.nanmax(values) - np.nanmin(values) > 15.0  # a real pattern, not a flat map
+    res = json.loads(prod["residual_statistics.json"])
+    for key, after in res["after"].items():
+        assert after["rms_mm"] < 0.5 * res["before"][key]["rms_mm"], key
+    summary = json.loads(prod["calibration_summary.json"])
+    assert all(m["converged"] for m in summary["maps"])
+    # re-run: the same maps bit for bit
+    ctx2 = _ctx(tmp_path / "b", sets)
+    run(ctx2, cfg)
+    prod2 = _products(ctx2)
+    for name in prod:
+        if name.startswith("pcv_") and name.endswith(".json") or name == "baselines.json":
+            assert prod[name] == prod2[name], name
+
+
+def _copy(src: Path, dst: Path) -> Path:
+    shutil.copytree(src, dst, ignore=shutil.ignore_patterns("observations_*.csv"))
+    return dst
+
+
+def test_refuses_a_set_without_reference_attitude(tmp_path, pcv_campaign):
+    sets = [input_set(pcv_campaign[0]), input_set(pcv_campaign[1], skip=("reference_attitude.csv",))]
+    with pytest.raises(JobInputError) as exc:
+        run(_ctx(tmp_path, sets), CalibrationConfig(**FAST_CFG))
+    assert "set_001" in exc.value.detail and "reference attitude" in exc.value.detail
+
+
+def test_refuses_overlapping_sets(tmp_path, pcv_campaign):
+    sets = [input_set(pcv_campaign[0]), input_set(pcv_campaign[1]), input_set(pcv_campaign[0], set_id="copy_of_0")]
+    with pytest.raises(JobInputError) as exc:
+        run(_ctx(tmp_path, sets), CalibrationConfig(**FAST_CFG))
+    assert "overlap" in exc.value.detail and "copy_of_0" in exc.value.detail and "set_000" in exc.value.detail
+
+
+def test_refuses_a_set_of_another_platform(tmp_path, pcv_campaign):
+    other = _copy(pcv_campaign[1], tmp_path / "other")
+    doc = json.loads((other / "platform.json").read_text())
+    doc["antennas"]["GPS-1"]["position_m"][1] = 1.2
+    (other / "platform.json").write_text(json.dumps(doc))
+    sets = [input_set(pcv_campaign[0]), input_set(other)]
+    with pytest.raises(JobInputError) as exc:
+        run(_ctx(tmp_path / "job", sets), CalibrationConfig(**FAST_CFG))
+    assert exc.value.title == "Set of another platform"
+    assert "'other'" in exc.value.detail and "GPS-1" in exc.value.detail
+
+
+def test_refuses_a_reference_that_does_not_cover_the_observations(tmp_path, pcv_campaign):
+    cut = _copy(pcv_campaign[1], tmp_path / "cut")
+    lines = (cut / "reference_attitude.csv").read_text().splitlines()
+    (cut / "reference_attitude.csv").write_text("\n".join(lines[:200] + lines[260:]) + "\n")  # a 60 s hole
+    sets = [input_set(pcv_campaign[0]), input_set(cut)]
+    with pytest.raises(JobInputError) as exc:
+        run(_ctx(tmp_path / "job", sets), CalibrationConfig(**FAST_CFG))
+    assert "'cut'" in exc.value.detail and "uncovered" in exc.value.detail and exc.value.file == "reference_attitude.csv"
+    # with a gap limit above the hole it is bridged and accepted
+    run(_ctx(tmp_path / "job2", sets), CalibrationConfig(**FAST_CFG, max_reference_gap_s=120.0))
+
+
+def test_config_refuses_a_grid_that_does_not_divide():
+    with pytest.raises(ValueError):
+        CalibrationConfig(azimuth_step_deg=7.0)
+    with pytest.raises(ValueError):
+        CalibrationConfig(elevation_step_deg=0.7)

@@ -1,0 +1,257 @@
+"""The `calibration` pipeline (see worker/jobs/calibration.py and docs/calibration.md).
+
+run(): checks the campaign from the upload summaries and the reference attitude files, fans out pass 1 (one task
+per set), reduces baselines and iterates the maps, fans out pass 2, writes the products and publishes the maps.
+Task functions take (payload, sets) and return picklable results; an input problem of a set comes back as
+{"input_error": ...} (not raised) so the parent fails the job once, naming the set, instead of a retried task.
+"""
+from __future__ import annotations
+
+import json
+import time
+
+import numpy as np
+
+from worker.context import JobContext
+from worker.errors import JobInputError
+
+
+def _options(cfg: dict):
+    from worker.calibration.binning import Grid2D
+    from worker.calibration.campaign import CampaignOptions
+    from worker.calibration.extract import ExtractOptions
+
+    ext = ExtractOptions(signals=tuple(cfg["frequencies"]), sigma_phase_m=cfg["sigma_phase_mm"] * 1e-3,
+                         cn0_mask_dbhz={"L1": cfg["cn0_mask_l1_dbhz"], "L2": cfg["cn0_mask_l2_dbhz"]},
+                         elevation_mask_antenna_deg=cfg["elevation_mask_antenna_deg"],
+                         max_reference_gap_s=cfg["max_reference_gap_s"])
+    grid = Grid2D.regular(cfg["azimuth_step_deg"], cfg["elevation_step_deg"],
+                          y_range_deg=(cfg["elevation_min_deg"], cfg["elevation_max_deg"]))
+    return CampaignOptions(ext, grid, min_count=cfg["min_count"], tolerance_mm=cfg["tolerance_mm"],
+                           max_iterations=cfg["max_iterations"], batch_s=cfg["batch_s"],
+                           max_deviation_m=cfg["max_deviation_mm"] * 1e-3,
+                           min_reference_coverage=cfg["min_reference_coverage"])
+
+
+def _label(s) -> str:
+    return s.name or s.id
+
+
+def _find(sets, set_id: str):
+    for s in sets:
+        if s.id == set_id:
+            return s
+    raise KeyError(f"set {set_id} is not an input of this job")
+
+
+def _load(payload: dict, sets):
+    """(SetData, options) or an {"input_error"} dict."""
+    from worker.calibration.extract import SetInputError, load_set
+    from worker.gnss.io.errors import ParseError
+
+    options = _options(payload["config"])
+    s = _find(sets, payload["set_id"])
+    try:
+        data = load_set(s, options.extract)
+    except SetInputError as exc:
+        return None, options, {"input_error": {"title": "Set unusable for calibration",
+                                               "detail": f"set {_label(s)!r} {exc}", "file": exc.file}}
+    except ParseError as exc:
+        return None, options, {"input_error": {"title": "An input file could not be parsed",
+                                               "detail": f"set {_label(s)!r}: {exc}", "file": exc.path}}
+    if data.reference.coverage < options.min_reference_coverage:
+        from worker.calibration.reference import uncovered_spans
+        spans = "; ".join(f"{a} to {b}" for a, b in uncovered_spans(data.epochs, data.reference.ok))
+        return None, options, {"input_error": {
+            "title": "Reference attitude does not cover the observations",
+            "detail": f"set {_label(s)!r}: the reference attitude covers {100 * data.reference.coverage:.1f} % of "
+                      f"the observation epochs (min_reference_coverage {options.min_reference_coverage:g}); "
+                      f"uncovered: {spans}"}}
+    return data, options, None
+
+
+def statistics_task(payload: dict, sets):
+    """Pass 1 of one set: SetStats (worker.calibration.campaign) or {"input_error": ...}."""
+    from worker.calibration.campaign import set_statistics
+
+    t0 = time.perf_counter()
+    data, options, err = _load(payload, sets)
+    if err:
+        return err
+    stats = set_statistics(data, options)
+    return {"stats": stats, "seconds": time.perf_counter() - t0}
+
+
+def final_task(payload: dict, sets):
+    """Pass 2 of one set: SetFinal or {"input_error": ...}."""
+    from worker.calibration.campaign import set_final
+
+    t0 = time.perf_counter()
+    data, options, err = _load(payload, sets)
+    if err:
+        return err
+    calibrated = {tuple(k.split(">")): np.asarray(v, float) for k, v in payload["calibrated"].items()}
+    maps = {}
+    for key, values in payload["maps"].items():
+        bl, sig = key.rsplit(" ", 1)
+        maps[tuple(bl.split(">")) + (sig,)] = np.array([np.nan if v is None else v for v in values], float)
+    final = set_final(data, calibrated, maps, options, held_out=payload["held_out"])
+    return {"final": final, "seconds": time.perf_counter() - t0}
+
+
+def _raise_input_errors(results: list, payloads: list) -> None:
+    for r, p in zip(results, payloads):
+        if isinstance(r, dict) and "input_error" in r:
+            e = r["input_error"]
+            raise JobInputError(e["title"], e["detail"], file=e.get("file"), field="observation_set_ids")
+
+
+def _set_infos(sets, max_gap_s: float):
+    from worker.calibration.checks import SetInfo
+    from worker.gnss.io.reference_attitude import read_reference_attitude
+    from worker.gnss.time import GpsTime
+
+    infos = []
+    for s in sets:
+        plat = s.platform()
+        obs = s.of_kind("rinex_obs")
+        firsts = [GpsTime.from_iso(f.summary["time_first"]) for f in obs if f.summary.get("time_first")]
+        lasts = [GpsTime.from_iso(f.summary["time_last"]) for f in obs if f.summary.get("time_last")]
+        first = min(firsts, key=lambda t: (int(t.s), float(t.frac))) if firsts else None
+        last = max(lasts, key=lambda t: (int(t.s), float(t.frac))) if lasts else None
+        refs = s.of_kind("reference_attitude")
+        ref_times = None
+        if refs:
+            ref_times = read_reference_attitude(refs[0].path.read_bytes(), refs[0].name).time
+        infos.append(SetInfo(s.id, _label(s), plat, first, last, refs[0].name if refs else None, ref_times))
+    return infos
+
+
+def _map_doc(platform: str, key, grid, values, count, sigma) -> dict:
+    from worker.gnss.io.pcv_map import PcvMap
+
+    m = PcvMap(platform, key[0], key[1], key[2], grid.x_centres_deg, grid.y_centres_deg,
+               np.round(values, 4), count.astype(np.int64), np.round(sigma, 4))
+    return m.to_json()
+
+
+def run(ctx: JobContext, config) -> None:
+    from worker.calibration.campaign import (combine_residual_stats, finish_maps, reduce_baselines, reduce_maps)
+    from worker.calibration.baselines import baselines_document, baselines_table_csv
+    from worker.calibration.checks import CampaignError, check_campaign
+    from worker.gnss.io.platform import parse_platform
+
+    cfg = config.model_dump()
+    options = _options(cfg)
+    ctx.progress(0.0, "checking the campaign")
+    infos = _set_infos(ctx.sets, options.extract.max_reference_gap_s)
+    try:
+        check_campaign(infos, max_reference_gap_s=options.extract.max_reference_gap_s, held_out=config.held_out_set)
+    except CampaignError as exc:
+        raise JobInputError(exc.title, exc.detail, file=exc.file, field="observation_set_ids") from exc
+    plat_file = ctx.sets[0].of_kind("platform")[0]
+    platform = parse_platform(plat_file.path.read_bytes(), plat_file.name)
+    held = [s for s in ctx.sets if config.held_out_set in (s.id, s.name)] if config.held_out_set else []
+    held_ids = {s.id for s in held[:1]}
+    cal_sets = [s for s in ctx.sets if s.id not in held_ids]
+    ctx.log(f"calibration of {platform.name}: {len(cal_sets)} sets, held out: {[_label(s) for s in held[:1]]}")
+
+    # --- pass 1 ---
+    t0 = time.perf_counter()
+    p1 = [{"set_id": s.id, "label": _label(s), "config": cfg} for s in cal_sets]
+    r1 = ctx.map("worker.pipelines.calibration:statistics_task", p1, progress_span=(0.02, 0.5),
+                 stage="pass 1 (baselines, PCV statistics)")
+    _raise_input_errors(r1, p1)
+    t_pass1 = time.perf_counter() - t0
+    stats = [r["stats"] for r in r1]
+    rows = reduce_baselines(stats, platform)
+    calibrated = {(r.first, r.second): r.estimate.mean_m for r in rows}
+    if not all(np.all(np.isfinite(v)) for v in calibrated.values()):
+        bad = [f"{a}>{b}" for (a, b), v in calibrated.items() if not np.all(np.isfinite(v))]
+        raise JobInputError("No usable epochs", f"no epoch-wise solution survived for baseline(s) {bad} over "
+                            f"{len(cal_sets)} set(s); check the reference attitude and the observations")
+    ctx.progress(0.5, "iterating PCV maps")
+    t0 = time.perf_counter()
+    map_results = reduce_maps(stats, calibrated, list(config.frequencies), options)
+    t_maps = time.perf_counter() - t0
+    for m in map_results:
+        ctx.log(f"map {m.first}>{m.second} {m.signal}: iterations {len(m.changes_mm)}, changes (mm RMS) "
+                f"{[round(c, 4) for c in m.changes_mm]}, converged {m.converged}")
+
+    # --- pass 2 ---
+    t0 = time.perf_counter()
+    maps_payload = {f"{m.first}>{m.second} {m.signal}": [None if not np.isfinite(v) else round(float(v), 7)
+                                                          for v in m.map_m] for m in map_results}
+    cal_payload = {f"{a}>{b}": [float(x) for x in v] for (a, b), v in calibrated.items()}
+    p2 = [{"set_id": s.id, "label": _label(s), "config": cfg, "calibrated": cal_payload, "maps": maps_payload,
+           "held_out": s.id in held_ids} for s in cal_sets + held[:1]]
+    r2 = ctx.map("worker.pipelines.calibration:final_task", p2, progress_span=(0.52, 0.9),
+                 stage="pass 2 (residuals, final maps, held-out set)")
+    _raise_input_errors(r2, p2)
+    t_pass2 = time.perf_counter() - t0
+    finals = [r["final"] for r in r2]
+    maps_m = {(m.first, m.second, m.signal): np.array(maps_payload[f"{m.first}>{m.second} {m.signal}"],
+                                                       dtype=float) for m in map_results}
+    for m in map_results:
+        m.map_m = np.where(np.isfinite(maps_m[(m.first, m.second, m.signal)]), maps_m[(m.first, m.second, m.signal)],
+                           np.nan)
+    final_maps = finish_maps(map_results, finals, options)
+
+    # --- products ---
+    ctx.progress(0.92, "writing products")
+    ctx.write_product("baselines.json", baselines_document(platform.name, rows))
+    ctx.write_product("baselines.csv", baselines_table_csv(rows))
+    map_docs = []
+    map_name = config.map_name or f"{platform.name} calibration"
+    maps_summary = []
+    for m in map_results:
+        key = (m.first, m.second, m.signal)
+        values, count, sigma, check = final_maps[key]
+        doc = _map_doc(platform.name, key, options.grid, values, count, sigma)
+        ctx.write_product(f"pcv_{m.first}_{m.second}_{m.signal}.json", doc)
+        ctx.publish_pcv_map(f"{map_name} {m.first}>{m.second} {m.signal}", doc)
+        map_docs.append(doc)
+        finite = np.isfinite(values)
+        maps_summary.append({
+            "pair": [m.first, m.second], "frequency": m.signal, "iterations": len(m.changes_mm),
+            "changes_mm": [round(c, 5) for c in m.changes_mm], "converged": m.converged,
+            "bins_with_value": int(finite.sum()), "bins_total": int(values.size),
+            "min_mm": round(float(np.nanmin(values)), 3) if finite.any() else None,
+            "max_mm": round(float(np.nanmax(values)), 3) if finite.any() else None,
+            "max_abs_final_bin_residual_mm": round(float(np.nanmax(np.abs(check))), 4) if finite.any() else None,
+            "median_sigma_mm": round(float(np.nanmedian(sigma)), 4) if finite.any() else None})
+    try:
+        from worker.plots.calibration import pcv_counts_plot, pcv_maps_plot
+
+        context = {"job": ctx.job_id, "platform": platform.name, "sets": len(cal_sets)}
+        ctx.write_product("pcv_maps.png", pcv_maps_plot(map_docs, context=context))
+        ctx.write_product("pcv_counts.png", pcv_counts_plot(map_docs, context=context))
+    except ImportError:  # pragma: no cover - plotting is optional for the science
+        ctx.log("plots skipped: worker.plots.calibration not importable")
+    resid = combine_residual_stats(finals)
+    if held_ids:
+        resid["held_out"] = combine_residual_stats(finals, include_held_out=True)
+    ctx.write_product("residual_statistics.json", resid)
+    held_att = [f.attitude for f in finals if f.held_out]
+    if held_att:
+        ctx.write_product("held_out_attitude.json", held_att[0])
+    per_set = [{"set": s.label, "epochs": s.n_epochs, "reference_coverage": round(s.coverage, 4),
+                "epochs_used": {f"{a}>{b}": n for (a, b), n in s.n_epochs_used.items()},
+                "pass1_seconds": round(r["seconds"], 3)} for s, r in zip(stats, r1)]
+    summary = {
+        "platform": platform.name, "sets": len(cal_sets), "held_out_set": [_label(s) for s in held[:1]],
+        "extractor": "reference-aided kinematic (worker.calibration.extract): epoch-wise integer fixing with the "
+                     "reference attitude, epoch-wise least-squares baselines",
+        "grid": {"azimuth_step_deg": config.azimuth_step_deg, "elevation_step_deg": config.elevation_step_deg,
+                 "elevation_range_deg": [config.elevation_min_deg, config.elevation_max_deg],
+                 "min_count": config.min_count},
+        "baselines": baselines_document(platform.name, rows)["baselines"],
+        "maps": maps_summary,
+        "timing_s": {"pass1": round(t_pass1, 3), "maps": round(t_maps, 3), "pass2": round(t_pass2, 3)},
+        "per_set": per_set,
+    }
+    ctx.write_product("calibration_summary.json", summary)
+    ctx.progress(1.0, "done")
+
+
+__all__ = ["run", "statistics_task", "final_task"]
