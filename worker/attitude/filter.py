@@ -39,6 +39,9 @@ DEG = np.pi / 180.0
 REASONS = {0: "used", 1: "elevation_local", 2: "elevation_antenna", 3: "cn0", 4: "td_code", 5: "td_phase",
            6: "half_cycle", 7: "missing_partner", 8: "no_geometry", 9: "innovation"}
 TD_MAX_DT_S = 3.0   # triple differences need consecutive epochs; beyond this the arc restarts (see module doc)
+FIX_CHECK_SIGMAS = 4.0   # post-fit RMS of fixed phases above this many noise sigmas ...
+FIX_CHECK_MIN_M = 0.015  # ... and above 15 mm (multipath-sized) ...
+FIX_CHECK_EPOCHS = 3     # ... for this many consecutive epochs: the fix is withdrawn
 NOISE_EPOCHS = 300.0  # memory of the noise estimator (epochs)
 NOISE_MIN_EPOCHS = 10  # epochs of triple differences before the estimate replaces the configured sigma
 CLOCK_JUMP_M = 0.5e-3 * C_M_S * 0.5   # a change of the epoch clock estimate above 75 km (0.25 ms) is a jump
@@ -119,6 +122,16 @@ class _State:
             self.n_fixed_part + np.arange(self.amb_key.shape[0])
 
 
+def _nanmedian1(a: np.ndarray) -> np.ndarray:
+    """Median over axis 1 ignoring NaN (NaN where a slice has no finite value); a fast np.nanmedian(a, axis=1)."""
+    srt = np.sort(a, axis=1)                      # NaN sort last
+    n = np.isfinite(a).sum(axis=1)
+    lo = np.clip((n - 1) // 2, 0, None)
+    hi = np.clip(n // 2, 0, None)
+    v = 0.5 * (np.take_along_axis(srt, lo[:, None], 1)[:, 0] + np.take_along_axis(srt, hi[:, None], 1)[:, 0])
+    return np.where(n > 0, v, np.nan)
+
+
 def _cn0_factor(cn0_dbhz: np.ndarray) -> np.ndarray:
     """Variance factor 10^((45 - C/N0)/10), clipped to [0.25, 16] (noise doubles per -6 dB; 45 dB-Hz = Table 1)."""
     return np.clip(10.0 ** ((45.0 - np.nan_to_num(cn0_dbhz, nan=45.0)) / 10.0), 0.25, 16.0)
@@ -172,8 +185,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     out_n = np.zeros((n_ep, n_bl), np.int64)
     out_ratio = np.full((n_ep, n_bl), np.nan)
     out_w = np.full((n_ep, 3), np.nan)
-    res_cols: dict[str, list] = {k: [] for k in ("epoch", "bl", "sat", "sig", "kind", "residual_m", "reason",
-                                                  "el_ant_deg", "az_ant_deg", "cn0_dbhz")}
+    res_blocks: list[np.ndarray] = []
     events: list[dict] = []
     first_fix = np.full(n_bl, -1)
     first_data = np.full(n_bl, -1)
@@ -187,6 +199,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     prev_ub = None
     R_mask = None                                           # attitude for the antenna-frame mask
     ever_fixed = np.zeros(n_bl, bool)
+    bad_fix = np.zeros(n_bl, np.int64)
     # per-signal white-noise estimates (variance of one SD) from the triple differences: robust, exponentially
     # weighted over NOISE_EPOCHS epochs; used once NOISE_MIN_SAMPLES TDs have been seen
     est_var_c = np.full(n_sig, s.sigma_code_m ** 2)
@@ -197,7 +210,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         events.append({"epoch": k, "event": kind, "baseline": j, "sat": sat, "signal": sig, "detail": detail})
 
     for k in range(n_ep):
-        if progress is not None and k % 200 == 0:
+        if progress is not None and k % 100 == 0:
             progress(k / max(n_ep, 1))
         t = t_s[k]
         # ---------------- propagation ----------------
@@ -274,9 +287,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         b_pred = st.x[all_b_idx].reshape(n_bl, 3)
         ub = b_pred @ u.T                                                   # (n_bl, n_sat)
         c0 = np.where(use_c[:, :, 0], (sdc[:, :, 0] + ub) / cfac[None, :], np.nan)
-        with np.errstate(all="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            clk0 = np.nanmedian(np.where(np.isfinite(c0), c0, np.nan), axis=1) if n_sat else np.zeros(n_bl)
+        clk0 = _nanmedian1(c0) if n_sat else np.zeros(n_bl)
         clk0 = np.nan_to_num(clk0)
         corr = cfac[None, :, None] * clk0[:, None, None]
         sdc_c = sdc - corr
@@ -296,10 +307,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             td_p = sdp_c - prev_sdp - dgeo[:, :, None]
             td_c_ok = np.isfinite(td_c) & use_c
             td_p_ok = np.isfinite(td_p) & use_p
-            with np.errstate(all="ignore"), warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                mc = np.nanmedian(np.where(td_c_ok, td_c, np.nan), axis=1)      # (n_bl, n_sig)
-                mp = np.nanmedian(np.where(td_p_ok, td_p, np.nan), axis=1)
+            mc = _nanmedian1(np.where(td_c_ok, td_c, np.nan))                 # (n_bl, n_sig)
+            mp = _nanmedian1(np.where(td_p_ok, td_p, np.nan))
             # a common phase jump without a code jump: a receiver clock jump not applied to phase -> integer shift
             common = np.nan_to_num(mp - mc)
             for j, f in zip(*np.nonzero(np.abs(common) > 1000.0)):
@@ -360,6 +369,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         jp, sp, fp = np.nonzero(use_p)
         mc_n, mp_n = jc.size, jp.size
         m = mc_n + mp_n
+        vp_f = np.full(n_sig, s.sigma_phase_m ** 2)
         if m:
             cols = np.full((m, 5), -1, dtype=np.int64)
             coef = np.zeros((m, 5))
@@ -476,6 +486,24 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 if Ds:
                     _pseudo_update(st, np.concatenate(Ds), np.concatenate(vs))
                     ev(k, "fix_added", j, detail=f"{sum(len(v) for v in vs)} newcomers fixed by rounding")
+        # fix monitor: post-fit phase residuals of fixed ambiguities far above the noise for FIX_CHECK_EPOCHS in a
+        # row mean a wrong fix (or an undetected slip): restart every ambiguity of that baseline as float
+        if mp_n:
+            fixed_rows = st.amb_fixed[cols[mc_n:, 4] - st.n_fixed_part]
+            vp_now = vp_f if s.noise_estimation else np.full(n_sig, s.sigma_phase_m ** 2)
+            for j in range(n_bl):
+                sel = (jp == j) & fixed_rows
+                if sel.sum() >= 4:
+                    rms = np.sqrt(np.mean(post[mc_n:][sel] ** 2))
+                    lim = max(FIX_CHECK_SIGMAS * np.sqrt(np.max(vp_now)), FIX_CHECK_MIN_M)
+                    bad_fix[j] = bad_fix[j] + 1 if rms > lim else 0
+                    if bad_fix[j] >= FIX_CHECK_EPOCHS:
+                        drop = np.flatnonzero(st.amb_key[:, 0] == j) + st.n_fixed_part
+                        st.remove_ambiguities(drop)
+                        bad_fix[j] = 0
+                        ev(k, "fix_reset", j, detail=f"post-fit phase RMS {rms * 1e3:.1f} mm > {lim * 1e3:.1f} mm "
+                                                     f"for {FIX_CHECK_EPOCHS} epochs: ambiguities restart")
+                        mp_n = 0          # the state no longer matches this epoch's rows
         # recount fixed after AR
         had_fix = ever_fixed
         ever_fixed = np.array([bool(np.any(st.amb_fixed[st.amb_key[:, 0] == j])) for j in range(n_bl)])
@@ -495,33 +523,24 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         out_n[k] = n_used
         if dynamic:
             out_w[k] = st.x[0:3]
-        if attitude_fn is not None and np.all(fixed_now) and k % 5 == 0:
+        if attitude_fn is not None and np.all(fixed_now) and k % 10 == 0:
             R_mask = attitude_fn(out_b[k], fixed_now)
-        # residual records (used and rejected)
-        jr, sr, fr = np.nonzero(avail_c)
+        # residual records (used and rejected): one (rows, 10) block per epoch
+        jr, sr, fr_ = np.nonzero(avail_c)
         if jr.size:
-            rc = np.full(jr.size, np.nan)
-            lookup_c = np.full((n_bl, n_sat, n_sig), np.nan)
-            lookup_p = np.full((n_bl, n_sat, n_sig), np.nan)
+            lookup = np.full((2, n_bl, n_sat, n_sig), np.nan)
             if m:
-                lookup_c[jc, sc, fc] = post[:mc_n]
-                lookup_p[jp, sp, fp] = post[mc_n:]
-            rc = lookup_c[jr, sr, fr]
-            rp = lookup_p[jr, sr, fr]
-            rsn = np.where(use_c[jr, sr, fr], 0, reason[jr, sr, fr])
-            rsn_p = np.where(use_p[jr, sr, fr], 0, np.where(reason[jr, sr, fr] == 0, 5, reason[jr, sr, fr]))
-            keep_p = avail_p[jr, sr, fr]
-            for kind, r, rs, sel in ((0, rc, rsn, np.ones(jr.size, bool)), (1, rp, rsn_p, keep_p)):
-                res_cols["epoch"].append(np.full(sel.sum(), k))
-                res_cols["bl"].append(jr[sel])
-                res_cols["sat"].append(sr[sel])
-                res_cols["sig"].append(fr[sel])
-                res_cols["kind"].append(np.full(sel.sum(), kind))
-                res_cols["residual_m"].append(r[sel])
-                res_cols["reason"].append(rs[sel])
-                res_cols["el_ant_deg"].append(np.degrees(el_ant[jr[sel], sr[sel]]))
-                res_cols["az_ant_deg"].append(np.degrees(np.mod(az_ant[jr[sel], sr[sel]], 2 * np.pi)))
-                res_cols["cn0_dbhz"].append(cn0[jr[sel], sr[sel], fr[sel]])
+                lookup[0, jc, sc, fc] = post[:mc_n]
+                lookup[1, jp, sp, fp] = post[mc_n:]
+            rsn_c = np.where(use_c[jr, sr, fr_], 0, reason[jr, sr, fr_])
+            rsn_p = np.where(use_p[jr, sr, fr_], 0, np.where(reason[jr, sr, fr_] == 0, 5, reason[jr, sr, fr_]))
+            keep_p = avail_p[jr, sr, fr_]
+            common = np.stack([np.full(jr.size, k), jr, sr, fr_, np.degrees(el_ant[jr, sr]),
+                               np.degrees(np.mod(az_ant[jr, sr], 2 * np.pi)), cn0[jr, sr, fr_]], 1)
+            blk_c = np.column_stack([common, np.zeros(jr.size), lookup[0, jr, sr, fr_], rsn_c])
+            blk_p = np.column_stack([common, np.ones(jr.size), lookup[1, jr, sr, fr_], rsn_p])[keep_p]
+            res_blocks.append(blk_c)
+            res_blocks.append(blk_p)
         # memory for the triple differences
         prev_t = t
         prev_sdc = np.where(avail_c, sdc_c, np.nan)
@@ -531,7 +550,12 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         prev_ub = prev_b @ u.T
     if progress is not None:
         progress(1.0)
-    residuals = {kk: (np.concatenate(v) if v else np.zeros(0)) for kk, v in res_cols.items()}
+    R_all = np.concatenate(res_blocks) if res_blocks else np.zeros((0, 10))
+    residuals = {"epoch": R_all[:, 0].astype(np.int64), "bl": R_all[:, 1].astype(np.int64),
+                 "sat": R_all[:, 2].astype(np.int64), "sig": R_all[:, 3].astype(np.int64),
+                 "el_ant_deg": R_all[:, 4], "az_ant_deg": R_all[:, 5], "cn0_dbhz": R_all[:, 6],
+                 "kind": R_all[:, 7].astype(np.int64), "residual_m": R_all[:, 8],
+                 "reason": R_all[:, 9].astype(np.int64)}
     return FilterResult(out_ok, out_b, out_P, out_fixed, out_n, out_ratio, out_w, residuals, events,
                         first_fix, first_data)
 
