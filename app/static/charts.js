@@ -8,7 +8,8 @@
  *   tracking.csv   (inspect) satellites tracked and mean C/N0 per receiver
  *
  * Interaction: drag to zoom (x), Shift+drag to pan, mouse wheel to zoom around the cursor, double-click to
- * reset; the legend shows the values under the cursor; all charts share one time axis (zoom and cursor).
+ * reset all charts to the full span; the legend shows the values under the cursor; all charts share one time
+ * axis (zoom and cursor).
  * Times are GPS time, shown as written (no leap-second shift).  window.GnssattCharts.instances lists the
  * charts ({name, title, plot}) for tests. */
 (function () {
@@ -190,6 +191,25 @@
 
   /* --- uPlot glue ----------------------------------------------------------------------------------------- */
   let syncing = false;
+  let fullRange = null; // [min, max] of all charts' times: the shared initial and reset range
+
+  /* Every chart to one x range (the union of their times unless given), without echoing through syncX. */
+  function resetAll(range) {
+    const r = range || fullRange;
+    if (!r) return;
+    syncing = true;
+    for (const c of registry.instances) c.plot.setScale("x", {min: r[0], max: r[1]});
+    syncing = false;
+  }
+
+  function unionRange() {
+    let lo = Infinity, hi = -Infinity;
+    for (const c of registry.instances) {
+      const x = c.plot.data[0];
+      if (x.length) { lo = Math.min(lo, x[0]); hi = Math.max(hi, x[x.length - 1]); }
+    }
+    return lo < hi ? [lo, hi] : null;
+  }
 
   function syncX(u) {
     if (syncing) return;
@@ -264,12 +284,15 @@
       width: Math.max(container.clientWidth - 4, 320), height: HEIGHT, series, axes, scales,
       tzDate: (ts) => uPlot.tzDate(new Date(ts * 1e3), "Etc/UTC"),
       cursor: {sync: {key: "gnssatt-job", setSeries: false}, drag: {x: true, y: false, setScale: true},
-               bind: {mousedown: (u, targ, handler) => (e) => { if (!e.shiftKey) handler(e); return null; }}},
+               bind: {mousedown: (u, targ, handler) => (e) => { if (!e.shiftKey) handler(e); return null; },
+                      dblclick: () => () => { resetAll(); return null; }}},
       legend: {live: true},
       hooks: {setScale: [(u, key) => { if (key === "x") syncX(u); }]},
       plugins: [panZoomPlugin()],
     };
+    syncing = true; // a new chart's own first scale must not move the others
     const plot = new uPlot(opts, [x, ...ys], box);
+    syncing = false;
     registry.instances.push({name: productName, title: def.title, plot});
     return plot;
   }
@@ -305,6 +328,8 @@
         container.appendChild(note);
       }
     }
+    fullRange = unionRange();
+    resetAll();
     status.textContent = drawn ? "" : "No time series among this job's products.";
     status.hidden = drawn > 0;
     container.dataset.ready = String(drawn);
