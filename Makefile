@@ -14,7 +14,7 @@ export GNSSATT_DATA_DIR ?= $(DEMO_DIR)
 GNSSATT_TEST_DATABASE_URL ?= postgresql+psycopg://postgres@127.0.0.1:5432/test
 GNSSATT_TEST_QUEUE_URL ?= redis://127.0.0.1:6379/0
 
-.PHONY: venv demo stop test test-fast openapi bench clean
+.PHONY: venv browser demo stop test test-fast openapi bench clean
 
 $(VENV)/.installed: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -30,7 +30,13 @@ demo: venv
 stop:
 	@$(PY) -m client.demo --stop --data-dir "$(DEMO_DIR)"
 
-test: venv
+# The browser tests drive the system's Chromium (Debian package `chromium`) through Playwright; Playwright never
+# downloads a browser of its own here.
+browser:
+	@command -v chromium >/dev/null 2>&1 || (apt-get update -qq && apt-get install -y -qq chromium >/dev/null) \
+	  || echo "could not install chromium (not root?): the browser tests will say so"
+
+test: venv browser
 	GNSSATT_TEST_DATABASE_URL="$(GNSSATT_TEST_DATABASE_URL)" GNSSATT_TEST_QUEUE_URL="$(GNSSATT_TEST_QUEUE_URL)" \
 	  $(PY) -m pytest -q -p no:cacheprovider
 
