@@ -444,7 +444,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                     g = idx_j[sig_j == f]
                     if g.size >= 2:
                         groups.append((g, int(np.argmax(el_j[sig_j == f]))))
-                if not groups or sum(g.size - 1 for g, _ in groups) < 3:
+                if not groups or sum(g.size - 1 for g, _ in groups) < s.ar_min_dd:
                     continue
                 outcome = resolve_lambda(st.x, st.P, groups, b_idx[j], lengths[j], s.max_length_error_m,
                                          s.min_ratio)
@@ -500,6 +500,11 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                     if bad_fix[j] >= FIX_CHECK_EPOCHS:
                         drop = np.flatnonzero(st.amb_key[:, 0] == j) + st.n_fixed_part
                         st.remove_ambiguities(drop)
+                        # the baseline learnt from the wrong integers too: back to its initial uncertainty
+                        bi = b_idx[j]
+                        st.P[bi, :] = 0.0
+                        st.P[:, bi] = 0.0
+                        st.P[bi, bi] = max(s.sigma0_baseline_m, 1.2 * lengths[j]) ** 2
                         bad_fix[j] = 0
                         ev(k, "fix_reset", j, detail=f"post-fit phase RMS {rms * 1e3:.1f} mm > {lim * 1e3:.1f} mm "
                                                      f"for {FIX_CHECK_EPOCHS} epochs: ambiguities restart")

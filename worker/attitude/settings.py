@@ -49,6 +49,8 @@ class AttitudeSettings:
     max_length_error_m: float = 0.03            # ambiguity acceptance: |length - known| (Table 2)
     # --- ambiguity resolution (not in the paper: our choices, with reasons in docs/attitude.md) ---
     min_ratio: float = 0.0                      # 0 = ratio only reported (the paper validates by length)
+    ar_min_dd: int = 6                          # DD ambiguities (all signals) before a first MLAMBDA attempt: with
+                                                # fewer, several integer vectors pass the 3 cm length test
     ar_min_sats: int = 4                        # satellites with phase on a baseline before an AR attempt
     fixed_min_sats: int = 4                     # fixed satellites in the update for an epoch to count as fixed
     new_amb_round_sigma_cyc: float = 0.08       # a fixed baseline fixes a newcomer by rounding below this sigma
