@@ -12,16 +12,21 @@ The clock convention is that of the ionosphere-free reference signal pair (GPS/Q
 BeiDou B3I), which both the broadcast clock polynomial (before T_GD) and the IGS precise clocks refer to: a
 dual-frequency ionosphere-free user takes `clock_s` as it is; an L1-only user takes `clock_s - group_delay_s`.
 `clock_s` includes the relativistic eccentricity correction (IGS clock products exclude it: `PreciseEphemeris`
-adds -2 r.v/c^2 so both providers mean the same thing). Positions are in the ECEF frame of the product: the
-broadcast orbit refers to the satellite antenna phase centre, an SP3 orbit to the centre of mass (no ANTEX here;
-the difference, up to ~2.5 m along the satellite z axis for old GPS blocks, is what the comparison test measures).
+adds -2 r.v/c^2 so both providers mean the same thing). Positions are in the ECEF frame of the product, and of
+the satellite antenna phase centre (APC) that the clocks refer to: the broadcast orbit is of the APC already; an
+SP3 orbit is of the centre of mass (CoM), and `PreciseEphemeris` adds the satellite antenna offset
+(worker.gnss.satellite_antenna: built-in igs05.atx GPS values for IGS05 products, or a user's ANTEX) rotated by
+the nominal yaw-steering attitude. Without it each satellite's range is long by its z offset (0.6-2.7 m for the
+GPS blocks of 2007): on GRACE-A 2007-03-21 the per-satellite mean code residuals split by block, IIA -0.4 to
+-0.9 m and IIR +0.2 to +1.0 m, and fall within +-0.3 m (most within 0.1 m) with the offsets.
 
 Implements: IS-GPS-200N sec. 20.3.3.3.3.1-2 (clock, T_GD), 20.3.3.4.3 (orbit) via worker.gnss.orbits.broadcast;
 record choice per satellite and time by worker.gnss.io.rinex_nav.select_ephemeris (health, fit interval,
 nearest toe, latest transmission); SP3 Lagrange interpolation via worker.gnss.orbits.sp3_interp; RINEX clock
 linear interpolation; IERS Conventions (2010) eq. 10.10 (periodic relativistic clock term -2 r.v / c^2).
 Neglects: GLONASS (no state-vector integrator here: its satellites come back invalid), satellite antenna offsets
-(see above), the GGTO/BDT broadcast offsets beyond the fixed 14 s.
+of SP3 products outside the igs05 era without a user ANTEX, and the satellite phase-centre variations (< 13 mm;
+see worker.gnss.satellite_antenna), the GGTO/BDT broadcast offsets beyond the fixed 14 s.
 """
 from __future__ import annotations
 
@@ -208,12 +213,28 @@ class PreciseEphemeris:
     metre-level, fine for orbits, poor for clocks). `nav` (optional NavData) provides the group delays of
     single-frequency users; without it `group_delay_s` is 0 (an L1-only user then keeps the T_GD error, a few m).
     Clocks get the relativistic term -2 r.v/c^2 added (IGS products exclude it; see module docstring).
+
+    `antenna_offsets` moves the SP3 centre of mass to the satellite antenna phase centre (APC), which the
+    product's clocks refer to (worker.gnss.satellite_antenna): "auto" (default) applies the built-in igs05.atx
+    GPS table when the SP3 declares the IGS05 frame (the products computed with igs05.atx) and nothing otherwise;
+    None keeps the centre of mass; a `SatelliteAntennaOffsets` (e.g. `.from_antex(read_antex(path))`) is used
+    as given. Satellites it does not cover stay at the centre of mass. `antenna_offsets` (attribute) is the
+    model in use or None. Velocities stay those of the centre of mass (the offset turns with the orbit at
+    ~0.4 mm/s).
     """
 
-    def __init__(self, sp3, clk=None, *, nav=None, n_points: int = 10):
+    def __init__(self, sp3, clk=None, *, nav=None, n_points: int = 10, antenna_offsets="auto"):
+        from worker.gnss.satellite_antenna import default_offsets_for_sp3
+
         self.sp3 = sp3
         self.clk = clk
         self.n_points = int(n_points)
+        if isinstance(antenna_offsets, str):
+            if antenna_offsets != "auto":
+                raise ValueError(f"antenna_offsets must be 'auto', None or a SatelliteAntennaOffsets, "
+                                 f"not {antenna_offsets!r}")
+            antenna_offsets = default_offsets_for_sp3(sp3)
+        self.antenna_offsets = antenna_offsets
         self._broadcast = BroadcastEphemeris(nav) if nav is not None else None
         if clk is not None:
             self._clk_time, self._clk_sats, self._clk_s = clk.time, list(clk.sats), np.asarray(clk.clock_s)
@@ -243,7 +264,8 @@ class PreciseEphemeris:
         """SatState of satellites `sats` (n,) at GPS emission times `t_emission` ((n,) or scalar).
 
         Implements: Lagrange interpolation of the SP3 positions (Schenewerk 2003) and its derivative; linear
-        interpolation of the clocks; plus the relativistic term -2 r.v/c^2 (IERS Conventions 2010 eq. 10.10).
+        interpolation of the clocks; plus the relativistic term -2 r.v/c^2 (IERS Conventions 2010 eq. 10.10);
+        plus the satellite antenna offset in the nominal yaw-steering frame when `antenna_offsets` is set.
         """
         from worker.gnss.orbits.sp3_interp import interpolate_sp3, interpolate_sp3_velocity
 
@@ -257,7 +279,10 @@ class PreciseEphemeris:
             c, cr = self._clock(str(sat), tm)
             r[m], v[m] = pos[:, 0], vel[:, 0]
             clk[m], rate[m] = c, cr
-        clk = clk + relativity_clock_s(r, v)
+        clk = clk + relativity_clock_s(r, v)  # of the centre of mass, as the IGS convention defines it
+        if self.antenna_offsets is not None and len(sats):
+            off, covered = self.antenna_offsets.offset_ecef_m(sats, ts, r)
+            r = np.where(covered[:, None], r + off, r)
         ok = np.isfinite(clk) & np.all(np.isfinite(r), axis=-1) & np.all(np.isfinite(v), axis=-1)
         r[~ok], v[~ok] = np.nan, np.nan
         clk[~ok], rate[~ok] = np.nan, np.nan
