@@ -1,0 +1,76 @@
+"""The attitude job through its plug-in: registry entry, config validation, pipeline run(ctx, config) on a
+JobContext like the runner builds, products written, input errors as JobInputError."""
+from __future__ import annotations
+
+import hashlib
+import json
+
+import pytest
+from pydantic import ValidationError
+
+from tests.attitude.conftest import set_files
+from worker.context import InputFile, InputSet, JobContext
+from worker.errors import JobInputError
+from worker.jobs.attitude import AttitudeConfig
+from worker.jobs.registry import job_types
+
+
+def _ctx(tmp_path, files):
+    def store(path):
+        data = path.read_bytes()
+        return hashlib.sha256(data).hexdigest(), len(data)
+
+    s = InputSet(id="set-1", name="sim", files=[InputFile(n, k, p, {}) for n, k, p in files], summary={})
+    ctx = JobContext(job_id="job-1", attempt=1, sets=[s], workdir=tmp_path, _store_blob=store)
+    calls = []
+    ctx._flush_progress = lambda f, stage: calls.append((f, stage))
+    ctx.progress_interval_s = 0.0
+    return ctx, calls
+
+
+def test_registry_and_config():
+    jt = job_types()["attitude"]
+    assert jt.pipeline == "worker.pipelines.attitude:run" and jt.min_sets == 1 and jt.max_sets == 1
+    cfg = AttitudeConfig()
+    st = cfg.to_settings()
+    assert st.mode == "dynamic" and st.cn0_mask_dbhz == {"L1": 35.0, "L2": 30.0} and st.sigma_phase_m == 0.003
+    with pytest.raises(ValidationError):
+        AttitudeConfig(signals=["L5"])
+    with pytest.raises(ValidationError):
+        AttitudeConfig(mode="static")
+    cal = AttitudeConfig(calibrated_baselines={"platform": "x", "frames": "body", "baselines": [
+        {"from": "GPS-2", "to": "GPS-0", "a_priori_m": [1, 0, 0], "calibrated_m": [1.001, 0, 0]}]}).to_settings()
+    assert cal.calibrated_baselines[("GPS-2", "GPS-0")] == [1.001, 0, 0]
+
+
+def test_pipeline_writes_products(tmp_path, clean_pass):
+    from worker.pipelines.attitude import run
+
+    ctx, calls = _ctx(tmp_path, set_files(clean_pass))
+    run(ctx, AttitudeConfig(mode="kinematic"))
+    assert {"attitude.csv", "baselines.csv", "residuals.csv", "events.csv", "summary.json",
+            "attitude.aem"} <= set(ctx.products)
+    summary = json.loads((tmp_path / "products" / "summary.json").read_text())
+    assert summary["observation_set_id"] == "set-1" and summary["fix_rate"] > 0.9
+    fractions = [f for f, _ in calls]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0 and len(calls) > 5
+
+
+def test_pipeline_without_platform_is_an_input_error(tmp_path, clean_pass):
+    from worker.pipelines.attitude import run
+
+    files = [f for f in set_files(clean_pass) if f[1] != "platform"]
+    ctx, _ = _ctx(tmp_path, files)
+    with pytest.raises(JobInputError) as exc:
+        run(ctx, AttitudeConfig())
+    assert exc.value.field == "platform"
+
+
+def test_pipeline_cancellation_happens_at_progress(tmp_path, clean_pass):
+    from worker.errors import JobCancelled
+    from worker.pipelines.attitude import run
+
+    ctx, _ = _ctx(tmp_path, set_files(clean_pass))
+    ctx.cancel_requested.set()
+    with pytest.raises(JobCancelled):
+        run(ctx, AttitudeConfig())
