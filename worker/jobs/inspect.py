@@ -18,4 +18,4 @@ JOB_TYPE = JobType(
     description="Parses every file of one observation set and reports what it holds: per receiver, satellite "
                 "and signal the epochs observed, first and last epoch, mean C/N0, gaps and loss-of-lock count.",
     config_model=InspectConfig, pipeline="worker.pipelines.inspect:run",
-    min_sets=1, max_sets=1, produces=("summary.json", "observations.csv"))
+    min_sets=1, max_sets=1, produces=("summary.json", "observations.csv", "tracking.csv", "tracking.png", "cn0.png"))
