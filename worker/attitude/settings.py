@@ -38,7 +38,6 @@ class AttitudeSettings:
     sigma_baseline_kinematic_m: float = 1.0     # kinematic mode: per baseline component per tau (seed 000 sec. 4.1)
     tau_baseline_s: float = 1.0
     sigma0_code_bias_m: float = 10.0            # inter-signal code bias of a baseline (2nd signal vs 1st), constant
-    adaptive_process_noise: bool = False        # inflate omega noise when the innovations say the filter lags
     rk4_step_s: float = 1.0
     # --- Table 2: editing limits ---
     elevation_mask_local_deg: float = -90.0

@@ -29,8 +29,6 @@ class AttitudeConfig(BaseModel):
     tau_omega_s: float = Field(1.0, gt=0, le=3600)
     sigma0_ambiguity_cyc: float = Field(500.0, gt=0, le=1e6)
     sigma_baseline_kinematic_m: float = Field(1.0, gt=0, le=100)
-    adaptive_process_noise: bool = Field(False, description="Raise the angular-velocity noise while the phase "
-                                                            "innovations show the filter lagging a manoeuvre.")
     elevation_mask_local_deg: float = Field(-90.0, ge=-90, le=90)
     elevation_mask_antenna_deg: float = Field(0.0, ge=-90, le=90)
     cn0_mask_l1_dbhz: float = Field(35.0, ge=0, le=70)
