@@ -73,4 +73,5 @@ JOB_TYPE = JobType(
                 "attitude.aem (spacecraft) or heading.nmea (terrestrial).",
     config_model=AttitudeConfig, pipeline="worker.pipelines.attitude:run", min_sets=1, max_sets=1,
     produces=("attitude.csv", "baselines.csv", "residuals.csv", "events.csv", "summary.json", "attitude.aem",
-              "heading.nmea"))
+              "heading.nmea", "euler.png", "fix_status.png", "dop.png", "residuals.png", "skyplot.png",
+              "report.html"))

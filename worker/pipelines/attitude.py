@@ -33,6 +33,28 @@ def run(ctx: JobContext, config) -> None:
         raise JobInputError(exc.title, exc.detail, file=exc.file, field=exc.field) from exc
     ctx.progress(0.92, "writing products")
     sol.summary["observation_set_id"] = obs_set.id
-    for name, content in all_products(sol).items():
+    products = all_products(sol)
+    for name, content in products.items():
         ctx.write_product(name, content)
+    _write_plots_and_report(ctx, config, obs_set, products, sol.summary)
     ctx.progress(1.0, "done")
+
+
+def _write_plots_and_report(ctx: JobContext, config, obs_set, products: dict, summary: dict) -> None:
+    """PNG plots (seed 000 Figs. 5-7 style Euler errors, fix status, DOP, residuals, sky plot) and one
+    self-contained report.html; see docs/pages.md."""
+    from worker.plots import PlotContext
+    from worker.plots.attitude import attitude_plots
+    from worker.report import html_report
+
+    ctx.progress(0.95, "plotting")
+    texts = {name: (content.decode() if isinstance(content, bytes) else content)
+             for name, content in products.items() if name.endswith(".csv")}
+    refs = obs_set.of_kind("reference_attitude")
+    reference = refs[0].path.read_text() if refs else None
+    context = PlotContext(set_name=obs_set.name or obs_set.id, job_id=ctx.job_id, config=config.model_dump())
+    pngs = attitude_plots(texts, reference, context)
+    for name, png in pngs.items():
+        ctx.write_product(name, png, media_type="image/png")
+    ctx.write_product("report.html", html_report(f"Attitude · {obs_set.name or obs_set.id}", summary, pngs),
+                      media_type="text/html")
