@@ -1,6 +1,7 @@
 """`make demo`: start the API and a worker in the background on the embedded default (SQLite + Huey),
 mint a key, simulate a CASSIOPE-like observation set, submit it over HTTP, wait, print the products.
-`make stop` stops what the demo started. Uses only the `gnssatt` command and HTTP."""
+`make stop` stops what the demo started. Uses only the `gnssatt` command and HTTP. The job is the attitude job;
+its accuracy against the simulator's truth is printed at the end."""
 from __future__ import annotations
 
 import argparse
@@ -99,8 +100,41 @@ def demo(port: int, data_dir: Path, scenario: str, duration_s: float, job_type: 
         local = client.download_products(job["id"], data_dir / "demo-products" / job["id"])
         for prod, path in zip(client.products(job["id"]), local):
             print(f"  {prod['url']}\n    -> {path}")
+        attitude = data_dir / "demo-products" / job["id"] / "attitude.csv"
+        if attitude.is_file():
+            print_accuracy(attitude, sample / "truth" / "attitude.csv")
     print(f"\nAPI docs: {url}/docs   API key: {key}")
     print("The service keeps running in the background. Stop it with: make stop")
+
+
+def _read_quaternions(path: Path) -> dict[str, tuple]:
+    import csv
+
+    with open(path) as fh:
+        return {r["time_gps"]: (float(r["qe_w"]), float(r["qe_x"]), float(r["qe_y"]), float(r["qe_z"]),
+                                int(r["fixed"]), float(r.get("sigma_yaw_deg") or "nan"))
+                for r in csv.DictReader(fh)}
+
+
+def print_accuracy(attitude_csv: Path, truth_csv: Path) -> None:
+    """Attitude error against the simulator's truth: rotation angle of R(q_est) R(q_true)^T (CONVENTIONS.md)."""
+    import numpy as np
+
+    est, truth = _read_quaternions(attitude_csv), _read_quaternions(truth_csv)
+    common = [t for t in est if t in truth]
+    if not common:
+        print("no epoch of attitude.csv matches the truth")
+        return
+    q_est = np.array([est[t][:4] for t in common])
+    q_true = np.array([truth[t][:4] for t in common])
+    fixed = np.array([est[t][4] == 1 for t in common])
+    err_deg = np.degrees(2 * np.arccos(np.clip(np.abs(np.sum(q_est * q_true, axis=1)), 0.0, 1.0)))
+    print(f"\nAccuracy against the simulator's truth ({len(common)} epochs, {fixed.mean() * 100:.1f}% fixed):")
+    for label, mask in (("fixed", fixed), ("float", ~fixed)):
+        if mask.any():
+            e = err_deg[mask]
+            print(f"  {label:5s} epochs: attitude error median {np.median(e):.3f} deg, "
+                  f"95% {np.percentile(e, 95):.3f} deg, max {e.max():.3f} deg")
 
 
 def main() -> None:
@@ -108,8 +142,8 @@ def main() -> None:
     p.add_argument("--port", type=int, default=8000)
     p.add_argument("--data-dir", default="var")
     p.add_argument("--scenario", default="earth-pointing")
-    p.add_argument("--duration-s", type=float, default=300.0)
-    p.add_argument("--job-type", default="inspect")
+    p.add_argument("--duration-s", type=float, default=600.0)
+    p.add_argument("--job-type", default="attitude")
     p.add_argument("--stop", action="store_true")
     args = p.parse_args()
     data_dir = Path(args.data_dir).resolve()
