@@ -105,7 +105,11 @@ def _truncate(obs_by_ant: dict, max_duration_s: float | None) -> dict:
     """Keep only epochs within max_duration_s of the earliest tag (a TTFF study needs the start only)."""
     if max_duration_s is None:
         return obs_by_ant
-    t0 = min(o.time[0] for o in obs_by_ant.values() if len(o.time))
+    firsts = [o.time[0] for o in obs_by_ant.values() if len(o.time)]
+    if not firsts:
+        return obs_by_ant
+    t0 = firsts[0]
+    t0 = t0 + min(float(np.asarray(t - t0, dtype=np.float64)) for t in firsts)
     out = {}
     for ant, o in obs_by_ant.items():
         keep = np.asarray(o.time - t0, dtype=np.float64) <= max_duration_s + 1e-6

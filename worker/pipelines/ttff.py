@@ -1,0 +1,176 @@
+"""The `ttff` pipeline (see worker/jobs/ttff.py and docs/ttff.md).
+
+run(): one fan-out task per set (uploaded sets by id; simulated starts by their start parameters, each task
+simulating its own set into a scratch folder), then the Table 5 tables, runs.json/csv, summary.json and plots.
+A task returns its set's result, or {"input_error": ...} for an unusable uploaded set so the parent fails the job
+once, naming the set, instead of retrying the task.
+"""
+from __future__ import annotations
+
+import html
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+from worker.context import JobContext
+from worker.errors import JobInputError
+
+
+def _options(d: dict):
+    from worker.ttff.single_epoch import SingleEpochOptions
+    from worker.ttff.study import StudyOptions
+
+    se = SingleEpochOptions(max_length_error_m=d["max_length_error_m"],
+                            min_ratio_constrained=d["min_ratio_constrained"])
+    return StudyOptions(configurations=tuple(d["configurations"]), methods=tuple(d["methods"]),
+                        max_duration_s=d["duration_s"], single_epoch_step_s=d["single_epoch_step_s"],
+                        filter_settings={"mode": d["filter_mode"], "max_length_error_m": d["max_length_error_m"]},
+                        single_epoch=se)
+
+
+def _one_thread():
+    """Single-threaded BLAS inside a task (small matrices: threads only contend; measured 4-8x faster)."""
+    try:
+        from threadpoolctl import threadpool_limits
+        return threadpool_limits(1)
+    except ImportError:  # pragma: no cover - optional
+        import contextlib
+        return contextlib.nullcontext()
+
+
+def set_task(payload: dict, sets) -> dict:
+    """One set of the study: worker.ttff.study.run_set's result (+ "label"), or {"input_error": ...}."""
+    from worker.attitude.process import InputProblem
+    from worker.gnss.io.errors import ParseError
+    from worker.ttff.data import load_study_set
+    from worker.ttff.study import run_set
+
+    opts = _options(payload["options"])
+    label = payload["label"]
+    t0 = time.perf_counter()
+    with _one_thread():
+        if payload["source"] == "simulated":
+            from worker.sim import simulate_scenario
+
+            tmp = Path(tempfile.mkdtemp(prefix="ttff_"))
+            try:
+                simulate_scenario("ttff", tmp, seed=int(payload["seed"]), overrides=payload["overrides"])
+                files = ([(p.name, "rinex_obs", p) for p in sorted((tmp / "obs").glob("*.rnx"))]
+                         + [("brdc.rnx", "rinex_nav", tmp / "nav" / "brdc.rnx"),
+                            ("platform.sp3", "sp3", tmp / "platform.sp3"),
+                            ("platform.json", "platform", tmp / "platform.json"),
+                            ("reference_attitude.csv", "reference_attitude", tmp / "reference_attitude.csv")])
+                t_sim = time.perf_counter() - t0
+                ss = load_study_set(files, label, truth_dir=tmp / "truth", max_duration_s=opts.max_duration_s)
+                out = run_set(ss, opts)
+                out["simulation_seconds"] = round(t_sim, 3)
+                out["start"] = payload.get("start")
+            finally:
+                shutil.rmtree(tmp, ignore_errors=True)
+        else:
+            s = next((x for x in sets if x.id == payload["set_id"]), None)
+            if s is None:
+                return {"input_error": {"title": "Set not found", "detail": f"set {label!r} is not an input"}}
+            files = [(f.name, f.kind, f.path) for f in s.files]
+            try:
+                ss = load_study_set(files, label, max_duration_s=opts.max_duration_s)
+            except InputProblem as exc:
+                return {"input_error": {"title": exc.title, "detail": f"set {label!r}: {exc.detail}",
+                                        "file": exc.file}}
+            except ParseError as exc:
+                return {"input_error": {"title": "An input file could not be parsed",
+                                        "detail": f"set {label!r}: {exc}", "file": exc.path}}
+            out = run_set(ss, opts)
+    out["label"] = label
+    out["task_seconds"] = round(time.perf_counter() - t0, 3)
+    return out
+
+
+def payloads(ctx: JobContext, config) -> list[dict]:
+    """Task payloads: uploaded sets first (in the order given), then the simulated starts."""
+    from worker.ttff.starts import REALISTIC_OVERRIDES, random_starts, start_overrides
+
+    opts = {k: getattr(config, k) for k in ("configurations", "methods", "duration_s", "single_epoch_step_s",
+                                            "min_ratio_constrained", "max_length_error_m", "filter_mode")}
+    out = []
+    for s in ctx.sets:
+        out.append({"source": "upload", "set_id": s.id, "label": s.name or s.id, "options": opts})
+    sim = config.simulate
+    if sim is not None:
+        starts = random_starts(sim.count, sim.seed, sim.yaw_max_deg, sim.pitch_max_deg, sim.roll_max_deg,
+                               tuple(sim.rate_deg_s))
+        base = dict(REALISTIC_OVERRIDES) if sim.realistic else {}
+        for st in starts:
+            ov = start_overrides(st, config.duration_s + 1.0, sim.hold_s, base)
+            ov.update(sim.overrides)
+            out.append({"source": "simulated", "seed": int(sim.seed) * 100_003 + st["index"],
+                        "overrides": ov, "start": dict(st), "label": f"start {st['index']:03d}", "options": opts})
+    return out
+
+
+def _html(runs: list[dict], methods: list[str], summary: dict) -> str:
+    from worker.ttff.study import table5_rows
+
+    parts = ["<!doctype html><meta charset='utf-8'><title>Time to first fix</title>",
+             "<style>table{border-collapse:collapse;font:12px sans-serif}td,th{border:1px solid #bbb;"
+             "padding:2px 6px;text-align:right}</style>"]
+    for m in methods:
+        t = table5_rows(runs, m)
+        parts.append(f"<h2>{html.escape(m)}</h2><table><tr>" + "".join(f"<th>{html.escape(c)}</th>"
+                                                                        for c in t["columns"]) + "</tr>")
+        for row in t["rows"] + t["footer"]:
+            parts.append("<tr>" + "".join(f"<td>{html.escape(str(x))}</td>" for x in row) + "</tr>")
+        parts.append("</table>")
+    parts.append(f"<p>Wrong fixes in total: {summary['wrong_fixes_total']} (a wrong first fix is marked *).</p>")
+    return "\n".join(parts)
+
+
+def run(ctx: JobContext, config) -> None:
+    from worker.ttff.study import runs_csv, summarize, table5_csv, table5_markdown
+
+    tasks = payloads(ctx, config)
+    if not tasks:
+        raise JobInputError("Nothing to study", "give at least one observation set or a `simulate` block",
+                            field="config.simulate")
+    if config.simulate is not None and config.simulate.overrides:
+        from worker.sim.scenarios import make_params
+        try:
+            make_params("ttff", tasks[-1]["overrides"])
+        except ValueError as exc:
+            raise JobInputError("Invalid simulation parameters", str(exc), field="config.simulate.overrides") \
+                from exc
+    t0 = time.perf_counter()
+    results = ctx.map("worker.pipelines.ttff:set_task", tasks, progress_span=(0.02, 0.9), stage="sets")
+    bad = [r for r in results if "input_error" in r]
+    if bad:
+        e = bad[0]["input_error"]
+        raise JobInputError(e["title"], e["detail"], file=e.get("file"))
+    ctx.progress(0.92, "tables")
+    runs = [row for r in results for row in r["runs"]]
+    methods = list(dict.fromkeys(r["method"] for r in runs))
+    summary = summarize(runs)
+    summary.update({"configuration": config.model_dump(), "wall_seconds": round(time.perf_counter() - t0, 2),
+                    "task_seconds_total": round(sum(r.get("task_seconds", 0.0) for r in results), 2),
+                    "sets_list": [{"label": r["label"], "initial_euler_deg": r["initial_euler_deg"],
+                                   "truth": r["truth"], "n_epochs": r["n_epochs"], "start": r.get("start"),
+                                   "seconds": r.get("task_seconds")} for r in results]})
+    for m in methods:
+        ctx.write_product(f"table5_{m}.csv", table5_csv(runs, m))
+        ctx.write_product(f"table5_{m}.md", table5_markdown(runs, m), media_type="text/markdown")
+    ctx.write_product("table5.html", _html(runs, methods, summary))
+    ctx.write_product("runs.json", {"runs": runs, "sets": results and [
+        {k: v for k, v in r.items() if k != "runs"} for r in results]})
+    ctx.write_product("runs.csv", runs_csv(runs))
+    ctx.write_product("summary.json", summary)
+    ctx.progress(0.95, "plots")
+    try:
+        from worker.plots.ttff import ttff_plots
+
+        main = "filter" if "filter" in methods else methods[0]
+        for name, png in ttff_plots([r for r in runs if r["method"] == main],
+                                    {"job_id": ctx.job_id, "config": {"method": main}}).items():
+            ctx.write_product(name, png, media_type="image/png")
+    except Exception as exc:  # noqa: BLE001 - plots are a convenience; the tables carry the result
+        ctx.log(f"plots failed: {type(exc).__name__}: {exc}")
+    ctx.progress(1.0, "done")
