@@ -55,16 +55,21 @@ class Service:
 
     def start_api(self, wait: bool = True) -> None:
         self.api = self._spawn(["serve", "--port", str(self.port)], "api")
+        self.api_log = self.logs[-1]
         if wait:
             self.wait_ready()
 
     def wait_ready(self, timeout_s: float = 30.0) -> None:
+        """Ready = OUR process says it is serving on the port (another test's server may have raced us to a
+        free port) and /readyz answers 200."""
         deadline = time.monotonic() + timeout_s
+        marker = f"running on http://127.0.0.1:{self.port}"
         while time.monotonic() < deadline:
             if self.api is not None and self.api.poll() is not None:
                 raise RuntimeError(f"API exited early:\n{self.logs_text()}")
+            bound = marker in self.api_log.read_text(errors="replace") if self.api_log.exists() else False
             try:
-                if httpx.get(self.url + "/readyz", timeout=2).status_code == 200:
+                if bound and httpx.get(self.url + "/readyz", timeout=2).status_code == 200:
                     return
             except httpx.HTTPError:
                 pass
