@@ -617,13 +617,18 @@ def spp(obs, ephemeris, *, systems=("G",), iono_free: bool = True, elevation_mas
         return v, H, var, el, az, ground
 
     def gauss_newton(rows, xk, usek):
-        """Iterate the batched WLS on epochs `rows` (index array) from xk; returns x, N_inv, ok, converged."""
+        """Iterate the batched WLS on epochs `rows` (index array) from xk; returns x, N_inv, ok, converged.
+
+        Epochs leave the iteration once converged (or singular): later iterations solve only the others.
+        """
+        xk = np.array(xk, dtype=np.float64, copy=True)
         conv = np.zeros(len(rows), dtype=bool)
         N_inv = np.zeros((len(rows), p, p))
         ok = np.ones(len(rows), dtype=bool)
+        act = np.arange(len(rows))
         for it in range(GN_MAX_ITER):
-            v, H, var, el, az, ground = model(xk, rows)
-            u = usek.copy()
+            v, H, var, el, az, ground = model(xk[act], rows[act])
+            u = usek[act].copy()
             if it >= 1:  # the elevation mask needs a position first
                 u &= ~(ground & (el < np.radians(mask_deg(ground))))
             w = np.where(u, 1.0 / var, 0.0)
@@ -632,12 +637,14 @@ def spp(obs, ephemeris, *, systems=("G",), iono_free: bool = True, elevation_mas
             b = np.einsum("ksi,ks,ks->ki", H, w, v0)
             enough = u.sum(1) >= 4 + np.sum([np.any(u & (sys_col[None, :] == k), axis=1) for k in range(n_isb)],
                                             axis=0)
-            dx, N_inv, ok = _batch_solve(N, b)
-            ok &= enough
-            dx = np.where(ok[:, None], dx, 0.0)
-            xk = xk + dx
-            conv = np.max(np.abs(dx[:, :4]), axis=1) < GN_TOL_M
-            if np.all(conv | ~ok):
+            dx, N_inv_a, ok_a = _batch_solve(N, b)
+            ok_a &= enough
+            dx = np.where(ok_a[:, None], dx, 0.0)
+            xk[act] += dx
+            N_inv[act], ok[act] = N_inv_a, ok_a
+            conv[act] = np.max(np.abs(dx[:, :4]), axis=1) < GN_TOL_M
+            act = act[~(conv[act] | ~ok[act])]
+            if act.size == 0:
                 break
         return xk, N_inv, ok, conv
 
@@ -651,29 +658,35 @@ def spp(obs, ephemeris, *, systems=("G",), iono_free: bool = True, elevation_mas
     def solve_with_raim(x, use, excluded):
         """Batched Gauss-Newton + RAIM exclusion loop over all epochs; updates use/excluded in place."""
         x, N_inv_all, ok, conv = gauss_newton(rows, x, use)
+        T = np.zeros(n)
+        dof = np.zeros(n, dtype=np.int64)
+        idx = rows  # epochs whose test statistic is (re)computed this round: all, then the re-solved ones
         # --- RAIM loop: re-solve failing epochs without their worst satellite ---
         for _round in range(raim_max_exclusions + 1):
-            v, H, var, el, az, ground = model(x, rows)
-            u = use & ~(ground & (el < np.radians(mask_deg(ground))))
+            v, H, var, el, az, ground = model(x[idx], idx)
+            u = use[idx] & ~(ground & (el < np.radians(mask_deg(ground))))
             w = np.where(u, 1.0 / var, 0.0)
-            T = np.einsum("ks,ks->k", w, np.where(u, v, 0.0) ** 2)
-            dof = u.sum(1) - p
-            thr = np.where(dof > 0, chi2_dist.ppf(1.0 - raim_false_alarm, np.maximum(dof, 1)), np.inf)
-            fail = ok & conv & (dof > 0) & (T > thr)
-            if _round == raim_max_exclusions or not np.any(fail & (dof >= 2)):
+            T[idx] = np.einsum("ks,ks->k", w, np.where(u, v, 0.0) ** 2)
+            dof[idx] = u.sum(1) - p
+            d_i = dof[idx]
+            thr = np.where(d_i > 0, chi2_dist.ppf(1.0 - raim_false_alarm, np.maximum(d_i, 1)), np.inf)
+            fail = ok[idx] & conv[idx] & (d_i >= 2) & (T[idx] > thr)  # keep one redundant row to test again
+            if _round == raim_max_exclusions or not np.any(fail):
                 break
-            cand = np.flatnonzero(fail & (dof >= 2))  # keep at least one redundant row to test again
+            loc = np.flatnonzero(fail)
+            cand = idx[loc]
             # standardised residuals with leverage h = w H N^-1 H^T (diagonal)
-            Hk, wk, vk = H[cand], w[cand], v[cand]
+            Hk, wk, vk = H[loc], w[loc], v[loc]
             h = np.einsum("ksi,kij,ksj->ks", Hk, N_inv_all[cand], Hk) * wk
             with np.errstate(divide="ignore", invalid="ignore"):
                 std = np.abs(vk) * np.sqrt(wk) / np.sqrt(np.maximum(1.0 - h, 1e-6))
-            std = np.where(u[cand], std, -np.inf)
+            std = np.where(u[loc], std, -np.inf)
             worst = np.argmax(std, axis=1)
             use[cand, worst] = False
             excluded[cand, worst] = True
             xs, N_inv_c, ok_c, conv_c = gauss_newton(cand, x[cand], use[cand])
             x[cand], N_inv_all[cand], ok[cand], conv[cand] = xs, N_inv_c, ok_c, conv_c
+            idx = cand
         return x, N_inv_all, ok, conv, T, dof
 
     x_start = x.copy()
