@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ArOutcome", "dd_matrix", "resolve_lambda", "round_newcomers"]
+__all__ = ["ArOutcome", "dd_matrix", "resolve_constrained", "resolve_lambda", "round_newcomers"]
 
 
 @dataclass
@@ -95,3 +95,42 @@ def round_newcomers(x: np.ndarray, P: np.ndarray, new_idx: np.ndarray, ref_idx: 
     r = np.round(d)
     ok = (np.sqrt(np.maximum(var, 0.0)) < max_sigma_cyc) & (np.abs(d - r) < max_frac_cyc)
     return D[ok], r[ok], ok
+
+
+def resolve_constrained(x: np.ndarray, P: np.ndarray, groups: list[tuple[np.ndarray, int]], b_idx: np.ndarray,
+                        known_length_m: float, max_length_error_m: float, min_ratio: float = 3.0,
+                        max_nodes: int = 50_000) -> ArOutcome:
+    """ArOutcome of a baseline-constrained (C-LAMBDA) attempt over the DD ambiguities of `groups`.
+
+    The same DD layout as `resolve_lambda`; the integer search minimises ||a_hat - a||^2_Qa +
+    min_{|b| = l} ||b_hat(a) - b||^2_{Q_b|a} (Teunissen 2010, J. Geod. 84:433-447; Buist 2007) with
+    worker.estimation.constrained_search. Accepted when the ratio of the constrained objective (second / best)
+    reaches `min_ratio` and the integer-conditioned, unconstrained baseline passes the length test (seed 000
+    Table 2), so the test still measures the data and not the constraint. The ratio cap of the search is
+    max(3, 2 min_ratio): a second candidate beyond it gives a lower-bound ratio that passes.
+    """
+    from worker.estimation.constrained_search import constrained_search
+    from worker.estimation.lambda_search import AmbiguitySearchError
+
+    D = np.concatenate([dd_matrix(idx, ref, x.size) for idx, ref in groups if idx.size >= 2], axis=0)
+    a = D @ x
+    DP = D @ P
+    Qa = DP @ D.T
+    Qa = 0.5 * (Qa + Qa.T)
+    b = x[b_idx]
+    Qb = P[np.ix_(b_idx, b_idx)]
+    Qab = DP[:, b_idx]
+    try:
+        res = constrained_search(a, Qa, b, 0.5 * (Qb + Qb.T), Qab, np.array([[known_length_m, 0.0, 0.0]]), m=2,
+                                 ratio_cap=max(3.0, 2.0 * min_ratio), max_nodes=max_nodes)
+    except (AmbiguitySearchError, ValueError, np.linalg.LinAlgError) as exc:
+        return ArOutcome(False, None, None, float("nan"), float("nan"), D.shape[0], f"search failed: {exc}")
+    a_fix = np.asarray(res.fixed[0], dtype=np.float64)
+    length = float(np.linalg.norm(res.b_unconstrained_m))
+    ratio = float(res.ratio)
+    if abs(length - known_length_m) > max_length_error_m:
+        return ArOutcome(False, D, a_fix, ratio, length, D.shape[0],
+                         f"length {length:.4f} m vs known {known_length_m:.4f} m")
+    if not (ratio >= min_ratio):
+        return ArOutcome(False, D, a_fix, ratio, length, D.shape[0], f"constrained ratio {ratio:.2f} < {min_ratio:.2f}")
+    return ArOutcome(True, D, a_fix, ratio, length, D.shape[0])
