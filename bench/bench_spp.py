@@ -13,6 +13,7 @@ Usage: .venv/bin/python -m bench.bench_spp [--runs 3] [--write]   (--write updat
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import tempfile
@@ -154,8 +155,13 @@ def main(argv=None) -> int:
     abl = run_ablations(data)
     al = run_alignment(args.runs)
     print(al)
-    lines = [f"Machine: {machine_line()}. `python -m bench.bench_spp --runs {args.runs}`, median of "
-             f"{args.runs} runs after a warm-up, file reading excluded.", "",
+    load1, _, _ = os.getloadavg()
+    old = next(r for r in abl if r["products"].startswith("CODE, previous"))
+    lines = [f"Machine: {machine_line()}, load average {load1:.1f} at the end of the run (other jobs share the "
+             f"cores: compare epochs/s within this table only). `python -m bench.bench_spp --runs {args.runs}`, "
+             f"median of {args.runs} runs after a warm-up, file reading excluded. The default model costs "
+             f"{old['eps'] / rows[2]['eps']:.1f}x the time of the previous one (CODE, code only: up to three "
+             "batch solves -- calibration, arc screening -- instead of one).", "",
              "SPP of GRACE-A, 2007-03-21, the whole day (8640 epochs at 10 s, RINEX 2.10 P1/P2/C1, GPS only), "
              "against the JPL reduced-dynamic orbit of the centre of mass (the GPS antenna's offset from it, "
              "about 0.5 m up, is not modelled: it is the mean radial error). Default `spp`: ionosphere-free "

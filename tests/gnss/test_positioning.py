@@ -7,7 +7,8 @@
   and arc screening. Measured here (docs/design/positioning.md): CODE 1.37 m RMS 3-D code-only, 0.66 m
   carrier-smoothed (600 s); without the satellite antenna offsets 2.55 m; with the previous model (elevation
   weights, no calibration, no arc screening) 2.35 m. Whole day (bench): 1.47 m and 0.67 m.
-- Nagoya 2024 static mosaic-X5 pair against the README's RTK positions: IF solutions 1.0 / 1.7 m from truth.
+- Nagoya 2024 static mosaic-X5 pair against the README's RTK positions: IF solutions 1.4 / 1.1 m from truth (base /
+  rover, C/N0 weights; 1.7 / 1.0 m with elevation weights).
 """
 from __future__ import annotations
 
