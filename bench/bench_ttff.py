@@ -67,6 +67,9 @@ def cmd_study(args) -> None:
     with get_context("fork").Pool(args.procs) as pool:
         for i, r in enumerate(pool.imap(_task, pl)):
             out.append(r)
+            Path(args.out + ".partial").write_text(json.dumps({"count": i + 1, "seed": args.seed, "duration_s":
+                                                              args.duration, "procs": args.procs,
+                                                              "wall_s": time.perf_counter() - t0, "results": out}))
             if (i + 1) % 10 == 0:
                 print(f"{i + 1}/{len(pl)} sets, {time.perf_counter() - t0:.0f} s", flush=True)
     wall = time.perf_counter() - t0

@@ -281,7 +281,7 @@ def solve_lambda(prob: EpochProblem, body_baselines_m: np.ndarray, opts: SingleE
         sub = prob.sol.baseline(j)
         try:
             r = mlambda(sub.a_float_cyc, sub.Q_a, m=2)
-        except (AmbiguitySearchError, ValueError, np.linalg.LinAlgError) as exc:
+        except (AmbiguitySearchError, ValueError, OverflowError, np.linalg.LinAlgError) as exc:
             detail[j] = f"search failed: {exc}"
             continue
         nodes += r.n_nodes
@@ -399,7 +399,7 @@ def solve_constrained(prob: EpochProblem, body_baselines_m: np.ndarray, opts: Si
             a_best = found[0][1]
             B = found[0][2].reshape(-1, 3)
             rt = found[1][0] / found[0][0] if len(found) > 1 and found[0][0] > 0 else math.inf
-    except (AmbiguitySearchError, ValueError, np.linalg.LinAlgError) as exc:
+    except (AmbiguitySearchError, ValueError, OverflowError, np.linalg.LinAlgError) as exc:
         for j in use:
             detail[j] = f"search failed: {str(exc)[:80]}"
         return EpochOutcome("constrained", acc, correct, best_ok, ratio, bfix, nodes, detail)

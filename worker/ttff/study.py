@@ -35,7 +35,7 @@ METHODS = ("filter", "filter-constrained", "epoch-lambda", "epoch-constrained")
 RUN_COLUMNS = ("set", "yaw_deg", "pitch_deg", "roll_deg", "configuration", "baseline", "method", "ttff_s",
                "fix_right", "fix_error_deg", "wrong_fixed_epochs", "fixed_epochs", "single_epoch_n",
                "single_epoch_success", "single_epoch_accepted", "single_epoch_wrong", "single_epoch_best_right",
-               "seconds")
+               "seconds", "note")
 
 
 @dataclass(frozen=True)
@@ -84,8 +84,14 @@ def _filter_runs(ss: StudySet, cfg: str, method: str, opts: StudyOptions) -> lis
             q, _ = attitude_from_baselines(b[None], np.zeros((1, 3 * len(b), 3 * len(b))), ss.body_baselines_m,
                                            settings.attitude_method)
             return rot.quat_to_dcm(q[0])
-    fr = run_filter(pobs, ss.geom, ss.bl_idx, ss.body_baselines_m, ss.boresight_body, settings,
-                    ss.R_ref_from_ecef[0], attitude_fn)
+    try:
+        fr = run_filter(pobs, ss.geom, ss.bl_idx, ss.body_baselines_m, ss.boresight_body, settings,
+                        ss.R_ref_from_ecef[0], attitude_fn)
+    except Exception as exc:  # noqa: BLE001 - one failing run must not lose the study; it shows in the row
+        note = f"filter failed: {type(exc).__name__}: {str(exc)[:120]}"
+        return [{"baseline": _bl_label(a, b), "configuration": cfg, "method": method, "ttff_s": None,
+                 "fix_right": None, "note": note, "seconds": round(time.perf_counter() - t0, 4)}
+                for a, b in ss.baselines]
     t = ss.t_s
     rows = []
     for j, (a, b) in enumerate(ss.baselines):
