@@ -122,7 +122,10 @@ CODE_CONSISTENCY_M = 30.0
 GF_CODE_RANGE_M = (-30.0, 100.0)
 
 #: C/N0 (dB-Hz) at which a code has the noise sigma_code_m under weighting="cn0"; the RINEX 3 signal-strength
-#: digit d means C/N0 in [6d, 6d + 6) dB-Hz (RINEX 3.04 Table 8: 1 < 12, ..., 9 >= 54), taken as 6d + 3.
+#: digit d means C/N0 in [6d, 6d + 6) dB-Hz (RINEX 3.04 Table 8: 1 < 12, ..., 9 >= 54), taken as 6d + 3. RINEX 2
+#: digits (1 minimum, 5 threshold of good S/N, 9 maximum; the mapping is the receiver's) are read on the same
+#: scale: a different slope changes the relative weights, a different offset only the scale the batch variance
+#: factor absorbs. GRACE-A (RINEX 2.10, SNR bins in V/V): the code noise doubles per digit, i.e. 6 dB.
 CN0_REF_DBHZ = 51.0
 
 #: weighting="auto" takes C/N0 weighting when at least this fraction of the band-1 codes carry a signal-strength digit.
