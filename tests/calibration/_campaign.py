@@ -94,6 +94,8 @@ def truth_map_mm(truth: dict, key: tuple, b_calibrated_m: np.ndarray, az_deg: np
 def compare_maps_mm(values_mm: np.ndarray, truth_mm: np.ndarray, weight: np.ndarray) -> float:
     """RMS (mm) of estimated minus truth over bins with a value, after removing the weighted mean difference."""
     ok = np.isfinite(values_mm) & np.isfinite(truth_mm) & (weight > 0)
+    if not np.any(ok):
+        return float("nan")
     d = values_mm[ok] - truth_mm[ok]
     d = d - np.average(d, weights=weight[ok])
     return float(np.sqrt(np.mean(d ** 2)))
