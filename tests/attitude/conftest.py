@@ -44,3 +44,9 @@ def hard_pass(tmp_path_factory) -> Path:
     return _simulate(tmp_path_factory, "hard", "hard", 2, {
         "duration_s": 300.0, "clock_free_drift_ppm": 5.0,
         "outage_windows": [["GPS-0", 100.0, 20.0], ["*", 200.0, 30.0]]})
+
+
+@pytest.fixture(scope="session")
+def realistic_pass(tmp_path_factory) -> Path:
+    """The earth-pointing preset as it is: C/N0-dependent noise, multipath, PCV 10 mm p-p, PCO scatter."""
+    return _simulate(tmp_path_factory, "realistic", "earth-pointing", 11, {"duration_s": 600.0})

@@ -29,6 +29,7 @@ import numpy as np
 
 from worker.attitude.ambiguity import resolve_lambda, round_newcomers
 from worker.attitude.settings import AttitudeSettings
+from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
 from worker.estimation.ekf import joseph_update_sparse, rotation_rk4_stm
 from worker.gnss.constants import C_M_S
 
@@ -42,6 +43,8 @@ TD_MAX_DT_S = 3.0   # triple differences need consecutive epochs; beyond this th
 FIX_CHECK_SIGMAS = 4.0   # post-fit RMS of fixed phases above this many noise sigmas ...
 FIX_CHECK_MIN_M = 0.015  # ... and above 15 mm (multipath-sized) ...
 FIX_CHECK_EPOCHS = 3     # ... for this many consecutive epochs: the fix is withdrawn
+ANGLE_FAIL_RESET = 10    # first-fix candidates in a row failing the angle test against the fixed partners: the
+                         # partners' fix is withdrawn
 NOISE_EPOCHS = 300.0  # memory of the noise estimator (epochs)
 NOISE_MIN_EPOCHS = 10  # epochs of triple differences before the estimate replaces the configured sigma
 CLOCK_JUMP_M = 0.5e-3 * C_M_S * 0.5   # a change of the epoch clock estimate above 75 km (0.25 ms) is a jump
@@ -62,6 +65,10 @@ class FilterResult:
     events: list = field(default_factory=list)
     first_fix_epoch: np.ndarray = None    # (n_bl,) int epoch index of the first accepted fix, -1 never
     first_data_epoch: np.ndarray = None   # (n_bl,) int
+    # every integer constraint the filter applied: column arrays epoch, bl, sig, sat, ref_sat (indices into
+    # pobs.sats / pobs.signals), dd_cyc (the integer SD(sat) - SD(ref_sat)), last_epoch (the last epoch both arcs
+    # were in the filter with this constraint); for scoring against a simulator's truth/arcs.csv
+    fix_log: dict = None
 
 
 class _State:
@@ -89,6 +96,10 @@ class _State:
         self.amb_key = np.zeros((0, 3), dtype=np.int64)        # per ambiguity state: (bl, sat, sig)
         self.amb_fixed = np.zeros(0, bool)
         self.amb_last_t = np.zeros(0)
+        self.amb_arc = np.zeros(0, np.int64)                    # arc id (index into arcs) of each ambiguity state
+        # arcs: one per ambiguity state ever created: [bl, sat, sig, first epoch, last epoch (-1 open)]
+        self.arcs: list[list[int]] = []
+        self.epoch = 0
 
     @property
     def n(self) -> int:
@@ -105,11 +116,17 @@ class _State:
         self.amb_key = np.concatenate([self.amb_key, keys])
         self.amb_fixed = np.concatenate([self.amb_fixed, np.zeros(k, bool)])
         self.amb_last_t = np.concatenate([self.amb_last_t, np.full(k, t)])
+        a0 = len(self.arcs)
+        self.arcs.extend([int(b), int(sa), int(f), self.epoch, -1] for b, sa, f in keys)
+        self.amb_arc = np.concatenate([self.amb_arc, a0 + np.arange(k)])
         self.amb_index[keys[:, 0], keys[:, 1], keys[:, 2]] = n0 + np.arange(k)
 
-    def remove_ambiguities(self, state_idx: np.ndarray) -> None:
+    def remove_ambiguities(self, state_idx: np.ndarray, last_epoch: int) -> None:
+        """Drop ambiguity states; their arcs end at last_epoch (the last epoch their phase was used)."""
         keep = np.ones(self.n, bool)
         keep[state_idx] = False
+        for a in self.amb_arc[~keep[self.n_fixed_part:]]:
+            self.arcs[a][4] = last_epoch
         self.x = self.x[keep]
         self.P = self.P[np.ix_(keep, keep)]
         ka = keep[self.n_fixed_part:]
@@ -118,6 +135,7 @@ class _State:
         self.amb_key = self.amb_key[ka]
         self.amb_fixed = self.amb_fixed[ka]
         self.amb_last_t = self.amb_last_t[ka]
+        self.amb_arc = self.amb_arc[ka]
         self.amb_index[self.amb_key[:, 0], self.amb_key[:, 1], self.amb_key[:, 2]] = \
             self.n_fixed_part + np.arange(self.amb_key.shape[0])
 
@@ -135,6 +153,13 @@ def _nanmedian1(a: np.ndarray) -> np.ndarray:
 def _cn0_factor(cn0_dbhz: np.ndarray) -> np.ndarray:
     """Variance factor 10^((45 - C/N0)/10), clipped to [0.25, 16] (noise doubles per -6 dB; 45 dB-Hz = Table 1)."""
     return np.clip(10.0 ** ((45.0 - np.nan_to_num(cn0_dbhz, nan=45.0)) / 10.0), 0.25, 16.0)
+
+
+def _mp_var(off_boresight_rad: np.ndarray, sigma_boresight_m: float, sigma_horizon_m: float) -> np.ndarray:
+    """Variance (m^2) of the time-correlated error of one SD: sigma grows from the boresight value with the square
+    of the off-boresight angle, reaching sigma_horizon_m at the antenna horizon (90 deg); capped at 120 deg."""
+    x = np.clip(np.nan_to_num(off_boresight_rad, nan=np.pi / 2) / (np.pi / 2), 0.0, 4.0 / 3.0)
+    return (sigma_boresight_m + (sigma_horizon_m - sigma_boresight_m) * x * x) ** 2
 
 
 def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: np.ndarray,
@@ -177,6 +202,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     q_w = (s.sigma_omega_deg_s * DEG) ** 2 / s.tau_omega_s          # rad^2/s^2 per s
     q_b = s.sigma_baseline_kinematic_m ** 2 / s.tau_baseline_s       # m^2 per s
     var_clk = (s.sigma_clock_s * C_M_S) ** 2
+    cn0_growth = s.weighting == "cn0" or s.noise_cn0_growth
+    mp_model = max(s.sigma_multipath_phase_m) > 0 or max(s.sigma_multipath_code_m) > 0
+    mp_infl = s.multipath_correlation_factor if dynamic else 1.0
     # --- outputs ---
     out_ok = np.zeros((n_ep, n_bl), bool)
     out_b = np.full((n_ep, n_bl, 3), np.nan)
@@ -206,10 +234,35 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     est_var_p = np.full(n_sig, s.sigma_phase_m ** 2)
     est_n = np.zeros(n_sig)
 
+    fix_rows: list[tuple[int, int, int, float]] = []        # (epoch, arc, ref arc, integer)
+
+    def log_fix(D, a_fix):
+        for row, v in zip(D, a_fix):
+            pos, neg = np.flatnonzero(row > 0.5), np.flatnonzero(row < -0.5)
+            if pos.size == 1 and neg.size == 1:
+                fix_rows.append((k, int(st.amb_arc[pos[0] - st.n_fixed_part]),
+                                 int(st.amb_arc[neg[0] - st.n_fixed_part]), float(v)))
+
+    angle_fail = np.zeros(n_bl, np.int64)
+    pending_reset: dict = {}
+
+    def reset_baseline(j, why):
+        """Withdraw every ambiguity of baseline j (restart as float) and its baseline covariance: it learnt from
+        the suspect integers too, and would otherwise re-fix the same ones."""
+        drop = np.flatnonzero(st.amb_key[:, 0] == j) + st.n_fixed_part
+        st.remove_ambiguities(drop, k)
+        bi = b_idx[j]
+        st.P[bi, :] = 0.0
+        st.P[:, bi] = 0.0
+        st.P[bi, bi] = max(s.sigma0_baseline_m, 1.2 * lengths[j]) ** 2
+        bad_fix[j] = 0
+        ev(k, "fix_reset", j, detail=f"{why}: ambiguities restart")
+
     def ev(k, kind, j=None, sat=None, sig=None, detail=""):
         events.append({"epoch": k, "event": kind, "baseline": j, "sat": sat, "signal": sig, "detail": detail})
 
     for k in range(n_ep):
+        st.epoch = k
         if progress is not None and k % 100 == 0:
             progress(k / max(n_ep, 1))
         t = t_s[k]
@@ -269,13 +322,13 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # antenna frame, once fixed (sec. 3.2 compromise)
         el_ant = np.full((n_bl, n_sat), np.nan)
         az_ant = np.full((n_bl, n_sat), np.nan)
+        # antenna-frame elevation for the noise model: by the current attitude once known, else the initial one
+        los_b = u @ (R_mask if R_mask is not None else R_body_from_ecef_0).T           # (n_sat, 3) body
+        el_w = np.fmin(np.arcsin(np.clip(los_b @ boresight_body[ia].T, -1, 1)),
+                       np.arcsin(np.clip(los_b @ boresight_body[ib].T, -1, 1))).T      # (n_bl, n_sat)
         if R_mask is not None:
-            los_b = u @ R_mask.T                                           # (n_sat, 3) body
-            for j in range(n_bl):
-                e1 = np.arcsin(np.clip(los_b @ boresight_body[ia[j]], -1, 1))
-                e2 = np.arcsin(np.clip(los_b @ boresight_body[ib[j]], -1, 1))
-                el_ant[j] = np.fmin(e1, e2)
-                az_ant[j] = np.arctan2(los_b[:, 1], los_b[:, 0])
+            el_ant[:] = el_w
+            az_ant[:] = np.arctan2(los_b[:, 1], los_b[:, 0])[None, :]
             below = ever_fixed[:, None] & ~(el_ant >= s.elevation_mask_antenna_deg * DEG)
             reason = np.where((reason == 0) & below[:, :, None], 2, reason)
         # C/N0
@@ -319,7 +372,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 td_p[j, :, f] -= n_cyc * lam[f]
                 ev(k, "phase_clock_jump", j, sig=pobs.signals[f], detail=f"{n_cyc:.0f} cycles common to all satellites")
             if s.noise_estimation:
-                wfac = _cn0_factor(cn0) if s.weighting == "cn0" else np.ones(cn0.shape)
+                wfac = _cn0_factor(cn0) if cn0_growth else np.ones(cn0.shape)
                 for f in range(n_sig):
                     dc = ((td_c - np.nan_to_num(mc)[:, None, :]) / np.sqrt(wfac))[..., f][td_c_ok[..., f]]
                     dp = ((td_p - np.nan_to_num(mp)[:, None, :]) / np.sqrt(wfac))[..., f][td_p_ok[..., f]]
@@ -332,21 +385,28 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                         est_var_c[f] += a * (vc - est_var_c[f])
                         est_n[f] += 1
             bad_tc = td_c_ok & (np.abs(td_c - np.nan_to_num(mc)[:, None, :]) > s.td_code_m)
-            bad_tp = td_p_ok & (np.abs(td_p - np.nan_to_num(mp)[:, None, :]) > s.td_phase_cyc * lam[None, None, :])
+            # every phase with a state is checked, used or not: a slip while rejected (C/N0, mask) must not
+            # survive into the epochs where it is used again
+            td_p_chk = np.isfinite(td_p) & avail_p
+            bad_tp = td_p_chk & (np.abs(td_p - np.nan_to_num(mp)[:, None, :]) > s.td_phase_cyc * lam[None, None, :])
             reason = np.where((reason == 0) & bad_tc, 4, reason)
             use_c &= ~bad_tc
             slip |= bad_tp
-            for j, sat, f in zip(*np.nonzero(bad_tp & ~((lli & 1).astype(bool)) & (st.amb_index >= 0))):
-                ev(k, "cycle_slip", j, pobs.sats[sat], pobs.signals[f], "triple-difference test")
-        for j, sat, f in zip(*np.nonzero((lli & 1).astype(bool) & avail_p & (st.amb_index >= 0))):
-            ev(k, "cycle_slip", j, pobs.sats[sat], pobs.signals[f], "loss-of-lock indicator")
+            for j, sat, f in zip(*np.nonzero(bad_tp & ~((lli & 1).astype(bool)))):
+                ev(k, "cycle_slip", j, pobs.sats[sat], pobs.signals[f], "triple-difference test"
+                   + ("" if st.amb_index[j, sat, f] >= 0 else " (phase not in use)"))
+        # every slip is reported, also on phases not in use; an LLI on the first epoch of an arc is an acquisition
+        cont = np.isfinite(prev_sdp) if consecutive else np.zeros(avail_p.shape, bool)
+        for j, sat, f in zip(*np.nonzero((lli & 1).astype(bool) & avail_p & ((st.amb_index >= 0) | cont))):
+            ev(k, "cycle_slip", j, pobs.sats[sat], pobs.signals[f], "loss-of-lock indicator"
+               + ("" if st.amb_index[j, sat, f] >= 0 else " (phase not in use)"))
         # ---------------- ambiguity bookkeeping ----------------
         # restart an arc (new float from code-carrier) on a slip or where no triple difference could check it;
         # drop states of satellites no longer observed, or unused for max_gap_s
         have = st.amb_index >= 0
         td_possible = np.isfinite(td_p) if (consecutive and prev_b is not None) else np.zeros(have.shape, bool)
-        restart = have & use_p & (slip | ~td_possible)
-        n_gap = int((have & use_p & ~slip & ~td_possible).sum())
+        restart = have & avail_p & (slip | ~td_possible)
+        n_gap = int((have & avail_p & ~slip & ~td_possible).sum())
         if n_gap:
             ev(k, "arc_restart", detail=f"{n_gap} ambiguities without a triple-difference check (data gap)")
         last_t = np.full(have.shape, np.inf)
@@ -358,7 +418,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             for j in np.unique(np.nonzero(drop_mask)[0]):
                 if st.amb_fixed[st.amb_index[j][drop_mask[j]] - st.n_fixed_part].any():
                     lost_fix[j] = True
-            st.remove_ambiguities(drop)
+            st.remove_ambiguities(drop, k - 1)
         need = use_p & (st.amb_index < 0)
         if need.any():
             jj, ss, ff = np.nonzero(need)
@@ -397,13 +457,19 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 var = np.concatenate([vc_f[fc], vp_f[fp]])
             else:
                 var = np.concatenate([np.full(mc_n, s.sigma_code_m ** 2), np.full(mp_n, s.sigma_phase_m ** 2)])
-            if s.weighting == "cn0":
+            if cn0_growth:
                 var *= np.concatenate([_cn0_factor(cn0[jc, sc, fc]), _cn0_factor(cn0[jp, sp, fp])])
-            elif s.weighting == "elevation":
+            if s.weighting == "elevation":
                 # antenna-frame elevation once an attitude exists, else the local horizon (ground platforms)
-                el_w = el_ant if R_mask is not None else np.broadcast_to(el_loc, (n_bl, n_sat))
-                e = np.concatenate([el_w[jc, sc], el_w[jp, sp]])
+                el_e = el_ant if R_mask is not None else np.broadcast_to(el_loc, (n_bl, n_sat))
+                e = np.concatenate([el_e[jc, sc], el_e[jp, sp]])
                 var *= np.clip(1.0 / np.sin(np.clip(np.nan_to_num(e, nan=0.5), 0.05, None)) ** 2, 1.0, 16.0)
+            if mp_model:
+                # time-correlated errors (multipath, uncalibrated PCV) growing with the off-boresight angle
+                th_c = np.pi / 2 - el_w[jc, sc]
+                th_p = np.pi / 2 - el_w[jp, sp]
+                var += np.concatenate([_mp_var(th_c, *s.sigma_multipath_code_m),
+                                       _mp_var(th_p, *s.sigma_multipath_phase_m)]) * mp_infl
             ok_cols = np.where(cols >= 0, cols, 0)
             hx = np.einsum("mk,mk->m", np.where(cols >= 0, coef, 0.0), st.x[ok_cols])
             innov = z - hx
@@ -449,7 +515,33 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 outcome = resolve_lambda(st.x, st.P, groups, b_idx[j], lengths[j], s.max_length_error_m,
                                          s.min_ratio)
                 out_ratio[k, j] = outcome.ratio
+                if outcome.accepted and not (outcome.ratio >= s.ar_min_ratio_first_fix):
+                    outcome.accepted = False
+                    outcome.reason = f"ratio {outcome.ratio:.2f} < {s.ar_min_ratio_first_fix:.2f} (first fix)"
+                if outcome.accepted and n_bl > 1 and s.max_angle_error_m > 0:
+                    partners = [j2 for j2 in range(n_bl) if j2 != j and st.amb_fixed[st.amb_key[:, 0] == j2].any()]
+                    if partners:
+                        b_cand = fixed_baseline_vector(st.x, st.P, outcome.D, outcome.a_fix, b_idx[j])
+                        ok_ang, worst = angle_test_against_fixed(
+                            b_cand, body_baselines_m[j], st.x[b_idx[partners]], body_baselines_m[partners],
+                            s.max_angle_error_m)
+                        if not ok_ang:
+                            outcome.accepted = False
+                            outcome.reason = (f"angle to fixed baseline(s) {partners} off by {worst:.2f} deg "
+                                              f"(length {outcome.length_m:.4f} m)")
+                            angle_fail[j] += 1
+                            if angle_fail[j] >= ANGLE_FAIL_RESET:
+                                # a candidate that passes length and ratio but never fits the partners' directions:
+                                # the partners' fix is the suspect one; back to float on all of them
+                                for j2 in partners:
+                                    pending_reset[j2] = (f"{ANGLE_FAIL_RESET} candidates of baseline {j} in a row "
+                                                         f"failed the angle test against it")
+                                angle_fail[j] = 0
+                        else:
+                            angle_fail[j] = 0
                 if outcome.accepted:
+                    angle_fail[j] = 0
+                    log_fix(outcome.D, outcome.a_fix)
                     _pseudo_update(st, outcome.D, outcome.a_fix)
                     for g, _ in groups:
                         st.amb_fixed[g - st.n_fixed_part] = True
@@ -484,6 +576,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                         st.amb_fixed[cand[okm] - st.n_fixed_part] = True
                         st.amb_fixed[ref - st.n_fixed_part] = True
                 if Ds:
+                    log_fix(np.concatenate(Ds), np.concatenate(vs))
                     _pseudo_update(st, np.concatenate(Ds), np.concatenate(vs))
                     ev(k, "fix_added", j, detail=f"{sum(len(v) for v in vs)} newcomers fixed by rounding")
         # fix monitor: post-fit phase residuals of fixed ambiguities far above the noise for FIX_CHECK_EPOCHS in a
@@ -498,17 +591,15 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                     lim = max(FIX_CHECK_SIGMAS * np.sqrt(np.max(vp_now)), FIX_CHECK_MIN_M)
                     bad_fix[j] = bad_fix[j] + 1 if rms > lim else 0
                     if bad_fix[j] >= FIX_CHECK_EPOCHS:
-                        drop = np.flatnonzero(st.amb_key[:, 0] == j) + st.n_fixed_part
-                        st.remove_ambiguities(drop)
-                        # the baseline learnt from the wrong integers too: back to its initial uncertainty
-                        bi = b_idx[j]
-                        st.P[bi, :] = 0.0
-                        st.P[:, bi] = 0.0
-                        st.P[bi, bi] = max(s.sigma0_baseline_m, 1.2 * lengths[j]) ** 2
-                        bad_fix[j] = 0
-                        ev(k, "fix_reset", j, detail=f"post-fit phase RMS {rms * 1e3:.1f} mm > {lim * 1e3:.1f} mm "
-                                                     f"for {FIX_CHECK_EPOCHS} epochs: ambiguities restart")
+                        reset_baseline(j, f"post-fit phase RMS {rms * 1e3:.1f} mm > {lim * 1e3:.1f} mm "
+                                          f"for {FIX_CHECK_EPOCHS} epochs")
                         mp_n = 0          # the state no longer matches this epoch's rows
+        # partners withdrawn by the angle test (after the monitor: the state layout changes)
+        for j2, why in pending_reset.items():
+            if st.amb_fixed[st.amb_key[:, 0] == j2].any():
+                reset_baseline(j2, why)
+                mp_n = 0
+        pending_reset.clear()
         # recount fixed after AR
         had_fix = ever_fixed
         ever_fixed = np.array([bool(np.any(st.amb_fixed[st.amb_key[:, 0] == j])) for j in range(n_bl)])
@@ -561,8 +652,15 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                  "el_ant_deg": R_all[:, 4], "az_ant_deg": R_all[:, 5], "cn0_dbhz": R_all[:, 6],
                  "kind": R_all[:, 7].astype(np.int64), "residual_m": R_all[:, 8],
                  "reason": R_all[:, 9].astype(np.int64)}
+    arcs = np.array(st.arcs, dtype=np.int64).reshape(-1, 5)
+    arcs[arcs[:, 4] < 0, 4] = n_ep - 1
+    fl = np.array(fix_rows, dtype=np.float64).reshape(-1, 4)
+    a_arc, r_arc = fl[:, 1].astype(np.int64), fl[:, 2].astype(np.int64)
+    fix_log = {"epoch": fl[:, 0].astype(np.int64), "bl": arcs[a_arc, 0], "sig": arcs[a_arc, 2],
+               "sat": arcs[a_arc, 1], "ref_sat": arcs[r_arc, 1], "dd_cyc": fl[:, 3],
+               "last_epoch": np.minimum(arcs[a_arc, 4], arcs[r_arc, 4])}
     return FilterResult(out_ok, out_b, out_P, out_fixed, out_n, out_ratio, out_w, residuals, events,
-                        first_fix, first_data)
+                        first_fix, first_data, fix_log)
 
 
 def _pseudo_update(st: _State, D: np.ndarray, a_fix: np.ndarray) -> None:

@@ -28,6 +28,15 @@ class AttitudeSettings:
                                                 # into the baseline through the common-mode ambiguity
     noise_estimation: bool = True               # per-signal white-noise sigma from the triple differences (honest
                                                 # sigmas when the receiver is noisier than Table 1 says)
+    noise_cn0_growth: bool = True               # white-noise variance x 10^((45 - C/N0)/10) (tracking-loop
+                                                # jitter ~ 1/sqrt(C/N0)); same as weighting "cn0"
+    # time-correlated errors of one SD (multipath, uncalibrated PCV/PCO): sigma (boresight, antenna horizon) m,
+    # growing with the square of the off-boresight angle; (0, 0) switches the term off (Table 1: white only)
+    sigma_multipath_phase_m: tuple = (0.0015, 0.006)
+    sigma_multipath_code_m: tuple = (0.15, 0.9)
+    multipath_correlation_factor: float = 3.0   # dynamic mode: the correlated variance is multiplied by this,
+                                                # ~ the epochs the filter averages over within one correlation
+                                                # time, so its averaged contribution is not counted as white
     # --- Table 1: initial and process noise ---
     sigma0_baseline_m: float = 2.0
     sigma_clock_s: float = 1.0e-6              # white noise, reset each epoch
@@ -48,6 +57,10 @@ class AttitudeSettings:
     max_length_error_m: float = 0.03            # ambiguity acceptance: |length - known| (Table 2)
     # --- ambiguity resolution (not in the paper: our choices, with reasons in docs/attitude.md) ---
     min_ratio: float = 0.0                      # 0 = ratio only reported (the paper validates by length)
+    ar_min_ratio_first_fix: float = 0.0         # a first fix of a baseline also needs this ratio
+    max_angle_error_m: float = 0.03             # a first fix must agree with every baseline already fixed: angle
+                                                # between them vs the body angle within atan(this / l_min) (1.6 deg
+                                                # at 1.05 m); 0 switches the test off
     ar_min_dd: int = 6                          # DD ambiguities (all signals) before a first MLAMBDA attempt: with
                                                 # fewer, several integer vectors pass the 3 cm length test
     ar_min_sats: int = 4                        # satellites with phase on a baseline before an AR attempt
