@@ -43,6 +43,7 @@ TD_MAX_DT_S = 3.0   # triple differences need consecutive epochs; beyond this th
 FIX_CHECK_SIGMAS = 4.0   # post-fit RMS of fixed phases above this many noise sigmas ...
 FIX_CHECK_MIN_M = 0.015  # ... and above 15 mm (multipath-sized) ...
 FIX_CHECK_EPOCHS = 3     # ... for this many consecutive epochs: the fix is withdrawn
+MP_SCALE_MIN, MP_SCALE_MAX = 0.05, 20.0   # range of the adaptive multipath-variance scale
 ANGLE_FAIL_RESET = 10    # first-fix candidates in a row failing the angle test against the fixed partners: the
                          # partners' fix is withdrawn
 NOISE_EPOCHS = 300.0  # memory of the noise estimator (epochs)
@@ -205,6 +206,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     cn0_growth = s.weighting == "cn0" or s.noise_cn0_growth
     mp_model = max(s.sigma_multipath_phase_m) > 0 or max(s.sigma_multipath_code_m) > 0
     mp_infl = s.multipath_correlation_factor if dynamic else 1.0
+    mp_scale, mp_n_ep = 1.0, 0          # adaptive scale of the multipath variance (1 = the configured sigmas)
     # --- outputs ---
     out_ok = np.zeros((n_ep, n_bl), bool)
     out_b = np.full((n_ep, n_bl, 3), np.nan)
@@ -468,8 +470,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 # time-correlated errors (multipath, uncalibrated PCV) growing with the off-boresight angle
                 th_c = np.pi / 2 - el_w[jc, sc]
                 th_p = np.pi / 2 - el_w[jp, sp]
-                var += np.concatenate([_mp_var(th_c, *s.sigma_multipath_code_m),
-                                       _mp_var(th_p, *s.sigma_multipath_phase_m)]) * mp_infl
+                v_mp = np.concatenate([_mp_var(th_c, *s.sigma_multipath_code_m),
+                                       _mp_var(th_p, *s.sigma_multipath_phase_m)])
+                v_white = var.copy()
+                var += v_mp * (mp_infl * mp_scale)
             ok_cols = np.where(cols >= 0, cols, 0)
             hx = np.einsum("mk,mk->m", np.where(cols >= 0, coef, 0.0), st.x[ok_cols])
             innov = z - hx
@@ -477,7 +481,21 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             if good:
                 st.x, st.P = x1, P1
             st.amb_last_t[cols[mc_n:, 4] - st.n_fixed_part] = t
-            post = z - np.einsum("mk,mk->m", np.where(cols >= 0, coef, 0.0), st.x[ok_cols])
+            cz = np.where(cols >= 0, coef, 0.0)
+            post = z - np.einsum("mk,mk->m", cz, st.x[ok_cols])
+            if mp_model and s.multipath_adaptive and good:
+                # scale of the multipath variance from the post-fit residuals of fixed phases:
+                # E[r^2] = R_true (1 - h), h = (H P+ H^T)_ii / R_model (leverage); R_true = white + scale * mp
+                rows = mc_n + np.flatnonzero(st.amb_fixed[cols[mc_n:, 4] - st.n_fixed_part])
+                if rows.size >= 6:
+                    c_r, z_r = ok_cols[rows], cz[rows]
+                    hph = np.einsum("mi,mij,mj->m", z_r, st.P[c_r[:, :, None], c_r[:, None, :]], z_r)
+                    one_h = np.clip(1.0 - hph / var[rows], 0.05, 1.0)
+                    num = np.sum(post[rows] ** 2 / one_h - v_white[rows])
+                    den = np.sum(v_mp[rows])
+                    a = 1.0 / min(mp_n_ep + 1.0, NOISE_EPOCHS)
+                    mp_scale = float(np.clip(mp_scale + a * (num / den - mp_scale), MP_SCALE_MIN, MP_SCALE_MAX))
+                    mp_n_ep += 1
         else:
             post = np.zeros(0)
         # ---------------- ambiguity resolution ----------------

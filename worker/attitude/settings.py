@@ -37,6 +37,8 @@ class AttitudeSettings:
     multipath_correlation_factor: float = 3.0   # dynamic mode: the correlated variance is multiplied by this,
                                                 # ~ the epochs the filter averages over within one correlation
                                                 # time, so its averaged contribution is not counted as white
+    multipath_adaptive: bool = True             # scale the multipath variance by what the post-fit residuals of
+                                                # fixed phases show (300-epoch memory; 1 = the sigmas above)
     # --- Table 1: initial and process noise ---
     sigma0_baseline_m: float = 2.0
     sigma_clock_s: float = 1.0e-6              # white noise, reset each epoch
