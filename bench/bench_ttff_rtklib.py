@@ -170,7 +170,6 @@ def comparison_markdown(rtk_doc: dict, study_doc: dict) -> str:
     g = summarize(runs)["methods"]
     rk = summarize_rtklib(rtk_doc)
     secs = {m: np.mean([row["seconds"] or 0 for row in runs if row["method"] == m]) for m in g}
-    err = [row["fix_error_deg"] for row in runs if row["method"] == "filter" and row["fix_right"]]
     lines = [f"{len(sets)} starts (seed {rtk_doc['seed']}, the first {len(sets)} of the 200 of bench_ttff), "
              f"{rtk_doc['duration_s']:.0f} s each. Per cell: GPS-2>GPS-0 / GPS-2>GPS-1.", "",
              "| tool, method | conf. | instant fix [%] | mean TTFF > 0 [s] | never fixed | wrong first fixes | "
@@ -190,10 +189,12 @@ def comparison_markdown(rtk_doc: dict, study_doc: dict) -> str:
                 continue
             se = pair(d, "single_epoch_success", "{:.1f}", 100) if m != "filter" else "–"
             we = pair(d, "wrong_fixed_epochs") if m == "filter" else pair(d, "single_epoch_wrong")
-            de = f"{np.mean(err):.2f} (first fix)" if m == "filter" and err else "–"
+            err = [row["fix_error_deg"] for row in runs if row["method"] == "filter" and row["fix_right"]
+                   and row["configuration"] == cfg]
+            de = f"{np.mean(err):.2f} ± {np.std(err):.2f} (first fix)" if m == "filter" and err else "–"
             lines.append(f"| {label} | {cfg} | {pair(d, 'instant_fix_share', '{:.0f}', 100)} | "
                          f"{pair(d, 'mean_nonzero_ttff_s', '{:.1f}')} | {pair(d, 'never_fixed')} | "
-                         f"{pair(d, 'wrong_first_fixes')} | {we} | {se} | {de} | {secs[m] * 2 / 2:.2f} |")
+                         f"{pair(d, 'wrong_first_fixes')} | {we} | {se} | {de} | {secs[m]:.2f} |")
         for mode in ("fix-and-hold", "instantaneous"):
             d = rk.get(cfg, {}).get(mode)
             if not d:
