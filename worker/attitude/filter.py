@@ -44,6 +44,7 @@ FIX_CHECK_SIGMAS = 4.0   # post-fit RMS of fixed phases above this many noise si
 FIX_CHECK_MIN_M = 0.015  # ... and above 15 mm (multipath-sized) ...
 FIX_CHECK_EPOCHS = 3     # ... for this many consecutive epochs: the fix is withdrawn
 MP_SCALE_MIN, MP_SCALE_MAX = 0.05, 20.0   # range of the adaptive multipath-variance scale
+OMEGA_RESET_TURN_DEG = 0.5   # a first fix turning its baseline by more than this resets the angular velocity
 ANGLE_FAIL_RESET = 10    # first-fix candidates in a row failing the angle test against the fixed partners: the
                          # partners' fix is withdrawn
 NOISE_EPOCHS = 300.0  # memory of the noise estimator (epochs)
@@ -560,7 +561,18 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 if outcome.accepted:
                     angle_fail[j] = 0
                     log_fix(outcome.D, outcome.a_fix)
+                    b_before = st.x[b_idx[j]].copy()
                     _pseudo_update(st, outcome.D, outcome.a_fix)
+                    b_after = st.x[b_idx[j]]
+                    turn_deg = np.degrees(np.arccos(np.clip(b_before @ b_after / max(
+                        np.linalg.norm(b_before) * np.linalg.norm(b_after), 1e-12), -1.0, 1.0)))
+                    if dynamic and turn_deg > OMEGA_RESET_TURN_DEG:
+                        # the angular velocity was learnt with a baseline that the fix has just turned: its
+                        # estimate and covariance (linearised about the wrong baseline) are not to be trusted
+                        st.P[0:3, :] = 0.0
+                        st.P[:, 0:3] = 0.0
+                        st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
+                        ev(k, "omega_reset", j, detail=f"the fix turned the baseline by {turn_deg:.2f} deg")
                     for g, _ in groups:
                         st.amb_fixed[g - st.n_fixed_part] = True
                     ev(k, "fix", j, detail=f"{outcome.n_dd} DD ambiguities, ratio {outcome.ratio:.2f}, "
