@@ -61,7 +61,7 @@ def resolve_lambda(x: np.ndarray, P: np.ndarray, groups: list[tuple[np.ndarray, 
     Qa = 0.5 * (Qa + Qa.T)
     try:
         res = mlambda(a, Qa, m=2)
-    except (AmbiguitySearchError, ValueError, np.linalg.LinAlgError) as exc:
+    except (AmbiguitySearchError, ValueError, OverflowError, np.linalg.LinAlgError) as exc:
         return ArOutcome(False, None, None, float("nan"), float("nan"), D.shape[0], f"search failed: {exc}")
     a_fix = np.asarray(res.fixed[0], dtype=np.float64)
     Qba = DP[:, b_idx].T                                              # (3, n_dd)

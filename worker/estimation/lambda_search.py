@@ -156,6 +156,11 @@ def _ldl_pivoted(Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return L, d, perm
 
 
+#: Largest Gauss-transform multiplier kept: beyond 2**40 the int64 Z and its inverse can overflow in a few steps
+#: and float64 stops representing integers exactly; a covariance that needs it is numerically singular.
+_MAX_GAUSS_MU = 2.0 ** 40
+
+
 def _gauss(L: np.ndarray, Z: np.ndarray, Z_inv: np.ndarray, i: int, j: int) -> None:
     """Integer Gauss transformation making |L[i, j]| <= 1/2 (in place).
 
@@ -163,6 +168,9 @@ def _gauss(L: np.ndarray, Z: np.ndarray, Z_inv: np.ndarray, i: int, j: int) -> N
     loses mu times column i (Teunissen 1995 eq. 27; de Jonge & Tiberius 1996 sec. 3.4). The inverse
     ``Z^-1 <- (I + mu e_i e_j^T) Z^-1`` is kept exactly in integers.
     """
+    if not abs(L[i, j]) < _MAX_GAUSS_MU:  # NaN/inf or beyond exact integers: Q is numerically singular
+        raise AmbiguitySearchError(f"decorrelation diverged (L[{i},{j}] = {L[i, j]!r}): the ambiguity covariance is "
+                                   "too ill-conditioned to search; leave this epoch float")
     mu = math.floor(L[i, j] + 0.5)
     if mu != 0:
         L[i:, j] -= mu * L[i:, i]
