@@ -69,4 +69,4 @@ JOB_TYPE = JobType(
                 "fan-out task per set.",
     config_model=TtffConfig, pipeline="worker.pipelines.ttff:run", min_sets=0, max_sets=None,
     produces=("table5_<method>.csv", "table5_<method>.md", "table5.html", "runs.json", "runs.csv", "summary.json",
-              "ttff_table.png", "ttff_histogram.png"))
+              "ttff_table.png", "ttff_histogram.png", "report.html"))

@@ -164,13 +164,21 @@ def run(ctx: JobContext, config) -> None:
     ctx.write_product("runs.csv", runs_csv(runs))
     ctx.write_product("summary.json", summary)
     ctx.progress(0.95, "plots")
+    pngs: dict[str, bytes] = {}
     try:
         from worker.plots.ttff import ttff_plots
 
         main = "filter" if "filter" in methods else methods[0]
-        for name, png in ttff_plots([r for r in runs if r["method"] == main],
-                                    {"job_id": ctx.job_id, "config": {"method": main}}).items():
+        pngs = ttff_plots([r for r in runs if r["method"] == main], {"job_id": ctx.job_id, "config": {"method": main}})
+        for name, png in pngs.items():
             ctx.write_product(name, png, media_type="image/png")
     except Exception as exc:  # noqa: BLE001 - plots are a convenience; the tables carry the result
         ctx.log(f"plots failed: {type(exc).__name__}: {exc}")
+    from worker.plots.ttff import table5
+    from worker.report import html_report
+
+    tables = {f"Table 5 layout, method {m}": table5([r for r in runs if r["method"] == m]) for m in methods}
+    ctx.write_product("report.html", html_report("Time to first fix", {k: v for k, v in summary.items()
+                                                                       if k != "sets_list"}, pngs, tables),
+                      media_type="text/html")
     ctx.progress(1.0, "done")
