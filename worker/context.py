@@ -75,6 +75,7 @@ class JobContext:
     _last_flush: float = 0.0
     log_lines: list[str] = field(default_factory=list)
     pcv_maps: list[tuple[str, dict]] = field(default_factory=list)
+    _map_offset: int = 0
 
     # --- progress and cancellation ---------------------------------------------------------------
     def check(self) -> None:
@@ -102,11 +103,15 @@ class JobContext:
     def map(self, function: str, payloads: list[dict], *, progress_span: tuple[float, float] = (0.0, 0.9),
             stage: str = "tasks") -> list:
         """Run `function(payload, sets) -> result` ("module:function") for every payload on any worker
-        (this one included) and return the results in payload order. Progress counts finished tasks."""
+        (this one included) and return the results in payload order. Progress counts finished tasks.
+        A pipeline may fan out several times; each call gets its own task rows (call them in the same order
+        on every attempt, so a retried job reuses the results it already has)."""
         if self._map is None:
             from worker.fanout import run_locally
             return run_locally(self, function, payloads, progress_span, stage)
-        return self._map(function, payloads, progress_span, stage)
+        offset = self._map_offset
+        self._map_offset += len(payloads)
+        return self._map(function, payloads, progress_span, stage, offset)
 
     # --- products --------------------------------------------------------------------------------
     def write_product(self, name: str, data: bytes | str | dict | list | Path,

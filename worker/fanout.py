@@ -39,9 +39,10 @@ def _load(function: str) -> Callable[[dict, list[InputSet]], Any]:
     return getattr(importlib.import_module(module_name), func_name)
 
 
-def create_tasks(rt, job_id: str, function: str, payloads: list[dict]) -> None:
-    """Insert the task rows of a job (idempotent: rows of an earlier attempt are kept with their results)."""
-    rows = [{"id": uuid.uuid4().hex, "job_id": job_id, "idx": i, "function": function, "payload": p,
+def create_tasks(rt, job_id: str, function: str, payloads: list[dict], offset: int = 0) -> None:
+    """Insert the task rows of one fan-out of a job at indices offset.. (idempotent: rows of an earlier attempt
+    are kept with their results; a pipeline calls its fan-outs in the same order, so offsets repeat)."""
+    rows = [{"id": uuid.uuid4().hex, "job_id": job_id, "idx": offset + i, "function": function, "payload": p,
              "state": "pending", "attempts": 0} for i, p in enumerate(payloads)]
     insert = pg_insert if rt.engine.dialect.name == "postgresql" else sqlite_insert
     with rt.Session.begin() as s:
@@ -152,23 +153,25 @@ def run_task_message(task_id: str) -> None:
 
 
 def gather(rt, ctx, function: str, payloads: list[dict], progress_span: tuple[float, float],
-           stage: str) -> list[Any]:
-    """Create, share, help run and wait for all tasks of this job; returns their results in payload order."""
+           stage: str, offset: int = 0) -> list[Any]:
+    """Create, share, help run and wait for the tasks of one fan-out of this job (task indices offset..offset+n-1,
+    so several fan-outs of one job never share rows); returns their results in payload order."""
     job_id = ctx.job_id
-    create_tasks(rt, job_id, function, payloads)
+    n = len(payloads)
+    in_this = (JobTask.job_id == job_id, JobTask.idx >= offset, JobTask.idx < offset + n)
+    create_tasks(rt, job_id, function, payloads, offset)
     ring(rt, job_id)
     lo, hi = progress_span
-    n = len(payloads)
     while True:
         ctx.check()
         with rt.Session() as s:
-            counts = dict(s.execute(select(JobTask.state, func.count()).where(JobTask.job_id == job_id)
+            counts = dict(s.execute(select(JobTask.state, func.count()).where(*in_this)
                                     .group_by(JobTask.state)).all())
         done = counts.get("done", 0)
         ctx.progress(lo + (hi - lo) * done / max(n, 1), f"{stage}: {done}/{n} done")
         if counts.get("failed"):
             with rt.Session() as s:
-                bad = s.execute(select(JobTask).where(JobTask.job_id == job_id, JobTask.state == "failed")
+                bad = s.execute(select(JobTask).where(*in_this, JobTask.state == "failed")
                                 .order_by(JobTask.idx).limit(1)).scalar_one()
                 raise TaskFailed(f"task {bad.idx} ({bad.payload.get('label', '')}) failed {bad.attempts} times: "
                                  f"{(bad.error or '').splitlines()[0]}")
@@ -180,7 +183,7 @@ def gather(rt, ctx, function: str, payloads: list[dict], progress_span: tuple[fl
         else:
             time.sleep(0.2)
     with rt.Session() as s:
-        rows = s.execute(select(JobTask).where(JobTask.job_id == job_id).order_by(JobTask.idx)).scalars().all()
+        rows = s.execute(select(JobTask).where(*in_this).order_by(JobTask.idx)).scalars().all()
         task_log = [f"task {r.idx:4d} {r.payload.get('label', '')!s:<24} worker={r.worker} attempts={r.attempts} "
                     f"seconds={(r.finished_at - r.started_at).total_seconds():.2f}" for r in rows]
         shas = [r.result_sha256 for r in rows]

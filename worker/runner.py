@@ -196,7 +196,8 @@ def execute_job(rt: Runtime, job_id: str) -> str | None:
 
     ctx = JobContext(job_id=job_id, attempt=attempt, sets=[], workdir=workdir,
                      _store_blob=lambda p: rt.blobs.put_file(p), _flush_progress=flush)
-    ctx._map = lambda function, payloads, span, stage: gather(rt, ctx, function, payloads, span, stage)
+    ctx._map = lambda function, payloads, span, stage, offset: gather(rt, ctx, function, payloads, span, stage,
+                                                                      offset)
     beat = Heartbeat(rt, job_id, token, ctx)
     beat.start()
     log.info("job %s (%s) attempt %d claimed by %s", job_id, job_type, attempt, token)

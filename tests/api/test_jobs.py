@@ -221,3 +221,11 @@ def test_reaper_leaves_a_reclaimed_job_alone(api):
     with api.rt.Session() as s:
         job = s.get(Job, job_id)
         assert job.state == "running" and job.lease_owner == "alive/2"
+
+
+def test_successive_fan_outs_of_one_job_never_mix(api):
+    job_id = api.post("/v1/jobs", json={"type": "selftest", "config": {
+        "duration_s": 0, "fan_out": 4, "fan_out_passes": 3, "task_seconds": 0}}).json()["id"]
+    assert api.get(f"/v1/jobs/{job_id}").json()["state"] == "succeeded"
+    passes = api.get(f"/v1/jobs/{job_id}/products/selftest.json").json()["passes"]
+    assert [[t["power"] for t in p] for p in passes] == [[n ** k for n in range(4)] for k in (2, 3, 4)]

@@ -14,6 +14,8 @@ class SelftestConfig(BaseModel):
     fail_attempts: int = Field(0, ge=0, le=100, description="Fail (as an internal error) the first N attempts.")
     fail_as_input_error: bool = Field(False, description="Fail as a user-input error instead (never retried).")
     fan_out: int = Field(0, ge=0, le=1000, description="Split into this many tasks that any worker may run.")
+    fan_out_passes: int = Field(1, ge=1, le=5, description="Fan out this many times in a row (pass k squares, "
+                                "cubes, ... each task's number) to check that passes never mix.")
     task_seconds: float = Field(0.2, ge=0.0, le=600.0, description="How long each fanned-out task works.")
     publish_pcv_map: str | None = Field(None, max_length=200,
                                         description="Publish a small flat test PCV map under this name.")

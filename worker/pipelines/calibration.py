@@ -99,17 +99,6 @@ def final_task(payload: dict, sets):
     return {"final": final, "seconds": time.perf_counter() - t0}
 
 
-def _second_fan_out(ctx: JobContext, function: str, first: list, second: list, **kw) -> list:
-    """Results of a second fan-out of the same job. The service's fan-out keys task rows by (job, index) and keeps
-    existing rows with their results (worker/fanout.py create_tasks), so a second ctx.map over indices 0..n-1
-    would hand back the first pass's results. The second pass is therefore submitted behind the first: payloads
-    first + second, where the first n rows already exist (done, reused as is) and rows n.. are the new tasks.
-    Without a service (ctx.map runs locally) only the new payloads are run."""
-    if ctx._map is None:
-        return ctx.map(function, second, **kw)
-    return ctx.map(function, first + second, **kw)[len(first):]
-
-
 def _raise_input_errors(results: list, payloads: list) -> None:
     for r, p in zip(results, payloads):
         if isinstance(r, dict) and "input_error" in r:
@@ -196,8 +185,8 @@ def run(ctx: JobContext, config) -> None:
     cal_payload = {f"{a}>{b}": [float(x) for x in v] for (a, b), v in calibrated.items()}
     p2 = [{"set_id": s.id, "label": _label(s), "config": cfg, "calibrated": cal_payload, "maps": maps_payload,
            "held_out": s.id in held_ids} for s in cal_sets + held[:1]]
-    r2 = _second_fan_out(ctx, "worker.pipelines.calibration:final_task", p1, p2, progress_span=(0.52, 0.9),
-                         stage="pass 2 (residuals, final maps, held-out set)")
+    r2 = ctx.map("worker.pipelines.calibration:final_task", p2, progress_span=(0.52, 0.9),
+                 stage="pass 2 (residuals, final maps, held-out set)")
     _raise_input_errors(r2, p2)
     t_pass2 = time.perf_counter() - t0
     finals = [r["final"] for r in r2]

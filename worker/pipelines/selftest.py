@@ -22,17 +22,22 @@ def run(ctx: JobContext, config) -> None:
         ctx.progress(k / steps, f"step {k + 1} of {steps}")
         time.sleep(config.duration_s / steps)
     tasks = []
-    if config.fan_out:
-        tasks = ctx.map("worker.pipelines.selftest:square_task",
-                        [{"n": i, "seconds": config.task_seconds, "label": f"n={i}"} for i in range(config.fan_out)],
-                        progress_span=(0.5, 0.95), stage="fan-out")
+    passes = []
+    for k in range(config.fan_out_passes if config.fan_out else 0):
+        lo = 0.5 + 0.45 * k / config.fan_out_passes
+        passes.append(ctx.map("worker.pipelines.selftest:square_task",
+                              [{"n": i, "power": k + 2, "seconds": config.task_seconds, "label": f"n={i}"}
+                               for i in range(config.fan_out)],
+                              progress_span=(lo, lo + 0.45 / config.fan_out_passes), stage=f"fan-out {k + 1}"))
+    if passes:
+        tasks = passes[0]
     if config.publish_pcv_map:
         ctx.publish_pcv_map(config.publish_pcv_map, {
             "platform": "selftest", "pair": ["A", "B"], "frequency": "L1", "azimuth_deg": [45.0, 135.0, 225.0, 315.0],
             "elevation_deg": [15.0, 45.0, 75.0], "values_mm": [[0.0, 0.5, None, 1.0]] * 3,
             "count": [[10, 10, 0, 10]] * 3, "sigma_mm": [[0.1, 0.1, None, 0.1]] * 3})
     ctx.write_product("selftest.json", {
-        "tasks": tasks,
+        "tasks": tasks, "passes": passes,
         "attempt": ctx.attempt, "host": socket.gethostname(), "pid": os.getpid(),
         "elapsed_s": round(time.monotonic() - start, 3),
         "observation_sets": [{"id": s.id, "files": [f.name for f in s.files]} for s in ctx.sets]})
@@ -42,4 +47,6 @@ def run(ctx: JobContext, config) -> None:
 def square_task(payload: dict, sets) -> dict:
     """A fan-out task: works for payload['seconds'] and reports which worker process ran it."""
     time.sleep(float(payload.get("seconds", 0.0)))
-    return {"n": payload["n"], "square": payload["n"] ** 2, "worker": f"{socket.gethostname()}:{os.getpid()}"}
+    power = int(payload.get("power", 2))
+    return {"n": payload["n"], "square": payload["n"] ** 2, "power": payload["n"] ** power,
+            "worker": f"{socket.gethostname()}:{os.getpid()}"}
