@@ -45,3 +45,19 @@ def test_simulated_nav_matches_the_real_orbits(tmp_path):
     # consecutive broadcast records agree to metres, and a wrong satellite or epoch would be thousands of km off.
     assert np.max(np.linalg.norm(a.r_ecef_m[both] - b.r_ecef_m[both], axis=1)) < 10.0
     assert "brdc0770.11n" in (tmp_path / "nav" / "brdc.rnx").read_text()[:2000]
+
+
+def test_passes_of_one_run_share_the_antennas(tmp_path):
+    """A multi-pass run is one platform: the injected PCV maps and PCOs are the same in every pass (a calibration
+    campaign over passes with different hardware would be meaningless), while noise differs."""
+    import json
+
+    simulate_scenario("calibration", tmp_path, seed=4, overrides={"count": 2, "duration_s": 30})
+    a, b = tmp_path / "pass_000", tmp_path / "pass_001"
+    for name in sorted(p.name for p in (a / "truth" / "pcv").glob("*.json")):
+        assert json.loads((a / "truth" / "pcv" / name).read_text()) == json.loads((b / "truth" / "pcv" / name).read_text())
+    ma, mb = (json.loads((d / "truth" / "model.json").read_text())["antennas"] for d in (a, b))
+    for ant in ma:
+        assert ma[ant]["pco_ant_m"] == mb[ant]["pco_ant_m"]
+        assert ma[ant]["offset_body_m"] == mb[ant]["offset_body_m"]
+    assert (a / "obs" / "GPS-0.rnx").read_bytes() != (b / "obs" / "GPS-0.rnx").read_bytes()

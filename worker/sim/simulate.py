@@ -154,12 +154,14 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
         bore = np.asarray(spec.get("boresight", [0, 0, -1]), dtype=np.float64)
         offset = np.asarray(p.antenna_offsets_mm.get(aid, [0, 0, 0]), dtype=np.float64) / 1e3
         R_a_b = ob.antenna_frame(bore)
-        prng = _rng(seed, pidx, ai, "pcv")
+        # PCV and PCO belong to the antennas, not to a pass: every pass of a multi-pass run (a calibration
+        # campaign) sees the same hardware, so their random streams do not depend on the pass index.
+        prng = _rng(seed, 0, ai, "pcv")
         pcv = {f: ob.pcv_grid_mm(prng, p.pcv_peak_to_peak_mm * (p.l2_pcv_factor if f == "L2" else 1.0)
                                  * prng.uniform(0.8, 1.0)) if p.pcv else np.zeros((len(ob.PCV_EL_DEG),
                                                                                    len(ob.PCV_AZ_DEG)))
                for f in ("L1", "L2")}
-        crng = _rng(seed, pidx, ai, "pco")
+        crng = _rng(seed, 0, ai, "pco")
         pco = {f: ((np.asarray(p.pco_nominal_mm[k]) + crng.normal(0, p.pco_scatter_mm, 3)) / 1e3 if p.pco
                    else np.zeros(3)) for k, f in enumerate(("L1", "L2"))}
         brng = _rng(seed, pidx, ai, "bias")
