@@ -69,8 +69,10 @@ def test_campaign_recovers_maps_and_is_deterministic(tmp_path, pcv_campaign):
     run(ctx, cfg)
     prod = _products(ctx)
     for name in ("baselines.json", "baselines.csv", "residual_statistics.json", "held_out_attitude.json",
-                 "calibration_summary.json", "pcv_maps.png", "pcv_counts.png"):
+                 "calibration_summary.json", "pcv_maps.png", "pcv_counts.png", "report.html"):
         assert name in prod, name
+    report = prod["report.html"] if isinstance(prod["report.html"], str) else prod["report.html"].decode()
+    assert "Table 3 layout" in report and "data:image/png;base64" in report
     assert len(ctx.pcv_maps) == 4 and ctx.pcv_maps[0][0].startswith("CASSIOPE-like calibration GPS-2>GPS-0 ")
     truth = truth_of(pcv_campaign[0])
     cal = {(b["from"], b["to"]): np.asarray(b["calibrated_m"]) for b in json.loads(prod["baselines.json"])["baselines"]}

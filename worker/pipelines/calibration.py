@@ -220,14 +220,13 @@ def run(ctx: JobContext, config) -> None:
             "max_mm": round(float(np.nanmax(values)), 3) if finite.any() else None,
             "max_abs_final_bin_residual_mm": round(float(np.nanmax(np.abs(check))), 4) if finite.any() else None,
             "median_sigma_mm": round(float(np.nanmedian(sigma)), 4) if finite.any() else None})
-    try:
-        from worker.plots.calibration import pcv_counts_plot, pcv_maps_plot
+    from worker.plots.calibration import baselines_table, pcv_counts_plot, pcv_maps_plot
 
-        context = {"job": ctx.job_id, "platform": platform.name, "sets": len(cal_sets)}
-        ctx.write_product("pcv_maps.png", pcv_maps_plot(map_docs, context=context))
-        ctx.write_product("pcv_counts.png", pcv_counts_plot(map_docs, context=context))
-    except ImportError:  # pragma: no cover - plotting is optional for the science
-        ctx.log("plots skipped: worker.plots.calibration not importable")
+    context = {"job": ctx.job_id, "platform": platform.name, "sets": len(cal_sets)}
+    pngs = {"pcv_maps.png": pcv_maps_plot(map_docs, context=context),
+            "pcv_counts.png": pcv_counts_plot(map_docs, context=context)}
+    for name, png in pngs.items():
+        ctx.write_product(name, png, media_type="image/png")
     resid = combine_residual_stats(finals)
     if held_ids:
         resid["held_out"] = combine_residual_stats(finals, include_held_out=True)
@@ -251,6 +250,13 @@ def run(ctx: JobContext, config) -> None:
         "per_set": per_set,
     }
     ctx.write_product("calibration_summary.json", summary)
+    from worker.report import html_report
+
+    report_summary = {k: v for k, v in summary.items() if k not in ("per_set", "baselines", "maps")}
+    ctx.write_product("report.html", html_report(
+        f"Calibration · {platform.name} · {len(cal_sets)} sets", report_summary, pngs,
+        {"Baselines (body frame, Table 3 layout)": baselines_table(baselines_document(platform.name, rows)),
+         "PCV maps": maps_summary, "Sets": per_set}), media_type="text/html")
     ctx.progress(1.0, "done")
 
 
