@@ -61,7 +61,11 @@ def _short(value: Any) -> str:
 
 def set_title(fig: Figure, what: str, context: "PlotContext | Mapping[str, Any] | None") -> None:
     """Figure title: what is shown (first line) and set, job and configuration (second line)."""
-    fig.suptitle(f"{what}\n{PlotContext.of(context).subtitle()}", fontsize=10)
+    import textwrap
+
+    width_chars = max(60, int(fig.get_figwidth() * 13))  # ~13 characters per inch at 9 pt: never clipped
+    sub = textwrap.fill(PlotContext.of(context).subtitle(), width=width_chars)
+    fig.suptitle(f"{what}\n{sub}", fontsize=9)
 
 
 def new_figure(width_in: float = 10.0, height_in: float = 6.0) -> Figure:
