@@ -71,6 +71,9 @@ class FilterResult:
     # pobs.sats / pobs.signals), dd_cyc (the integer SD(sat) - SD(ref_sat)), last_epoch (the last epoch both arcs
     # were in the filter with this constraint); for scoring against a simulator's truth/arcs.csv
     fix_log: dict = None
+    # the noise model as estimated at the end: white sigma per signal (at 45 dB-Hz), C/N0 growth exponents, the
+    # adaptive multipath scale (summary.json "noise_model")
+    noise: dict = None
 
 
 class _State:
@@ -207,6 +210,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     cn0_growth = s.weighting == "cn0" or s.noise_cn0_growth
     mp_model = max(s.sigma_multipath_phase_m) > 0 or max(s.sigma_multipath_code_m) > 0
     mp_infl = s.multipath_correlation_factor if dynamic else 1.0
+    # C/N0 growth exponent per (code, phase) and signal, estimated from the triple differences (starts at 1)
+    gamma = np.ones((2, n_sig)) if cn0_growth else np.zeros((2, n_sig))
+    gam_n = np.zeros((2, n_sig))
+    mom = np.zeros((2, n_sig, 4))
     mp_scale, mp_n_ep = 1.0, 0          # adaptive scale of the multipath variance (1 = the configured sigmas)
     # --- outputs ---
     out_ok = np.zeros((n_ep, n_bl), bool)
@@ -375,10 +382,32 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 td_p[j, :, f] -= n_cyc * lam[f]
                 ev(k, "phase_clock_jump", j, sig=pobs.signals[f], detail=f"{n_cyc:.0f} cycles common to all satellites")
             if s.noise_estimation:
-                wfac = _cn0_factor(cn0) if cn0_growth else np.ones(cn0.shape)
+                lw = np.log(_cn0_factor(cn0))                              # ln of the full C/N0 factor
+                if cn0_growth:
+                    # exponent gamma of the C/N0 growth (variance ~ factor^gamma) per observable and signal: slope
+                    # of ln|TD| against ln(factor) / 2 (E ln|x| = ln sigma + const for Gaussian x), pooled
+                    # moments over NOISE_EPOCHS; a receiver whose noise does not grow as C/N0 falls gets gamma ~ 0
+                    for f in range(n_sig):
+                        for kk, td, okk, mref, big in ((0, td_c, td_c_ok, mc, 5.0), (1, td_p, td_p_ok, mp, lam[f])):
+                            sel = okk[..., f]
+                            r = np.abs((td - np.nan_to_num(mref)[:, None, :])[..., f][sel])
+                            x = lw[..., f][sel]
+                            keep = (r < big) & (r > 0)
+                            if keep.sum() >= 3:
+                                x, y = x[keep], np.log(r[keep])
+                                a = 1.0 / min(gam_n[kk, f] + 1.0, NOISE_EPOCHS)
+                                mom[kk, f] += a * (np.array([x.mean(), y.mean(), (x * x).mean(), (x * y).mean()])
+                                                   - mom[kk, f])
+                                gam_n[kk, f] += 1
+                                vx = mom[kk, f, 2] - mom[kk, f, 0] ** 2
+                                if gam_n[kk, f] >= NOISE_MIN_EPOCHS and vx > 0.05:
+                                    gamma[kk, f] = np.clip(2.0 * (mom[kk, f, 3] - mom[kk, f, 0] * mom[kk, f, 1]) / vx,
+                                                           0.0, 1.5)
+                wfac_c = np.exp(gamma[0][None, None, :] * lw)
+                wfac_p = np.exp(gamma[1][None, None, :] * lw)
                 for f in range(n_sig):
-                    dc = ((td_c - np.nan_to_num(mc)[:, None, :]) / np.sqrt(wfac))[..., f][td_c_ok[..., f]]
-                    dp = ((td_p - np.nan_to_num(mp)[:, None, :]) / np.sqrt(wfac))[..., f][td_p_ok[..., f]]
+                    dc = ((td_c - np.nan_to_num(mc)[:, None, :]) / np.sqrt(wfac_c))[..., f][td_c_ok[..., f]]
+                    dp = ((td_p - np.nan_to_num(mp)[:, None, :]) / np.sqrt(wfac_p))[..., f][td_p_ok[..., f]]
                     if dp.size >= 3 and dc.size >= 3:
                         a = 1.0 / min(est_n[f] + 1.0, NOISE_EPOCHS)
                         # MAD -> sigma of a TD = sqrt(2) sigma of one SD (white noise)
@@ -461,7 +490,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             else:
                 var = np.concatenate([np.full(mc_n, s.sigma_code_m ** 2), np.full(mp_n, s.sigma_phase_m ** 2)])
             if cn0_growth:
-                var *= np.concatenate([_cn0_factor(cn0[jc, sc, fc]), _cn0_factor(cn0[jp, sp, fp])])
+                var *= np.concatenate([_cn0_factor(cn0[jc, sc, fc]) ** gamma[0, fc],
+                                       _cn0_factor(cn0[jp, sp, fp]) ** gamma[1, fp]])
             if s.weighting == "elevation":
                 # antenna-frame elevation once an attitude exists, else the local horizon (ground platforms)
                 el_e = el_ant if R_mask is not None else np.broadcast_to(el_loc, (n_bl, n_sat))
@@ -689,8 +719,16 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     fix_log = {"epoch": fl[:, 0].astype(np.int64), "bl": arcs[a_arc, 0], "sig": arcs[a_arc, 2],
                "sat": arcs[a_arc, 1], "ref_sat": arcs[r_arc, 1], "dd_cyc": fl[:, 3],
                "last_epoch": np.minimum(arcs[a_arc, 4], arcs[r_arc, 4])}
+    noise = {"sigma_phase_white_m": {sg: float(np.sqrt(max(est_var_p[f], s.sigma_phase_m ** 2)))
+                                     for f, sg in enumerate(pobs.signals)},
+             "sigma_code_white_m": {sg: float(np.sqrt(max(est_var_c[f], s.sigma_code_m ** 2)))
+                                    for f, sg in enumerate(pobs.signals)},
+             "cn0_gamma_code": {sg: float(gamma[0, f]) for f, sg in enumerate(pobs.signals)},
+             "cn0_gamma_phase": {sg: float(gamma[1, f]) for f, sg in enumerate(pobs.signals)},
+             "multipath_scale": float(mp_scale) if mp_model else None,
+             "multipath_correlation_factor": float(mp_infl)}
     return FilterResult(out_ok, out_b, out_P, out_fixed, out_n, out_ratio, out_w, residuals, events,
-                        first_fix, first_data, fix_log)
+                        first_fix, first_data, fix_log, noise)
 
 
 def _pseudo_update(st: _State, D: np.ndarray, a_fix: np.ndarray) -> None:

@@ -120,6 +120,8 @@ def summarize(sol, R_ref_from_ecef: np.ndarray, orbit_source: str) -> dict:
             "median_azimuth_deg": float(np.median(bt["azimuth_deg"][mb])) if mb.any() else None,
             "median_elevation_deg": float(np.median(bt["elevation_deg"][mb])) if mb.any() else None,
         })
+    if fr.noise is not None:
+        summary["noise_model"] = fr.noise
     summary["fix_rate"] = float(fr.fixed.all(axis=1).sum() / max(fr.ok.all(axis=1).sum(), 1))
     summary["events"] = {}
     for e in fr.events:
