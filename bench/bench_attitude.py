@@ -109,12 +109,10 @@ def event_check(sol, d: Path) -> dict:
     seen = [(e["sat"], e["signal"], t[e["epoch"]]) for e in sol.fr.events if e["event"] == "cycle_slip"]
     slips = _slips_formed_by_sd(sol, d / "truth")
     found = sum(any(s == x[0] and f == x[1] and abs(tt - x[2]) < 1.5 for s, f, tt in seen) for x in slips)
-    jumps = {}
-    for r in csv.DictReader(open(d / "truth" / "receivers.csv")):
-        jumps.setdefault(r["antenna"], []).append(int(r["clock_jumps_ms"]))
-    n_jumps = sum(int(np.count_nonzero(np.diff(v))) for v in jumps.values())
-    n_jump_ev = sum(1 for e in sol.fr.events if e["event"] == "clock_jump")
-    return {"slips_truth": len(slips), "slips_found": int(found), "jumps_truth": n_jumps, "jump_events": n_jump_ev}
+    from tests.attitude.test_attitude_sim import clock_jump_match
+    jumps, missed, spurious = clock_jump_match(sol, d / "truth")
+    return {"slips_truth": len(slips), "slips_found": int(found), "jumps_truth": len(jumps),
+            "jumps_found": len(jumps) - len(missed), "jump_spurious": len(spurious)}
 
 
 PASSES = {  # label: (preset, minutes or None for --minutes, overrides)
@@ -164,11 +162,11 @@ def main() -> None:
     if hard:
         lines += ["", "Hard passes, events against truth (slips on a phase that forms a single difference at the "
                   "slip epoch and the one before; clock jumps per receiver):", "",
-                  "| pass | mode | slips in truth | reported as cycle_slip | clock jumps in truth | clock_jump events |",
-                  "|---|---|---|---|---|---|"]
+                  "| pass | mode | slips in truth | reported as cycle_slip | clock jumps in truth | reported | "
+                  "spurious clock_jump events |", "|---|---|---|---|---|---|---|"]
         for (label, mode), r in hard:
             lines.append(f"| {label} | {mode} | {r['slips_truth']} | {r['slips_found']} | {r['jumps_truth']} | "
-                         f"{r['jump_events']} |")
+                         f"{r['jumps_found']} | {r['jump_spurious']} |")
     ref = "clean 1deg wobble"
     if any(k[0] == "hard events" for k in results) and any(k[0] == ref for k in results):
         lines += ["", "Accuracy after re-fix: the hard events (slips, clock jumps, gaps, outages incl. all receivers "
@@ -200,7 +198,31 @@ def main() -> None:
         replace_section(ROOT / "docs" / "BENCHMARKS.md", "Attitude job", text + "\n\n" + NOTES)
 
 
-NOTES = ""
+NOTES = """Done-when status (issue 6) from these tables (figures quoted from the run above):
+
+- Clean 106 min: kinematic |bias| <= 0.006 deg, std/predicted 0.96-1.01 (limit 0.02 deg and 1.3x: met); dynamic
+  errors smaller than kinematic on every angle (met); fix rate 99.94 % (met); no wrong integer (truth arcs) in
+  either mode, no dynamic epoch above 1 deg (max 0.88). Kinematic epochs are single-epoch solutions (pitch sigma
+  0.33 deg): 139 of 6349 exceed 1 deg at 3 sigma with the right integers.
+- Realistic 106 min (earth-pointing preset as it is): no wrong integer in 2610 constraints. Errors vs predicted
+  sigma: std/predicted 0.88-1.00 (before this noise model: 1.6-1.9, i.e. predicted sigmas 1.6x too small). The
+  epochs above 1 deg while fixed (dynamic 179 = 2.8 %, max 1.88 deg; before: 502, max 1.94) have the right
+  integers: the 0.26 deg yaw bias of the uncalibrated 1.5 mm PCO scatter plus 3-sigma excursions of the
+  honest 0.32 deg tilt sigma (time-correlated multipath/PCV). With the true PCO as calibrated baselines the yaw
+  bias drops to 0.12 deg and the count to 166; with sigma_omega 0.01 deg/s (Table 1: 0.03) to 93. Kinematic:
+  1425 such epochs at tilt sigma 0.6 deg.
+- Hard 30 min (free clocks with 1 ms jumps, slips with/without LLI, gaps, outages, strong multipath, 25 mm PCV):
+  completes; no wrong integer in 1204-1232 constraints (before: 27 wrong, all slips after the fix that the
+  phase test skipped while the phase was rejected); every slip a single difference can see is reported (490/490;
+  43 more happen on satellites the partner antenna does not track: no single difference, never used); every
+  clock jump is reported and none invented (4/4, 0 spurious; before: 2 spurious events at the all-receiver outage,
+  where the epoch clock of an epoch without code was taken as 0). Epochs above 1 deg (535 dynamic): right integers, pitch bias -0.6 deg from the uncalibrated 25 mm
+  PCV and tilt sigma 0.45 deg, std/predicted 0.81-1.06.
+- Accuracy after re-fix: the hard events without multipath/PCV ("hard events") against the clean pass with the
+  same 1 deg wobble: the same error std to 0.005 deg on every angle, also after the all-receiver outage.
+- Speed 620-800 epochs/s and 14-17 s per 106-minute job with other jobs sharing the two cores; the 3,000
+  epochs/s and < 10 s targets are not met.
+"""
 
 
 if __name__ == "__main__":

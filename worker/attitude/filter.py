@@ -232,7 +232,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     prev_t = None
     prev_sdc = np.full((n_bl, n_sat, n_sig), np.nan)       # clock-corrected SD of the previous epoch
     prev_sdp = np.full((n_bl, n_sat, n_sig), np.nan)
-    prev_clk0 = np.full(n_bl, np.nan)
+    prev_clk0 = np.full(n_bl, np.nan)        # last estimated epoch clock c dt0 (m), its time and drift (m/s)
+    prev_clk0_t = np.zeros(n_bl)
+    clk_rate = np.zeros(n_bl)
     prev_b = None
     prev_ub = None
     R_mask = None                                           # attitude for the antenna-frame mask
@@ -350,13 +352,27 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         b_pred = st.x[all_b_idx].reshape(n_bl, 3)
         ub = b_pred @ u.T                                                   # (n_bl, n_sat)
         c0 = np.where(use_c[:, :, 0], (sdc[:, :, 0] + ub) / cfac[None, :], np.nan)
-        clk0 = _nanmedian1(c0) if n_sat else np.zeros(n_bl)
-        clk0 = np.nan_to_num(clk0)
+        clk0_raw = _nanmedian1(c0) if n_sat else np.full(n_bl, np.nan)
+        have0 = np.isfinite(clk0_raw)
+        # no code this epoch: the last estimate (the phase clocks absorb the drift since)
+        # predicted from the last estimate and the differential drift: free-running clocks drift by up to ~10 us/s
+        # relative to each other, so across an outage the change alone is no jump
+        clk_pred = prev_clk0 + clk_rate * (t - prev_clk0_t)
+        clk0 = np.where(have0, clk0_raw, np.nan_to_num(clk_pred))
         corr = cfac[None, :, None] * clk0[:, None, None]
         sdc_c = sdc - corr
         sdp_c = sdp - corr
-        for j in np.flatnonzero(np.isfinite(prev_clk0) & (np.abs(clk0 - prev_clk0) > CLOCK_JUMP_M) & pa):
-            ev(k, "clock_jump", j, detail=f"differential clock changed by {(clk0[j] - prev_clk0[j]) / C_M_S * 1e3:.3f} ms")
+        jump = have0 & np.isfinite(clk_pred) & (np.abs(clk0 - clk_pred) > CLOCK_JUMP_M) & pa
+        for j in np.flatnonzero(jump):
+            ev(k, "clock_jump", j, detail=f"differential clock changed by {(clk0[j] - clk_pred[j]) / C_M_S * 1e3:.3f} "
+                                         f"ms more than its drift predicts")
+        upd = have0 & pa
+        dtc = t - prev_clk0_t
+        rate_ok = upd & ~jump & np.isfinite(prev_clk0) & (dtc > 0) & (dtc <= TD_MAX_DT_S)
+        clk_rate = np.where(rate_ok, clk_rate + 0.1 * ((clk0 - prev_clk0) / np.where(dtc > 0, dtc, 1.0) - clk_rate),
+                            clk_rate)
+        prev_clk0 = np.where(upd, clk0, prev_clk0)           # the last epoch clock actually estimated
+        prev_clk0_t = np.where(upd, t, prev_clk0_t)
         # triple differences (time differences of SDs with the predicted geometry change, median-referenced)
         slip = (lli & 1).astype(bool) & avail_p
         half = (lli & 2).astype(bool) & avail_p
@@ -701,7 +717,6 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         prev_t = t
         prev_sdc = np.where(avail_c, sdc_c, np.nan)
         prev_sdp = np.where(avail_p, sdp_c, np.nan)
-        prev_clk0 = np.where(pa, clk0, np.nan)
         prev_b = out_b[k].copy()
         prev_ub = prev_b @ u.T
     if progress is not None:
