@@ -17,16 +17,16 @@ from tests.e2e.conftest import wait_for
 
 pytestmark = pytest.mark.e2e
 
-N_SETS = 5  # 4 calibration sets + 1 held out
+N_SETS = 5  # 4 calibration sets + 1 held out (10 min each)
 CFG = {"azimuth_step_deg": 10.0, "elevation_step_deg": 5.0, "min_count": 10, "held_out_set": f"set_{N_SETS - 1:03d}"}
 COMPARED = ("baselines.json", "baselines.csv")
 
 
 @pytest.fixture(scope="module")
 def campaign(tmp_path_factory) -> list[Path]:
-    """Five 15-minute passes of the `calibration` preset (noise, multipath, PCV, 2 arcsec reference)."""
+    """Five 10-minute passes of the `calibration` preset (noise, multipath, PCV, 2 arcsec reference)."""
     root = tmp_path_factory.mktemp("cal_scale")
-    return simulate_campaign(root, N_SETS, 900.0, seed=23, overrides={"reference_sigma_arcsec": 2.0})
+    return simulate_campaign(root, N_SETS, 600.0, seed=23, overrides={"reference_sigma_arcsec": 2.0})
 
 
 @pytest.fixture(scope="module")

@@ -84,7 +84,7 @@ def statistics_task(payload: dict, sets):
     from worker.calibration.campaign import set_statistics
     from worker.calibration.checks import CampaignError, check_campaign
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     s = _find(sets, payload["set_id"])
     try:
         check_campaign(_set_infos([s], read_reference=True),
@@ -95,14 +95,14 @@ def statistics_task(payload: dict, sets):
     if err:
         return err
     stats = set_statistics(data, options)
-    return {"stats": stats, "seconds": time.perf_counter() - t0}
+    return {"stats": stats, "seconds": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
 
 
 def final_task(payload: dict, sets):
     """Pass 2 of one set: SetFinal or {"input_error": ...}."""
     from worker.calibration.campaign import set_final
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     data, options, err = _load(payload, sets)
     if err:
         return err
@@ -112,7 +112,7 @@ def final_task(payload: dict, sets):
         bl, sig = key.rsplit(" ", 1)
         maps[tuple(bl.split(">")) + (sig,)] = np.array([np.nan if v is None else v for v in values], float)
     final = set_final(data, calibrated, maps, options, held_out=payload["held_out"])
-    return {"final": final, "seconds": time.perf_counter() - t0}
+    return {"final": final, "seconds": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
 
 
 def _raise_input_errors(results: list, payloads: list) -> None:
@@ -293,7 +293,9 @@ def run(ctx: JobContext, config) -> None:
         ctx.write_product("held_out_attitude.json", held_att[0])
     per_set = [{"set": s.label, "epochs": s.n_epochs, "reference_coverage": round(s.coverage, 4),
                 "epochs_used": {f"{a}>{b}": n for (a, b), n in s.n_epochs_used.items()},
-                "pass1_seconds": round(r["seconds"], 3)} for s, r in zip(stats, r1)]
+                "pass1_seconds": round(r["seconds"], 3), "pass1_cpu_s": round(r.get("cpu_s", np.nan), 3),
+                "pass2_seconds": round(q["seconds"], 3), "pass2_cpu_s": round(q.get("cpu_s", np.nan), 3)}
+               for s, r, q in zip(stats, r1, r2)]
     summary = {
         "platform": platform.name, "sets": len(cal_sets), "held_out_set": [_label(s) for s in held[:1]],
         "extractor": "reference-aided kinematic (worker.calibration.extract): epoch-wise integer fixing with the "
@@ -305,7 +307,11 @@ def run(ctx: JobContext, config) -> None:
         "maps": maps_summary,
         "timing_s": {"checks": round(t_checks, 3), "pass1": round(t_pass1, 3), "maps": round(t_maps, 3),
                      "pass2": round(t_pass2, 3), "maps_products_and_plots": round(t_plots, 3),
-                     "total": round(time.perf_counter() - t_start, 3)},
+                     "total": round(time.perf_counter() - t_start, 3),
+                     "set_cpu_s_median": {"pass1": round(float(np.median([r.get("cpu_s", np.nan) for r in r1])), 3),
+                                          "pass2": round(float(np.median([r.get("cpu_s", np.nan)
+                                                                          for r in r2[:len(cal_sets)]])), 3)},
+                     "held_out_cpu_s": [round(r.get("cpu_s", np.nan), 3) for r in r2[len(cal_sets):]]},
         "per_set": per_set,
         "workers": workers_summary(ctx.task_records),
     }
