@@ -33,6 +33,44 @@
     return {status: resp.status, headers: resp.headers, body: doc};
   }
 
+  /* POST a FormData with upload progress (fetch cannot report it): resolves like api(), calls
+   * onProgress(sentBytes, totalBytes) while the body goes out, then onProgress(null) while the server checks. */
+  function postWithProgress(url, data, onProgress) {
+    return new Promise((resolve, reject) => {
+      const xhr = new XMLHttpRequest();
+      xhr.open("POST", url);
+      xhr.withCredentials = true;
+      xhr.setRequestHeader("Accept", "application/json, application/problem+json");
+      xhr.setRequestHeader("X-CSRF-Token", csrf);
+      xhr.upload.addEventListener("progress", (ev) => { if (ev.lengthComputable) onProgress(ev.loaded, ev.total); });
+      xhr.upload.addEventListener("load", () => onProgress(null, null));
+      xhr.addEventListener("load", () => {
+        let doc = null;
+        try { doc = JSON.parse(xhr.responseText); } catch (e) { doc = null; }
+        if (xhr.status >= 200 && xhr.status < 300) { resolve({status: xhr.status, body: doc}); return; }
+        const problem = doc && doc.title ? doc : {title: `HTTP ${xhr.status}`, status: xhr.status,
+                                                   detail: "The server answered without a problem document."};
+        const err = new Error(problem.title);
+        err.problem = problem;
+        reject(err);
+      });
+      xhr.addEventListener("error", () => {
+        const err = new Error("The upload did not reach the server");
+        err.problem = {title: "The upload did not reach the server",
+                       detail: "The connection failed or was interrupted. Nothing was stored; try again."};
+        reject(err);
+      });
+      xhr.send(data);
+    });
+  }
+
+  function fmtBytes(n) {
+    if (n < 1024) return `${n} B`;
+    if (n < 1024 ** 2) return `${(n / 1024).toFixed(1)} KiB`;
+    if (n < 1024 ** 3) return `${(n / 1024 ** 2).toFixed(1)} MiB`;
+    return `${(n / 1024 ** 3).toFixed(2)} GiB`;
+  }
+
   /* Show an RFC 9457 problem document: title, detail, file, line, field and per-field errors. */
   function showProblem(box, problem) {
     if (!box) return;
@@ -173,13 +211,23 @@
       const ok = uploadForm.parentElement.querySelector(".js-ok");
       const busy = uploadForm.querySelector(".js-busy");
       const button = document.getElementById("upload-button");
+      const bar = document.getElementById("upload-progress");
+      const label = uploadForm.querySelector(".js-upload-label");
       box.hidden = true; ok.hidden = true; busy.hidden = false; button.disabled = true;
+      bar.hidden = false; bar.value = 0; bar.removeAttribute("data-done"); label.textContent = "uploading…";
       const data = new FormData();
       const name = document.getElementById("set-name").value.trim();
       if (name) data.append("name", name);
       for (const f of document.getElementById("set-files").files) data.append("files", f, f.name);
       try {
-        const {body} = await api("POST", "/v1/observation-sets", data);
+        const {body} = await postWithProgress("/v1/observation-sets", data, (sent, total) => {
+          if (sent === null) {  // every byte sent: the server now checks the files
+            bar.value = bar.max; bar.dataset.done = "1"; label.textContent = "uploaded; checking the files…";
+            return;
+          }
+          bar.max = total; bar.value = sent;
+          label.textContent = `uploading ${fmtBytes(sent)} of ${fmtBytes(total)} (${Math.floor(100 * sent / total)} %)`;
+        });
         ok.replaceChildren(document.createTextNode("Uploaded and checked: "));
         const a = el("a", {href: `/ui/sets/${body.id}`, id: "uploaded-set"}, body.name || body.id);
         a.dataset.setId = body.id;
@@ -193,7 +241,7 @@
       } catch (e) {
         showProblem(box, e.problem || {title: String(e)});
       } finally {
-        busy.hidden = true; button.disabled = false;
+        busy.hidden = true; bar.hidden = true; button.disabled = false;
       }
     });
 

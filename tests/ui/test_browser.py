@@ -61,6 +61,12 @@ def test_upload_run_watch_and_inspect_results(browser, site, simulated_set, arti
     link.wait_for(state="visible", timeout=60_000)
     set_id = link.get_attribute("data-set-id")
     assert re.fullmatch(r"[0-9a-f]{32}", set_id)
+    # the upload reported its progress: every byte went out (upload "load") before the server's answer,
+    # and the bar is put away afterwards
+    bar = page.locator("#upload-progress")
+    assert bar.get_attribute("data-done") == "1"
+    assert page.eval_on_selector("#upload-progress", "b => b.value === b.max")
+    assert bar.is_hidden()
 
     # --- start a job: attitude when the service has it, else inspect ----------------------------------------
     page.wait_for_selector("#job-type[data-loaded='1']")
