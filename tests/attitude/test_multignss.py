@@ -242,3 +242,24 @@ def test_job_with_systems_preset_runs_end_to_end(tmp_path):
     assert {("G", "G:L2"), ("E", "E:E5b"), ("C", "C:B1I"), ("J", "J:L1")} <= pairs
     assert all(sig.startswith(sysl + ":") for sysl, sig in pairs)
     assert len((out / "heading.nmea").read_text().splitlines()) == 301
+
+
+def test_a_system_without_ephemerides_is_left_out_with_a_warning():
+    import dataclasses
+
+    from tests.conftest import real_set
+    from worker.attitude.process import AttitudeInputs, InputProblem, _sat_state
+    from worker.gnss.io.rinex_nav import read_rinex_nav
+    from worker.gnss.time import GpsTime
+
+    d = real_set("static_1m_mosaicx5_nagoya_2024")
+    nav = read_rinex_nav(d / "base.nav", name="base.nav")
+    no_j = dataclasses.replace(nav, kepler={k: v for k, v in nav.kepler.items() if k != "J"})
+    inputs = AttitudeInputs(platform=None, obs={}, obs_names={}, nav=no_j)
+    state, _ = _sat_state(inputs, ["G", "J"])
+    assert len(inputs.warnings) == 1 and "J" in inputs.warnings[0]
+    t = GpsTime(np.array([nav.kepler["G"].toe_gpst().s[0]] * 2), np.zeros(2))
+    r, _, _, _ = state(np.array(["G" + nav.kepler["G"].sat[0][1:], "J03"]), t)
+    assert np.isfinite(r[0]).all() and np.isnan(r[1]).all()
+    with pytest.raises(InputProblem):
+        _sat_state(AttitudeInputs(platform=None, obs={}, obs_names={}, nav=no_j), ["J"])
