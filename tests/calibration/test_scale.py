@@ -47,3 +47,20 @@ def test_tasks_csv_and_workers_summary():
     assert [float(r["start_s"]) for r in rows] == [1.0, 4.0, 4.0]
     assert [float(r["end_s"]) for r in rows] == [3.5, 5.0, 4.25] and rows[1]["attempts"] == "2"
     assert workers_summary(rec) == {"w1": {"tasks": 2, "busy_s": 2.75}, "w2": {"tasks": 1, "busy_s": 1.0}}
+
+
+def echo_shared_task(payload, sets):
+    return {"label": payload["label"], "shared": payload["_shared"]["maps"], "has_sha": "_shared_sha256" in payload}
+
+
+def test_ctx_map_hands_the_shared_object_to_every_task(tmp_path):
+    """ctx.map(shared=...) without a service: every task sees payload["_shared"] (with a service the object is
+    stored once in the blob store; tests/e2e/test_calibration_scale.py covers that path)."""
+    from worker.context import JobContext
+
+    ctx = JobContext(job_id="t", attempt=1, sets=[], workdir=tmp_path, _store_blob=lambda p: ("x", 0))
+    out = ctx.map("tests.calibration.test_scale:echo_shared_task", [{"label": "a"}, {"label": "b"}],
+                  shared={"maps": [1.5, None]})
+    assert out == [{"label": "a", "shared": [1.5, None], "has_sha": False},
+                   {"label": "b", "shared": [1.5, None], "has_sha": False}]
+    assert [r["label"] for r in ctx.task_records] == ["a", "b"] and ctx.task_records[0]["worker"] == "local"
