@@ -21,8 +21,10 @@ class TtffSimulation(BaseModel):
     rate_deg_s: list[float] = Field([0.1, 0.5], min_length=2, max_length=2,
                                     description="Peak slew-back rate uniform in [min, max] (deg/s).")
     hold_s: float = Field(0.0, ge=0, le=3600, description="Start orientation held this long before the slew back.")
-    realistic: bool = Field(True, description="Apply the realism overrides of docs/ttff.md (50 mm p-p differential "
-                                              "PCV, ~1 m code multipath at the antenna horizon) to the preset.")
+    realistic: bool = Field(True, description="The `ttff` preset as it is (50 mm p-p differential PCV, ~1 m code "
+                                              "multipath at the antenna horizon, C/N0-dependent noise, docs/ttff.md "
+                                              "'Realism'); false: white noise only, no PCV or multipath "
+                                              "(consistency checks).")
     overrides: dict[str, Any] = Field(default_factory=dict,
                                       description="Further simulator parameters of the `ttff` preset "
                                                   "(docs/simulator.md), applied last.")

@@ -89,7 +89,7 @@ def set_task(payload: dict, sets) -> dict:
 
 def payloads(ctx: JobContext, config) -> list[dict]:
     """Task payloads: uploaded sets first (in the order given), then the simulated starts."""
-    from worker.ttff.starts import REALISTIC_OVERRIDES, random_starts, start_overrides
+    from worker.ttff.starts import BENIGN_OVERRIDES, random_starts, start_overrides
 
     opts = {k: getattr(config, k) for k in ("configurations", "methods", "duration_s", "single_epoch_step_s",
                                             "min_ratio_constrained", "max_length_error_m", "filter_mode")}
@@ -100,7 +100,7 @@ def payloads(ctx: JobContext, config) -> list[dict]:
     if sim is not None:
         starts = random_starts(sim.count, sim.seed, sim.yaw_max_deg, sim.pitch_max_deg, sim.roll_max_deg,
                                tuple(sim.rate_deg_s))
-        base = dict(REALISTIC_OVERRIDES) if sim.realistic else {}
+        base = {} if sim.realistic else dict(BENIGN_OVERRIDES)
         for st in starts:
             ov = start_overrides(st, config.duration_s + 1.0, sim.hold_s, base)
             ov.update(sim.overrides)
