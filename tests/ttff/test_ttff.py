@@ -170,7 +170,7 @@ def test_pipeline_simulated_and_uploaded(tmp_path, sim_set):
     ctx = _ctx(tmp_path, [up])
     run(ctx, cfg)
     assert {"runs.csv", "runs.json", "summary.json", "table5.html", "table5_filter.csv", "table5_filter.md",
-            "table5_epoch-constrained.md", "report.html"} <= set(ctx.products)
+            "table5_epoch-constrained.md", "report.html", "ttff_table.png", "ttff_histogram.png"} <= set(ctx.products)
     report = (tmp_path / "products" / "report.html").read_text()
     assert "Time to first fix" in report and "Table 5 layout, method filter" in report and "<script" not in report
     summary = json.loads((tmp_path / "products" / "summary.json").read_text())

@@ -71,4 +71,4 @@ JOB_TYPE = JobType(
                 "fan-out task per set.",
     config_model=TtffConfig, pipeline="worker.pipelines.ttff:run", min_sets=0, max_sets=None,
     produces=("table5_<method>.csv", "table5_<method>.md", "table5.html", "runs.json", "runs.csv", "summary.json",
-              "ttff_table.png", "ttff_histogram.png", "report.html"))
+              "ttff_table.png (up to 50 sets)", "ttff_histogram.png", "report.html"))

@@ -16,6 +16,9 @@ from pathlib import Path
 from worker.context import JobContext
 from worker.errors import JobInputError
 
+#: ttff_table.png is drawn up to this many sets (matplotlib's table: ~3 s of the parent's CPU at 200 sets).
+TABLE_PLOT_MAX_SETS = 50
+
 
 def _options(d: dict):
     from worker.ttff.single_epoch import SingleEpochOptions
@@ -166,10 +169,16 @@ def run(ctx: JobContext, config) -> None:
     ctx.progress(0.95, "plots")
     pngs: dict[str, bytes] = {}
     try:
-        from worker.plots.ttff import ttff_plots
+        from worker.plots.ttff import ttff_histogram_plot, ttff_plots
 
         main = "filter" if "filter" in methods else methods[0]
-        pngs = ttff_plots([r for r in runs if r["method"] == main], {"job_id": ctx.job_id, "config": {"method": main}})
+        main_runs = [r for r in runs if r["method"] == main]
+        pctx = {"job_id": ctx.job_id, "config": {"method": main}}
+        if len(results) <= TABLE_PLOT_MAX_SETS:
+            pngs = ttff_plots(main_runs, pctx)
+        else:   # a table image of hundreds of rows is unreadable and costs seconds: the tables carry it
+            pngs = {"ttff_histogram.png": ttff_histogram_plot(main_runs, pctx)}
+            ctx.log(f"ttff_table.png left out: {len(results)} sets > {TABLE_PLOT_MAX_SETS} (see table5_*.csv/md)")
         for name, png in pngs.items():
             ctx.write_product(name, png, media_type="image/png")
     except Exception as exc:  # noqa: BLE001 - plots are a convenience; the tables carry the result

@@ -94,7 +94,7 @@ def _filter_runs(ss: StudySet, cfg: str, method: str, opts: StudyOptions) -> lis
     from worker.attitude.filter import run_filter
     from worker.attitude.settings import AttitudeSettings
 
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     sigs = list(CONFIGURATIONS[cfg])
     kw = dict(opts.filter_settings)
     if method == "filter-constrained":
@@ -116,7 +116,7 @@ def _filter_runs(ss: StudySet, cfg: str, method: str, opts: StudyOptions) -> lis
     except Exception as exc:  # noqa: BLE001 - one failing run must not lose the study; it shows in the row
         note = f"filter failed: {type(exc).__name__}: {str(exc)[:120]}"
         return [{"baseline": _bl_label(a, b), "configuration": cfg, "method": method, "ttff_s": None,
-                 "fix_right": None, "note": note, "seconds": round(time.perf_counter() - t0, 4)}
+                 "fix_right": None, "note": note, "seconds": round(time.process_time() - t0, 4)}
                 for a, b in ss.baselines]
     t = ss.t_s
     rows = []
@@ -146,7 +146,7 @@ def _filter_runs(ss: StudySet, cfg: str, method: str, opts: StudyOptions) -> lis
         rows.append({"baseline": _bl_label(a, b), "configuration": cfg, "method": method, "ttff_s": ttff,
                      "fix_right": right, "fix_error_deg": err, "wrong_fixed_epochs": wrong_ep,
                      "off_3deg_fixed_epochs": off_ep, "fixed_epochs": fixed_ep, "seconds": None})
-    dt = time.perf_counter() - t0
+    dt = time.process_time() - t0
     for r in rows:
         r["seconds"] = round(dt / max(len(rows), 1), 4)
     return rows
@@ -171,7 +171,7 @@ def _epoch_runs(ss: StudySet, cfg: str, methods: list[str], opts: StudyOptions) 
 
     out = []
     for m in methods:
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         solver = solvers[m]
         first = np.full(q, -1)
         first_right: list = [None] * q
@@ -202,7 +202,7 @@ def _epoch_runs(ss: StudySet, cfg: str, methods: list[str], opts: StudyOptions) 
                 stats["ok"][j] += res.correct[j] is True
                 stats["wrong"][j] += res.correct[j] is False
                 stats["best"][j] += res.best_correct[j] is True
-        seconds[m] = time.perf_counter() - t0
+        seconds[m] = time.process_time() - t0
         for j, (a, b) in enumerate(ss.baselines):
             n = int(stats["n"][j])
             k = int(first[j])
@@ -229,7 +229,7 @@ def constrained_filter_available() -> bool:
 def run_set(ss: StudySet, opts: StudyOptions) -> dict:
     """JSON-able result of one set: {"set", "initial_euler_deg", "runs": [row per configuration, baseline and
     method (RUN_COLUMNS)], "truth", "n_epochs", "seconds"}."""
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     eul = initial_offset_euler_deg(ss)
     runs = []
     for cfg in opts.configurations:
@@ -251,7 +251,7 @@ def run_set(ss: StudySet, opts: StudyOptions) -> dict:
     return {"set": ss.label, "initial_euler_deg": [round(v, 3) for v in eul] if eul else None,
             "truth": ss.truth.source if ss.truth is not None else None, "n_epochs": int(len(ss.t_s)),
             "runs": [{c: r[c] for c in RUN_COLUMNS} for r in runs], "warnings": ss.warnings[:20],
-            "seconds": round(time.perf_counter() - t0, 3)}
+            "seconds": round(time.process_time() - t0, 3)}
 
 
 # ---------------------------------------------------------------------------------------------- many sets ---
