@@ -53,6 +53,10 @@ class TtffConfig(BaseModel):
     min_ratio_constrained: float = Field(1.5, ge=1.0, le=100.0,
                                          description="Ratio of the constrained objective for an accepted fix.")
     max_length_error_m: float = Field(0.03, gt=0, le=1.0, description="Length test (seed 000 Table 2).")
+    l2_min_ratio_first_fix: float = Field(2.0, ge=0.0, le=100.0,
+                                          description="Paper's method (filter) in the L2-only configuration: a first "
+                                                      "fix also needs this MLAMBDA ratio (0: the length test alone, "
+                                                      "as seed 000; docs/ttff.md 'Wrong fixes of L2').")
     filter_mode: Literal["dynamic", "kinematic"] = Field("dynamic", description="Attitude filter mode.")
 
     @model_validator(mode="after")

@@ -29,6 +29,8 @@ def _options(d: dict):
     return StudyOptions(configurations=tuple(d["configurations"]), methods=tuple(d["methods"]),
                         max_duration_s=d["duration_s"], single_epoch_step_s=d["single_epoch_step_s"],
                         filter_settings={"mode": d["filter_mode"], "max_length_error_m": d["max_length_error_m"]},
+                        filter_settings_by_configuration={
+                            "L2": {"ar_min_ratio_first_fix": d.get("l2_min_ratio_first_fix", 2.0)}},
                         single_epoch=se)
 
 
@@ -95,7 +97,8 @@ def payloads(ctx: JobContext, config) -> list[dict]:
     from worker.ttff.starts import BENIGN_OVERRIDES, random_starts, start_overrides
 
     opts = {k: getattr(config, k) for k in ("configurations", "methods", "duration_s", "single_epoch_step_s",
-                                            "min_ratio_constrained", "max_length_error_m", "filter_mode")}
+                                            "min_ratio_constrained", "max_length_error_m", "filter_mode",
+                                            "l2_min_ratio_first_fix")}
     out = []
     for s in ctx.sets:
         out.append({"source": "upload", "set_id": s.id, "label": s.name or s.id, "options": opts})

@@ -39,6 +39,13 @@ RUN_COLUMNS = ("set", "yaw_deg", "pitch_deg", "roll_deg", "configuration", "base
                "seconds", "note")
 
 
+#: Study-level AR settings of the paper's method per configuration (decision, docs/ttff.md "Wrong fixes of L2"):
+#: L2 alone (semi-codeless, 6 dB weaker, PCV x1.3) gives the 3 cm length test few, noisy DDs at the first epochs of
+#: an off-pointed start, and a wrong candidate of the right length was accepted on 2 of 400 baselines; a first fix
+#: of an L2-only baseline also needs the MLAMBDA ratio >= 2. L1+L2 and L1 keep seed 000's length test alone.
+FILTER_SETTINGS_BY_CONFIGURATION: dict = {"L2": {"ar_min_ratio_first_fix": 2.0}}
+
+
 @dataclass(frozen=True)
 class StudyOptions:
     """What to run on every set."""
@@ -48,6 +55,9 @@ class StudyOptions:
     max_duration_s: float | None = 120.0          # seconds of each set used (TTFFs beyond are "never")
     single_epoch_step_s: float = 10.0             # sampling of the single-epoch success rate
     filter_settings: dict = field(default_factory=dict)   # AttitudeSettings overrides (e.g. mode)
+    # further AttitudeSettings overrides per configuration, applied after filter_settings
+    filter_settings_by_configuration: dict = field(
+        default_factory=lambda: {k: dict(v) for k, v in FILTER_SETTINGS_BY_CONFIGURATION.items()})
     single_epoch: SingleEpochOptions = field(default_factory=SingleEpochOptions)
     wrong_fix_deg: float = WRONG_FIX_DEG
 
@@ -97,6 +107,7 @@ def _filter_runs(ss: StudySet, cfg: str, method: str, opts: StudyOptions) -> lis
     t0 = time.process_time()
     sigs = list(CONFIGURATIONS[cfg])
     kw = dict(opts.filter_settings)
+    kw.update(opts.filter_settings_by_configuration.get(cfg, {}))
     if method == "filter-constrained":
         kw["ambiguity_search"] = "constrained"
     settings = AttitudeSettings(signals=sigs, **kw)
