@@ -122,6 +122,7 @@ def cmd_job(args) -> None:
             cl = svc.client(key)
             cfg = {"simulate": {"count": args.count, "seed": args.seed}, "duration_s": args.duration,
                    "single_epoch_step_s": args.step}
+            load0 = list(os.getloadavg())
             t0 = time.monotonic()
             r = cl.post("/v1/jobs", json={"type": "ttff", "observation_set_ids": [], "config": cfg})
             r.raise_for_status()
@@ -134,7 +135,9 @@ def cmd_job(args) -> None:
             wall = time.monotonic() - t0
             summ = cl.get(f"/v1/jobs/{job_id}/products/summary.json").json() if j["state"] == "succeeded" else None
             out[str(n)] = {"state": j["state"], "wall_s": round(wall, 1), "error": j.get("error"),
-                           "task_seconds_total": summ and summ.get("task_seconds_total")}
+                           "task_seconds_total": summ and summ.get("task_seconds_total"),
+                           "task_cpu_seconds_total": summ and summ.get("task_cpu_seconds_total"),
+                           "load_average_before": load0, "load_average_after": list(os.getloadavg())}
             print(n, "worker(s):", out[str(n)], flush=True)
         finally:
             svc.shutdown()
@@ -224,8 +227,10 @@ def report(study: dict, cubesat: dict | None, job: dict | None, rtk: dict | None
                       f"step {job['step_s']:.0f} s, all 3 configurations and 3 methods), submitted through the API "
                       f"(`python -m bench.bench_ttff job --count {job['count']} --workers 1 2`):", ""]
         for n_w, v in job["workers"].items():
+            la = v.get("load_average_before")
             lines.append(f"- {n_w} worker(s): {v['state']}, {v['wall_s']} s wall (sum of task times "
-                         f"{v['task_seconds_total']} s)")
+                         f"{v['task_seconds_total']} s wall, {v.get('task_cpu_seconds_total')} s CPU; load average "
+                         f"before {la and ' / '.join(f'{x:.1f}' for x in la)})")
     return "\n".join(lines) + "\n"
 
 
