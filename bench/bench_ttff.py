@@ -137,6 +137,7 @@ def cmd_job(args) -> None:
             out[str(n)] = {"state": j["state"], "wall_s": round(wall, 1), "error": j.get("error"),
                            "task_seconds_total": summ and summ.get("task_seconds_total"),
                            "task_cpu_seconds_total": summ and summ.get("task_cpu_seconds_total"),
+                           "tasks_per_worker": summ and summ.get("tasks_per_worker"),
                            "load_average_before": load0, "load_average_after": list(os.getloadavg())}
             print(n, "worker(s):", out[str(n)], flush=True)
         finally:
@@ -230,7 +231,8 @@ def report(study: dict, cubesat: dict | None, job: dict | None, rtk: dict | None
             la = v.get("load_average_before")
             lines.append(f"- {n_w} worker(s): {v['state']}, {v['wall_s']} s wall (sum of task times "
                          f"{v['task_seconds_total']} s wall, {v.get('task_cpu_seconds_total')} s CPU; load average "
-                         f"before {la and ' / '.join(f'{x:.1f}' for x in la)})")
+                         f"before {la and ' / '.join(f'{x:.1f}' for x in la)}; tasks per worker "
+                         f"{v.get('tasks_per_worker')})")
     return "\n".join(lines) + "\n"
 
 

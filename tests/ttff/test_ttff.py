@@ -175,6 +175,7 @@ def test_pipeline_simulated_and_uploaded(tmp_path, sim_set):
     assert "Time to first fix" in report and "Table 5 layout, method filter" in report and "<script" not in report
     summary = json.loads((tmp_path / "products" / "summary.json").read_text())
     assert summary["sets"] == 3
+    assert summary["tasks_per_worker"]["local"][0] == 3 and summary["task_cpu_seconds_total"] > 0
     labels = [s["label"] for s in summary["sets_list"]]
     assert labels == ["uploaded start", "start 000", "start 001"]
     # the uploaded set has no arcs.csv: checked by the reference attitude only

@@ -133,6 +133,16 @@ def _html(runs: list[dict], methods: list[str], summary: dict) -> str:
     return "\n".join(parts)
 
 
+def _tasks_per_worker(ctx: JobContext) -> dict:
+    """{worker: [tasks, task seconds]} of this job's fan-out (how evenly the sets spread)."""
+    out: dict = {}
+    for r in getattr(ctx, "task_records", None) or []:
+        d = out.setdefault(str(r.get("worker")), [0, 0.0])
+        d[0] += 1
+        d[1] = round(d[1] + (r.get("seconds") or 0.0), 2)
+    return out
+
+
 def run(ctx: JobContext, config) -> None:
     from worker.ttff.study import runs_csv, summarize, table5_csv, table5_markdown
 
@@ -160,6 +170,7 @@ def run(ctx: JobContext, config) -> None:
     summary.update({"configuration": config.model_dump(), "wall_seconds": round(time.perf_counter() - t0, 2),
                     "task_seconds_total": round(sum(r.get("task_seconds", 0.0) for r in results), 2),
                     "task_cpu_seconds_total": round(sum(r.get("task_cpu_seconds", 0.0) for r in results), 2),
+                    "tasks_per_worker": _tasks_per_worker(ctx),
                     "sets_list": [{"label": r["label"], "initial_euler_deg": r["initial_euler_deg"],
                                    "truth": r["truth"], "n_epochs": r["n_epochs"], "start": r.get("start"),
                                    "seconds": r.get("task_seconds")} for r in results]})
