@@ -30,9 +30,11 @@ class AttitudeConfig(BaseModel):
     sigma0_ambiguity_cyc: float = Field(500.0, gt=0, le=1e6)
     sigma_baseline_kinematic_m: float = Field(1.0, gt=0, le=100)
     elevation_mask_local_deg: float = Field(-90.0, ge=-90, le=90)
-    elevation_mask_antenna_deg: float = Field(0.0, ge=-90, le=90)
-    cn0_mask_l1_dbhz: float = Field(35.0, ge=0, le=70)
-    cn0_mask_l2_dbhz: float = Field(30.0, ge=0, le=70)
+    elevation_mask_antenna_deg: float = Field(
+        -90.0, ge=-90, le=90, description="Antenna-frame elevation mask once fixed (seed 000 Table 2: 0; default off, "
+                                          "the noise model weights low satellites).")
+    cn0_mask_l1_dbhz: float = Field(0.0, ge=0, le=70, description="C/N0 mask of L1 (Table 2: 35; default off).")
+    cn0_mask_l2_dbhz: float = Field(0.0, ge=0, le=70, description="C/N0 mask of L2 (Table 2: 30; default off).")
     td_code_m: float = Field(0.5, gt=0, le=1000)
     td_phase_cyc: float = Field(0.25, gt=0, le=100)
     max_length_error_m: float = Field(0.03, gt=0, le=10)
