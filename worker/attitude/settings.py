@@ -48,6 +48,12 @@ class AttitudeSettings:
     sigma_clock_s: float = 1.0e-6              # white noise, reset each epoch
     sigma0_omega_deg_s: float = 1.0
     sigma_omega_deg_s: float = 0.03             # random walk, per tau
+    adaptive_omega_noise: bool = False          # dynamic mode: add the excess of the omega corrections over their
+                                                # predicted covariance to the random walk (covariance matching,
+                                                # worker/attitude/adaptive.py); off = Table 1
+    adaptive_omega_window: int = 5              # epochs averaged by the adaptive estimate
+    adaptive_omega_gain: float = 4.0            # scale of the estimated excess noise
+    adaptive_omega_gate: float = 0.5            # chi-square quantile the window's normalised corrections must exceed
     tau_omega_s: float = 1.0
     sigma0_ambiguity_cyc: float = 500.0
     sigma_baseline_kinematic_m: float = 1.0     # kinematic mode: per baseline component per tau (seed 000 sec. 4.1)
