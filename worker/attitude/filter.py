@@ -276,6 +276,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         events.append({"epoch": k, "event": kind, "baseline": j, "sat": sat, "signal": sig, "detail": detail})
 
     blk = None                                              # SdBlock of the current epochs
+    sub_w_b = np.concatenate([np.arange(3), all_b_idx])      # omega and baselines (dynamic propagation)
+    eye_sub = np.eye(sub_w_b.size)
+    ix_sub = np.ix_(sub_w_b, sub_w_b)
+    ix_b = np.ix_(all_b_idx, all_b_idx)
     for k in range(n_ep):
         st.epoch = k
         if progress is not None and k % 100 == 0:
@@ -289,8 +293,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 bb = st.x[all_b_idx].reshape(n_bl, 3)
                 b1, Pbb, Pbw = rotation_rk4_stm(bb, w, dt, s.rk4_step_s)
                 st.x[all_b_idx] = b1.ravel()
-                sub = np.concatenate([np.arange(3), all_b_idx])
-                Phi = np.eye(sub.size)
+                sub = sub_w_b
+                Phi = eye_sub.copy()
                 for j in range(n_bl):
                     r = 3 + 3 * j
                     Phi[r:r + 3, r:r + 3] = Pbb[j]
@@ -300,15 +304,16 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 # discrete process noise of the omega random walk and its effect on b (integrated over dt)
                 Q = np.zeros((sub.size, sub.size))
                 Q[0:3, 0:3] = np.eye(3) * q_w * dt
+                Bxs = [-_skew(b1[j]) for j in range(n_bl)]
                 for j in range(n_bl):
                     r = 3 + 3 * j
-                    Bx = -_skew(b1[j])
+                    Bx = Bxs[j]
                     Q[r:r + 3, 0:3] = Bx * q_w * dt ** 2 / 2
                     Q[0:3, r:r + 3] = Q[r:r + 3, 0:3].T
                     for i in range(n_bl):
                         ri = 3 + 3 * i
-                        Q[r:r + 3, ri:ri + 3] = Bx @ (-_skew(b1[i])).T * q_w * dt ** 3 / 3
-                st.P[np.ix_(sub, sub)] += Q
+                        Q[r:r + 3, ri:ri + 3] = Bx @ Bxs[i].T * q_w * dt ** 3 / 3
+                st.P[ix_sub] += Q
             else:
                 st.P[all_b_idx, all_b_idx] += q_b * dt
         # white-noise clocks: reset every epoch
@@ -405,14 +410,15 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                     for f in range(n_sig):
                         for kk, td, okk, mref, big in ((0, td_c, td_c_ok, mc, 5.0), (1, td_p, td_p_ok, mp, lam[f])):
                             sel = okk[..., f]
-                            r = np.abs((td - _nz(mref)[:, None, :])[..., f][sel])
+                            r = np.abs((td[..., f] - _nz(mref[:, f])[:, None])[sel])
                             x = lw[..., f][sel]
                             keep = (r < big) & (r > 0)
                             if keep.sum() >= 3:
                                 x, y = x[keep], np.log(r[keep])
                                 a = 1.0 / min(gam_n[kk, f] + 1.0, NOISE_EPOCHS)
-                                mom[kk, f] += a * (np.array([x.mean(), y.mean(), (x * x).mean(), (x * y).mean()])
-                                                   - mom[kk, f])
+                                nx = x.size            # means as sum / size (what ndarray.mean computes)
+                                mom[kk, f] += a * (np.array([x.sum() / nx, y.sum() / nx, (x * x).sum() / nx,
+                                                             (x * y).sum() / nx]) - mom[kk, f])
                                 gam_n[kk, f] += 1
                                 vx = mom[kk, f, 2] - mom[kk, f, 0] ** 2
                                 if gam_n[kk, f] >= NOISE_MIN_EPOCHS and vx > 0.05:
@@ -420,9 +426,11 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                                                            0.0, 1.5)
                 wfac_c = np.exp(gamma[0][None, None, :] * lw)
                 wfac_p = np.exp(gamma[1][None, None, :] * lw)
+                dc_all = (td_c - _nz(mc)[:, None, :]) / np.sqrt(wfac_c)
+                dp_all = (td_p - _nz(mp)[:, None, :]) / np.sqrt(wfac_p)
                 for f in range(n_sig):
-                    dc = ((td_c - _nz(mc)[:, None, :]) / np.sqrt(wfac_c))[..., f][td_c_ok[..., f]]
-                    dp = ((td_p - _nz(mp)[:, None, :]) / np.sqrt(wfac_p))[..., f][td_p_ok[..., f]]
+                    dc = dc_all[..., f][td_c_ok[..., f]]
+                    dp = dp_all[..., f][td_p_ok[..., f]]
                     if dp.size >= 3 and dc.size >= 3:
                         a = 1.0 / min(est_n[f] + 1.0, NOISE_EPOCHS)
                         # MAD -> sigma of a TD = sqrt(2) sigma of one SD (white noise)
@@ -685,7 +693,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         okb = pa & (n_used >= 3)
         out_ok[k] = okb
         out_b[k] = st.x[all_b_idx].reshape(n_bl, 3)
-        out_P[k] = st.P[np.ix_(all_b_idx, all_b_idx)]
+        out_P[k] = st.P[ix_b]
         fixed_now = ever_fixed & (n_fixed_used >= s.fixed_min_sats)
         out_fixed[k] = fixed_now & okb
         out_n[k] = n_used

@@ -155,6 +155,12 @@ def _column_array_fast(cells: np.ndarray) -> np.ndarray:
     stripped = np.strings.strip(cells)
     empty = stripped == ""
     out = np.full(stripped.shape, np.nan)
+    first = np.flatnonzero(~empty[:1000])
+    try:
+        if first.size:
+            float(stripped[first[0]])         # a text column (times, names) fails here, before the whole cast
+    except ValueError:
+        return stripped
     try:
         out[~empty] = stripped[~empty].astype(np.float64)
     except ValueError:
@@ -200,6 +206,8 @@ def gps_time(table: Table) -> np.ndarray:
     col = column(table, "time_gps")
     if col is None:
         raise KeyError("the table has no time_gps column")
+    if col.dtype.kind == "U":
+        return col.astype("datetime64[ms]")      # one cast, same parser as per-element np.array(str)
     return np.array([str(c) for c in col], dtype="datetime64[ms]")
 
 
