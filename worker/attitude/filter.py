@@ -762,13 +762,14 @@ def _pcv_epoch(tables, los_b, R_ant_first, n_sig, fixed):
 
 def _pseudo_update(st: _State, D: np.ndarray, a_fix: np.ndarray) -> None:
     """Constrain DD ambiguities D x = a_fix with a (numerically) zero-variance pseudo-measurement (Joseph form)."""
-    nz = [np.flatnonzero(row) for row in D]
-    kmax = max(len(z) for z in nz)
+    r, c = np.nonzero(D)                         # row-major: each row's columns ascending
+    cnt = np.bincount(r, minlength=D.shape[0])
+    kmax = int(cnt.max())
+    pos = np.arange(r.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)   # position of each non-zero in its row
     cols = np.full((D.shape[0], kmax), -1, dtype=np.int64)
     coef = np.zeros((D.shape[0], kmax))
-    for i, z in enumerate(nz):
-        cols[i, :len(z)] = z
-        coef[i, :len(z)] = D[i, z]
+    cols[r, pos] = c
+    coef[r, pos] = D[r, c]
     innov = a_fix - D @ st.x
     # 1e-6 cycles^2 keeps S positive definite in float64 without loosening the constraint noticeably
     x1, P1, _, good = joseph_update_sparse(st.x, st.P, cols, coef, np.full(D.shape[0], 1e-6), innov)
