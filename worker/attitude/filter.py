@@ -220,7 +220,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     out_n = np.zeros((n_ep, n_bl), np.int64)
     out_ratio = np.full((n_ep, n_bl), np.nan)
     out_w = np.full((n_ep, 3), np.nan)
-    res_blocks: list[np.ndarray] = []
+    res_blocks: list[tuple] = []          # per epoch: see _residual_records
     events: list[dict] = []
     first_fix = np.full(n_bl, -1)
     first_data = np.full(n_bl, -1)
@@ -713,12 +713,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             rsn_c = np.where(use_c[jr, sr, fr_], 0, reason[jr, sr, fr_])
             rsn_p = np.where(use_p[jr, sr, fr_], 0, np.where(reason[jr, sr, fr_] == 0, 5, reason[jr, sr, fr_]))
             keep_p = avail_p[jr, sr, fr_]
-            common = np.stack([np.full(jr.size, k), jr, sr, fr_, np.degrees(el_ant[jr, sr]),
-                               np.degrees(np.mod(az_ant[jr, sr], 2 * np.pi)), cn0[jr, sr, fr_]], 1)
-            blk_c = np.column_stack([common, np.zeros(jr.size), lookup[0, jr, sr, fr_], rsn_c])
-            blk_p = np.column_stack([common, np.ones(jr.size), lookup[1, jr, sr, fr_], rsn_p])[keep_p]
-            res_blocks.append(blk_c)
-            res_blocks.append(blk_p)
+            # code rows of this epoch, then its phase rows (kept per epoch, assembled once after the loop)
+            res_blocks.append((k, jr, sr, fr_, np.degrees(el_ant[jr, sr]),
+                               np.degrees(np.mod(az_ant[jr, sr], 2 * np.pi)), cn0[jr, sr, fr_],
+                               lookup[0, jr, sr, fr_], rsn_c, lookup[1, jr, sr, fr_], rsn_p, keep_p))
         # memory for the triple differences
         prev_t = t
         prev_sdc = np.where(avail_c, sdc_c, np.nan)
@@ -727,12 +725,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         prev_ub = prev_b @ u.T
     if progress is not None:
         progress(1.0)
-    R_all = np.concatenate(res_blocks) if res_blocks else np.zeros((0, 10))
-    residuals = {"epoch": R_all[:, 0].astype(np.int64), "bl": R_all[:, 1].astype(np.int64),
-                 "sat": R_all[:, 2].astype(np.int64), "sig": R_all[:, 3].astype(np.int64),
-                 "el_ant_deg": R_all[:, 4], "az_ant_deg": R_all[:, 5], "cn0_dbhz": R_all[:, 6],
-                 "kind": R_all[:, 7].astype(np.int64), "residual_m": R_all[:, 8],
-                 "reason": R_all[:, 9].astype(np.int64)}
+    residuals = _residual_records(res_blocks)
     arcs = np.array(st.arcs, dtype=np.int64).reshape(-1, 5)
     arcs[arcs[:, 4] < 0, 4] = n_ep - 1
     fl = np.array(fix_rows, dtype=np.float64).reshape(-1, 4)
@@ -758,6 +751,29 @@ def _pcv_epoch(tables, los_b, R_ant_first, n_sig, fixed):
     corr, has = epoch_correction_m(tables, los_b, R_ant_first, n_sig)
     on = fixed[:, None, None] & has[:, None, :]
     return np.where(on, np.nan_to_num(corr), 0.0), on & ~np.isfinite(corr)
+
+
+def _residual_records(blocks: list[tuple]) -> dict:
+    """Column arrays of residuals.csv from the per-epoch records of run_filter: per epoch its code rows (kind 0),
+    then its phase rows (kind 1, where a phase exists), epochs in order."""
+    if not blocks:
+        z_i, z_f = np.zeros(0, np.int64), np.zeros(0)
+        return {"epoch": z_i, "bl": z_i, "sat": z_i, "sig": z_i, "el_ant_deg": z_f, "az_ant_deg": z_f,
+                "cn0_dbhz": z_f, "kind": z_i, "residual_m": z_f, "reason": z_i}
+    cat = lambda i: np.concatenate([b[i] for b in blocks])  # noqa: E731
+    n_rows = np.array([b[1].size for b in blocks])
+    ep = np.repeat(np.array([b[0] for b in blocks], dtype=np.int64), n_rows)
+    keep = cat(11)
+    cols = {"epoch": ep, "bl": cat(1).astype(np.int64), "sat": cat(2).astype(np.int64),
+            "sig": cat(3).astype(np.int64), "el_ant_deg": cat(4), "az_ant_deg": cat(5),
+            "cn0_dbhz": cat(6).astype(np.float64)}
+    code = {**cols, "kind": np.zeros(ep.size, np.int64), "residual_m": cat(7), "reason": cat(8).astype(np.int64)}
+    phase = {**{k: v[keep] for k, v in cols.items()}, "kind": np.ones(int(keep.sum()), np.int64),
+             "residual_m": cat(9)[keep], "reason": cat(10).astype(np.int64)[keep]}
+    # epoch-major, code block before phase block; stable, so each block keeps its row order
+    order = np.argsort(2 * np.concatenate([code["epoch"], phase["epoch"]])
+                       + np.concatenate([code["kind"], phase["kind"]]), kind="stable")
+    return {k: np.concatenate([code[k], phase[k]])[order] for k in code}
 
 
 def _pseudo_update(st: _State, D: np.ndarray, a_fix: np.ndarray) -> None:
