@@ -222,8 +222,8 @@ NOTES = """Done-when status (issue 6) from these tables (figures quoted from the
   same 1 deg wobble: the same error std to 0.005 deg on every angle, also after the all-receiver outage. Each of
   the two has one dynamic epoch above 1 deg (1.33 / 1.12 deg), two epochs after the first fix, while the fresh
   angular velocity settles (predicted tilt sigma there 0.6 deg).
-- Speed 620-800 epochs/s and 14-17 s per 106-minute job with other jobs sharing the two cores; the 3,000
-  epochs/s and < 10 s targets are not met.
+- Speed: the columns above are wall-clock figures of the run above (filter and process + product texts, no
+  plots); the speed targets are measured by bench/bench_attitude_speed.py, section "Attitude job speed".
 
 Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude.py --write` (~5 min on an idle machine).
 """

@@ -111,10 +111,12 @@ def _table_of_text(text: str) -> Table:
         return {}
     if '"' not in text and "\r" not in text:
         lines = [ln for ln in lines if ln] if "" in lines else lines
+        if not lines:
+            return {}
         fields = lines[0].split(",")
         n = len(fields)
-        flat = ",".join(lines[1:]).split(",") if len(lines) > 1 else []
-        if len(flat) == n * (len(lines) - 1):
+        if all(ln.count(",") == n - 1 for ln in lines):
+            flat = ",".join(lines[1:]).split(",") if len(lines) > 1 else []
             cols = [flat[i::n] for i in range(n)]
             return _columns(fields, cols)
     gc_was = gc.isenabled()
