@@ -324,6 +324,21 @@ def scale_markdown(res: dict, command: str) -> str:
               f"over all {len(runs)} runs: {'yes' if res['identical'] else 'NO'}. The fan-out of every job is its "
               "`tasks.csv` product (pass, queue position, set, worker, start/end s); the held-out task is first "
               "in pass 2's queue and the sets go longest first."]
+    two = [r for r in runs if r["n_workers"] == (2 if 2 in workers else workers[-1])]
+    if two:
+        mid = sorted(two, key=lambda r: r["wall_s"])[len(two) // 2]
+        names = {w: f"worker-{i + 1}" for i, w in enumerate(sorted({t["worker"] for t in mid["tasks"]}))}
+        lines += ["", f"Excerpt of that job's `tasks.csv` ({mid['n_workers']} workers, {mid['wall_s']:.1f} s; "
+                  "worker names shortened; first and last tasks of each pass):", "", "```",
+                  "pass,task,set,worker,attempts,start_s,end_s,seconds"]
+        for p in ("1", "2"):
+            rows = [t for t in mid["tasks"] if t["pass"] == p]
+            shown = rows[:4] + ([{"pass": "..."}] if len(rows) > 7 else []) + rows[max(4, len(rows) - 3):]
+            for t in shown:
+                lines.append("..." if t["pass"] == "..." else ",".join(
+                    [t["pass"], t["task"], t["set"], names[t["worker"]], t["attempts"], t["start_s"], t["end_s"],
+                     t["seconds"]]))
+        lines.append("```")
     return "\n".join(lines)
 
 
