@@ -356,7 +356,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         pcv_m = np.zeros((n_bl, n_sat, n_sig))
         if pcv_tables and R_mask is not None and t - R_mask_t <= PCV_ATTITUDE_AGE_S:
             pcv_m, empty = _pcv_epoch(pcv_tables, los_b, R_ant_first, n_sig, ever_fixed)
-            reason = np.where((reason == 0) & empty, 10, reason)
+            if s.pcv_empty_bins == "exclude":
+                reason = np.where((reason == 0) & empty, 10, reason)
         # C/N0
         reason = np.where((reason == 0) & blk.low_cn0[i], 3, reason)
         use_c = reason == 0
