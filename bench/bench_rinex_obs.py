@@ -36,6 +36,8 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
+from bench._report import cpu_model  # noqa: E402
+
 SEED = 20240624
 GPS_UNIX_OFFSET_S = 315964800  # 1980-01-06T00:00:00 - 1970-01-01T00:00:00 (RTKLIB gtime_t.time is "unix-like")
 CODES = ["C1C", "L1C", "D1C", "S1C", "C2W", "L2W", "D2W", "S2W"]
@@ -273,14 +275,7 @@ rtklib_x1_as_code = [0]
 # --- main ---------------------------------------------------------------------------------------------------
 
 def machine() -> dict:
-    cpu = "?"
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    cpu = cpu_model("?")
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
                             cwd=REPO).stdout.strip()
     return {"nproc": os.cpu_count(), "cpu": cpu, "python": platform.python_version(), "commit": commit,

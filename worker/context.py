@@ -76,6 +76,8 @@ class JobContext:
     log_lines: list[str] = field(default_factory=list)
     pcv_maps: list[tuple[str, dict]] = field(default_factory=list)
     _map_offset: int = 0
+    # map id -> the team's stored PCV map (CONVENTIONS JSON) or None; set by the runner (tests: any callable)
+    _load_pcv_map: Callable[[str], dict | None] | None = None
 
     # --- progress and cancellation ---------------------------------------------------------------
     def check(self) -> None:
@@ -142,6 +144,14 @@ class JobContext:
 
         parse_pcv_map(doc, name)  # refuse a malformed map now, not at publication
         self.pcv_maps.append((name, doc))
+
+    def input_pcv_map(self, map_id: str) -> dict:
+        """A stored PCV map of the job's team by id (CONVENTIONS JSON); JobInputError when there is none."""
+        doc = self._load_pcv_map(map_id) if self._load_pcv_map is not None else None
+        if doc is None:
+            raise JobInputError("Unknown PCV map", f"there is no PCV map with id {map_id!r} in this team",
+                                field="config.pcv_map_ids")
+        return doc
 
     def product_path(self, name: str) -> Path:
         """A scratch path to write a product into; then call write_product(name, path)."""

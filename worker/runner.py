@@ -172,6 +172,20 @@ def load_inputs(rt: Runtime, job_id: str) -> list[InputSet]:
                 for o in rows]
 
 
+def load_pcv_map(rt: Runtime, job_id: str, map_id: str) -> dict | None:
+    """The JSON of PCV map `map_id` when it belongs to the job's team, else None."""
+    import json
+
+    from app.models import PcvMap
+
+    with rt.Session() as s:
+        row = s.get(PcvMap, map_id)
+        team_id = s.execute(select(Job.team_id).where(Job.id == job_id)).scalar_one()
+        if row is None or row.team_id != team_id:
+            return None
+        return json.loads(rt.blobs.path(row.sha256).read_bytes())
+
+
 # --- the whole life of one attempt ----------------------------------------------------------------
 
 def execute_job(rt: Runtime, job_id: str) -> str | None:
@@ -198,6 +212,7 @@ def execute_job(rt: Runtime, job_id: str) -> str | None:
                      _store_blob=lambda p: rt.blobs.put_file(p), _flush_progress=flush)
     ctx._map = lambda function, payloads, span, stage, offset: gather(rt, ctx, function, payloads, span, stage,
                                                                       offset)
+    ctx._load_pcv_map = lambda map_id: load_pcv_map(rt, job_id, map_id)
     beat = Heartbeat(rt, job_id, token, ctx)
     beat.start()
     log.info("job %s (%s) attempt %d claimed by %s", job_id, job_type, attempt, token)

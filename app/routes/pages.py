@@ -332,3 +332,45 @@ def pcv_maps_page(request: Request, session: SessionDep):
     maps = session.execute(select(PcvMap).where(PcvMap.team_id == team.id)
                            .order_by(PcvMap.platform, PcvMap.name, PcvMap.version.desc())).scalars().all()
     return render(request, "pcv_maps.html", team=team, maps=maps)
+
+
+def pcv_map_stats(doc: dict) -> list[tuple[str, str]]:
+    """Summary rows of a PCV map JSON (CONVENTIONS.md layout): filled bins, value range, RMS, median sigma."""
+    import numpy as np
+
+    values = np.array([[np.nan if v is None else v for v in row] for row in doc["values_mm"]], dtype=float)
+    sigma = np.array([[np.nan if v is None else v for v in row] for row in doc["sigma_mm"]], dtype=float)
+    count = np.asarray(doc["count"], dtype=np.int64)
+    filled = np.isfinite(values)
+    rows = [("grid", f"{len(doc['azimuth_deg'])} azimuth x {len(doc['elevation_deg'])} elevation bins"),
+            ("filled bins", f"{int(filled.sum())} of {values.size}"),
+            ("samples", f"{int(count.sum())}")]
+    if filled.any():
+        v = values[filled]
+        rows += [("values", f"{v.min():.2f} to {v.max():.2f} mm (peak to peak {v.max() - v.min():.2f} mm)"),
+                 ("RMS", f"{float(np.sqrt(np.mean(v ** 2))):.2f} mm"),
+                 ("median sigma", f"{float(np.nanmedian(sigma[filled])):.2f} mm")]
+    return rows
+
+
+@router.get("/pcv-maps/{map_id}", response_class=HTMLResponse)
+def pcv_map_page(map_id: str, request: Request, session: SessionDep):
+    """One PCV map: an interactive polar view (value, sigma and sample count of the bin under the pointer)."""
+    team = page_team(request, session)
+    if team is None:
+        return to_login(request)
+    row = session.get(PcvMap, map_id)
+    if row is None or row.team_id != team.id:
+        return problem_page(request, team, ProblemError(404, "not-found", "PCV map not found",
+                                                        f"No PCV map with id {map_id!r} is visible to your team."))
+    try:
+        doc = json.loads(request.app.state.blobs.path(row.sha256).read_bytes())
+        stats = pcv_map_stats(doc)
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        return problem_page(request, team, ProblemError(
+            500, "pcv-map-unreadable", "PCV map cannot be read",
+            f"The stored map of {row.name!r} v{row.version} could not be read ({exc.__class__.__name__}); "
+            "download it through the API or upload it again."))
+    # the map goes into the page as JSON; "</" is escaped so the data can never close the script element
+    data = json.dumps(doc, separators=(",", ":")).replace("</", "<\\/")
+    return render(request, "pcv_map.html", team=team, m=row, stats=stats, map_json=data)

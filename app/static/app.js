@@ -33,6 +33,44 @@
     return {status: resp.status, headers: resp.headers, body: doc};
   }
 
+  /* POST a FormData with upload progress (fetch cannot report it): resolves like api(), calls
+   * onProgress(sentBytes, totalBytes) while the body goes out, then onProgress(null) while the server checks. */
+  function postWithProgress(url, data, onProgress) {
+    return new Promise((resolve, reject) => {
+      const xhr = new XMLHttpRequest();
+      xhr.open("POST", url);
+      xhr.withCredentials = true;
+      xhr.setRequestHeader("Accept", "application/json, application/problem+json");
+      xhr.setRequestHeader("X-CSRF-Token", csrf);
+      xhr.upload.addEventListener("progress", (ev) => { if (ev.lengthComputable) onProgress(ev.loaded, ev.total); });
+      xhr.upload.addEventListener("load", () => onProgress(null, null));
+      xhr.addEventListener("load", () => {
+        let doc = null;
+        try { doc = JSON.parse(xhr.responseText); } catch (e) { doc = null; }
+        if (xhr.status >= 200 && xhr.status < 300) { resolve({status: xhr.status, body: doc}); return; }
+        const problem = doc && doc.title ? doc : {title: `HTTP ${xhr.status}`, status: xhr.status,
+                                                   detail: "The server answered without a problem document."};
+        const err = new Error(problem.title);
+        err.problem = problem;
+        reject(err);
+      });
+      xhr.addEventListener("error", () => {
+        const err = new Error("The upload did not reach the server");
+        err.problem = {title: "The upload did not reach the server",
+                       detail: "The connection failed or was interrupted. Nothing was stored; try again."};
+        reject(err);
+      });
+      xhr.send(data);
+    });
+  }
+
+  function fmtBytes(n) {
+    if (n < 1024) return `${n} B`;
+    if (n < 1024 ** 2) return `${(n / 1024).toFixed(1)} KiB`;
+    if (n < 1024 ** 3) return `${(n / 1024 ** 2).toFixed(1)} MiB`;
+    return `${(n / 1024 ** 3).toFixed(2)} GiB`;
+  }
+
   /* Show an RFC 9457 problem document: title, detail, file, line, field and per-field errors. */
   function showProblem(box, problem) {
     if (!box) return;
@@ -173,13 +211,23 @@
       const ok = uploadForm.parentElement.querySelector(".js-ok");
       const busy = uploadForm.querySelector(".js-busy");
       const button = document.getElementById("upload-button");
+      const bar = document.getElementById("upload-progress");
+      const label = uploadForm.querySelector(".js-upload-label");
       box.hidden = true; ok.hidden = true; busy.hidden = false; button.disabled = true;
+      bar.hidden = false; bar.value = 0; bar.removeAttribute("data-done"); label.textContent = "uploading…";
       const data = new FormData();
       const name = document.getElementById("set-name").value.trim();
       if (name) data.append("name", name);
       for (const f of document.getElementById("set-files").files) data.append("files", f, f.name);
       try {
-        const {body} = await api("POST", "/v1/observation-sets", data);
+        const {body} = await postWithProgress("/v1/observation-sets", data, (sent, total) => {
+          if (sent === null) {  // every byte sent: the server now checks the files
+            bar.value = bar.max; bar.dataset.done = "1"; label.textContent = "uploaded; checking the files…";
+            return;
+          }
+          bar.max = total; bar.value = sent;
+          label.textContent = `uploading ${fmtBytes(sent)} of ${fmtBytes(total)} (${Math.floor(100 * sent / total)} %)`;
+        });
         ok.replaceChildren(document.createTextNode("Uploaded and checked: "));
         const a = el("a", {href: `/ui/sets/${body.id}`, id: "uploaded-set"}, body.name || body.id);
         a.dataset.setId = body.id;
@@ -193,7 +241,7 @@
       } catch (e) {
         showProblem(box, e.problem || {title: String(e)});
       } finally {
-        busy.hidden = true; button.disabled = false;
+        busy.hidden = true; bar.hidden = true; button.disabled = false;
       }
     });
 
@@ -220,8 +268,96 @@
     });
   }
 
+  /* --- PCV map page: polar view of a map, readout of the bin under the pointer ----------------------- */
+  function binEdges(centres) {
+    // edges halfway between bin centres, the outer ones half a spacing beyond the first and last centre
+    const n = centres.length, e = new Array(n + 1);
+    for (let i = 1; i < n; i++) e[i] = (centres[i - 1] + centres[i]) / 2;
+    const d0 = n > 1 ? centres[1] - centres[0] : 1, d1 = n > 1 ? centres[n - 1] - centres[n - 2] : 1;
+    e[0] = centres[0] - d0 / 2; e[n] = centres[n - 1] + d1 / 2;
+    return e;
+  }
+
+  function findBin(edges, x) {
+    for (let i = 0; i < edges.length - 1; i++) if (x >= edges[i] && x < edges[i + 1]) return i;
+    return -1;
+  }
+
+  function divergingColour(t) {
+    // t in [-1, 1]: blue (negative) - white (0) - red (positive)
+    const c = Math.max(-1, Math.min(1, t));
+    const a = Math.abs(c), w = 255 * (1 - a);
+    return c < 0 ? `rgb(${Math.round(w + 33 * a)},${Math.round(w + 102 * a)},${Math.round(w + 172 * a)})`
+                 : `rgb(${Math.round(w + 178 * a)},${Math.round(w + 24 * a)},${Math.round(w + 43 * a)})`;
+  }
+
+  function wirePcvMap() {
+    const canvas = document.getElementById("pcv-polar");
+    const dataEl = document.getElementById("pcv-data");
+    if (!canvas || !dataEl) return;
+    const m = JSON.parse(dataEl.textContent);
+    const azEdges = binEdges(m.azimuth_deg), elEdges = binEdges(m.elevation_deg);
+    const ctx = canvas.getContext("2d");
+    const cx = canvas.width / 2, cy = canvas.height / 2, R = canvas.width / 2 - 22;
+    const zenMax = 90 - Math.min(0, elEdges[0]);  // the plot reaches the lowest elevation edge
+    const radius = (el) => R * (90 - el) / zenMax;
+    let vmax = 0;
+    for (const row of m.values_mm) for (const v of row) if (v !== null) vmax = Math.max(vmax, Math.abs(v));
+    vmax = vmax || 1;
+    // azimuth from antenna x (top) clockwise towards antenna y: canvas angle = az - 90 deg
+    const ang = (az) => (az - 90) * Math.PI / 180;
+    m.elevation_deg.forEach((_, i) => {
+      const r0 = radius(elEdges[i + 1]), r1 = radius(elEdges[i]);
+      m.azimuth_deg.forEach((__, j) => {
+        const v = m.values_mm[i][j];
+        ctx.beginPath();
+        ctx.arc(cx, cy, r1, ang(azEdges[j]), ang(azEdges[j + 1]));
+        ctx.arc(cx, cy, Math.max(r0, 0), ang(azEdges[j + 1]), ang(azEdges[j]), true);
+        ctx.closePath();
+        ctx.fillStyle = v === null ? "#d5d9de" : divergingColour(v / vmax);
+        ctx.fill();
+      });
+    });
+    ctx.strokeStyle = "rgba(29,39,51,.45)"; ctx.fillStyle = "#5f6b78"; ctx.font = "11px sans-serif";
+    for (const el of [0, 30, 60]) {
+      ctx.beginPath(); ctx.setLineDash(el === 0 ? [] : [3, 3]);
+      ctx.arc(cx, cy, radius(el), 0, 2 * Math.PI); ctx.stroke();
+      ctx.fillText(`${el}°`, cx + 3, cy - radius(el) + 12);
+    }
+    ctx.setLineDash([]);
+    for (const [az, name] of [[0, "x"], [90, "y"], [180, ""], [270, ""]]) {
+      const a = ang(az);
+      ctx.beginPath(); ctx.moveTo(cx, cy); ctx.lineTo(cx + R * Math.cos(a), cy + R * Math.sin(a)); ctx.stroke();
+      if (name) ctx.fillText(`${name} ${az}°`, cx + (R + 4) * Math.cos(a) - 8, cy + (R + 14) * Math.sin(a) + 4);
+    }
+    const legend = document.getElementById("pcv-legend");
+    const bar = el("span", {class: "pcv-bar"});  // CSSOM, not a style attribute: the CSP allows only 'self' styles
+    bar.style.background = `linear-gradient(90deg,${divergingColour(-1)},#fff,${divergingColour(1)})`;
+    legend.replaceChildren(document.createTextNode(`${(-vmax).toFixed(1)} mm `), bar,
+                           document.createTextNode(` +${vmax.toFixed(1)} mm · grey: empty bin`));
+    const readout = document.getElementById("pcv-readout");
+    canvas.addEventListener("mousemove", (ev) => {
+      const box = canvas.getBoundingClientRect();
+      const x = (ev.clientX - box.left) * canvas.width / box.width - cx;
+      const y = (ev.clientY - box.top) * canvas.height / box.height - cy;
+      const el = 90 - Math.hypot(x, y) / R * zenMax;
+      let az = Math.atan2(y, x) * 180 / Math.PI + 90;
+      az = ((az % 360) + 360) % 360;
+      let j = findBin(azEdges, az);
+      if (j < 0) j = findBin(azEdges, az - 360);
+      const i = findBin(elEdges, el);
+      if (i < 0 || j < 0) { readout.textContent = "outside the map"; delete readout.dataset.bin; return; }
+      const v = m.values_mm[i][j], s = m.sigma_mm[i][j], n = m.count[i][j];
+      readout.dataset.bin = `${i},${j}`;
+      readout.textContent = `azimuth ${m.azimuth_deg[j]}°, elevation ${m.elevation_deg[i]}°: ` +
+        (v === null ? `empty (${n} samples)` : `${v.toFixed(2)} ± ${s === null ? "?" : s.toFixed(2)} mm (${n} samples)`);
+    });
+    canvas.dataset.ready = "1";
+  }
+
   window.gnssatt = {api, showProblem};
   startLiveProgress();
   wireCancel();
   wireNewPage();
+  wirePcvMap();
 })();

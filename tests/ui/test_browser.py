@@ -8,6 +8,7 @@ import re
 from pathlib import Path
 
 import httpx
+import numpy as np
 import pytest
 
 from tests.e2e.conftest import wait_for
@@ -61,6 +62,12 @@ def test_upload_run_watch_and_inspect_results(browser, site, simulated_set, arti
     link.wait_for(state="visible", timeout=60_000)
     set_id = link.get_attribute("data-set-id")
     assert re.fullmatch(r"[0-9a-f]{32}", set_id)
+    # the upload reported its progress: every byte went out (upload "load") before the server's answer,
+    # and the bar is put away afterwards
+    bar = page.locator("#upload-progress")
+    assert bar.get_attribute("data-done") == "1"
+    assert page.eval_on_selector("#upload-progress", "b => b.value === b.max")
+    assert bar.is_hidden()
 
     # --- start a job: attitude when the service has it, else inspect ----------------------------------------
     page.wait_for_selector("#job-type[data-loaded='1']")
@@ -249,4 +256,50 @@ def test_team_b_pages_show_nothing_of_team_a(browser, site, simulated_set, artif
     assert page.locator("#job-sets option").count() == 0
     page.goto("/ui/pcv-maps")
     assert page.locator("#pcv-none").is_visible()
+    context.close()
+
+
+def test_pcv_map_page_reads_out_the_bin_under_the_pointer(browser, site, artifacts):
+    """The polar view of an uploaded map: pointing at a bin shows that bin's value, sigma and count; an empty
+    bin says empty; the canvas draws the filled bins in colour and the empty ones grey."""
+    import math
+
+    from tests.gnss.test_pcv_map import make_map
+
+    key = site.create_key("ops-pcv")
+    grid = make_map(seed=3)
+    resp = httpx.post(f"{site.url}/v1/pcv-maps", json={"name": "gap-l2", "map": grid.to_json()},
+                      headers={"Authorization": f"Bearer {key}"})
+    assert resp.status_code == 201, resp.text
+    map_id = resp.json()["id"]
+    context, page = sign_in(browser, site, key)
+    page.goto("/ui/pcv-maps")
+    page.click(f"a[href='/ui/pcv-maps/{map_id}']")
+    page.wait_for_selector("#pcv-polar[data-ready='1']")
+    canvas = page.locator("#pcv-polar")
+    box = canvas.bounding_box()
+    size = page.eval_on_selector("#pcv-polar", "c => [c.width, c.height]")
+    scale = box["width"] / size[0]
+    r_px = size[0] / 2 - 22  # the page's plot radius (elevation 0 on the circle), canvas pixels
+
+    def point_at(i_el: int, j_az: int) -> str:
+        el, az = grid.elevation_deg[i_el], grid.azimuth_deg[j_az]
+        r = r_px * (90 - el) / 90
+        a = math.radians(az - 90)
+        page.mouse.move(box["x"] + (size[0] / 2 + r * math.cos(a)) * scale,
+                        box["y"] + (size[1] / 2 + r * math.sin(a)) * scale)
+        readout = page.locator("#pcv-readout")
+        assert readout.get_attribute("data-bin") == f"{i_el},{j_az}"
+        return readout.inner_text()
+
+    # bins between 5 and 50 deg elevation are several canvas pixels wide each way: a pointer at the centre is inside
+    usable = ((grid.elevation_deg > 5) & (grid.elevation_deg < 50))[:, None]
+    filled = np.argwhere(np.isfinite(grid.values_mm) & usable)
+    for i, j in filled[:: max(1, len(filled) // 5)][:5]:
+        text = point_at(int(i), int(j))
+        assert f"{grid.values_mm[i, j]:.2f} ± {grid.sigma_mm[i, j]:.2f} mm ({grid.count[i, j]} samples)" in text
+    i, j = np.argwhere(np.isnan(grid.values_mm) & usable)[0]
+    assert f"empty ({grid.count[i, j]} samples)" in point_at(int(i), int(j))
+    page.screenshot(path=str(artifacts / "ui-pcv-map.png"), full_page=True)
+    assert page.console_errors == [], page.console_errors
     context.close()

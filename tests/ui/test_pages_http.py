@@ -150,3 +150,29 @@ def test_team_b_sees_nothing_of_team_a(site, tmp_path):
     assert obs_set["id"] not in site.get("/ui/new").text
     login(site, site.keys["a"])
     assert "a-map" in site.get("/ui/pcv-maps").text
+
+
+def test_pcv_map_page_shows_stats_and_is_team_scoped(site):
+    """One map's page: its summary computed from the stored map; another team gets a 404 page without it."""
+    import numpy as np
+
+    from tests.gnss.test_pcv_map import make_map
+
+    grid = make_map(seed=7)
+    headers = {"Authorization": f"Bearer {site.keys['a']}"}
+    meta = site.post("/v1/pcv-maps", json={"name": "gap-l1", "map": grid.to_json()}, headers=headers).json()
+    login(site, site.keys["a"])
+    listing = site.get("/ui/pcv-maps").text
+    assert f'href="/ui/pcv-maps/{meta["id"]}"' in listing
+    page = site.get(f"/ui/pcv-maps/{meta['id']}")
+    assert page.status_code == 200
+    filled = np.isfinite(grid.values_mm)
+    assert f"{int(filled.sum())} of {grid.values_mm.size}" in page.text
+    v = grid.values_mm[filled]
+    assert f"{v.min():.2f} to {v.max():.2f} mm" in page.text
+    assert f"{np.sqrt(np.mean(v ** 2)):.2f} mm" in page.text
+    assert 'id="pcv-data"' in page.text and "</script" not in page.text.split('id="pcv-data">', 1)[1].split(
+        "</script>", 1)[0]
+    login(site, site.keys["b"])
+    other = site.get(f"/ui/pcv-maps/{meta['id']}")
+    assert other.status_code == 404 and "gap-l1" not in other.text and 'id="pcv-data"' not in other.text

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from worker.attitude.ambiguity import resolve_lambda, round_newcomers
+from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
 from worker.attitude.settings import AttitudeSettings
 from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
 from worker.estimation.ekf import joseph_update_sparse, rotation_rk4_stm
@@ -38,7 +39,7 @@ __all__ = ["FilterResult", "run_filter", "REASONS"]
 DEG = np.pi / 180.0
 #: reason codes of residuals.csv (0 = used)
 REASONS = {0: "used", 1: "elevation_local", 2: "elevation_antenna", 3: "cn0", 4: "td_code", 5: "td_phase",
-           6: "half_cycle", 7: "missing_partner", 8: "no_geometry", 9: "innovation"}
+           6: "half_cycle", 7: "missing_partner", 8: "no_geometry", 9: "innovation", 10: "pcv_empty"}
 TD_MAX_DT_S = 3.0   # triple differences need consecutive epochs; beyond this the arc restarts (see module doc)
 FIX_CHECK_SIGMAS = 4.0   # post-fit RMS of fixed phases above this many noise sigmas ...
 FIX_CHECK_MIN_M = 0.015  # ... and above 15 mm (multipath-sized) ...
@@ -50,6 +51,7 @@ ANGLE_FAIL_RESET = 10    # first-fix candidates in a row failing the angle test 
 NOISE_EPOCHS = 300.0  # memory of the noise estimator (epochs)
 NOISE_MIN_EPOCHS = 10  # epochs of triple differences before the estimate replaces the configured sigma
 CLOCK_JUMP_M = 0.5e-3 * C_M_S * 0.5   # a change of the epoch clock estimate above 75 km (0.25 ms) is a jump
+PCV_ATTITUDE_AGE_S = 10.0   # PCV maps are looked up with an attitude at most this old (else not applied)
 
 
 @dataclass
@@ -238,6 +240,13 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     prev_b = None
     prev_ub = None
     R_mask = None                                           # attitude for the antenna-frame mask
+    R_mask_t = -np.inf
+    # differential PCV maps per (baseline, signal), applied to fixed baselines (worker.attitude.pcv_correction)
+    pcv_tables = pcv_tables_for(s.pcv_maps, list(pobs.antennas), baselines, list(pobs.signals)) \
+        if s.pcv_maps else {}
+    if pcv_tables:
+        from worker.gnss.geometry import R_antenna_from_body
+        R_ant_first = R_antenna_from_body(boresight_body[ia])             # (n_bl, 3, 3)
     ever_fixed = np.zeros(n_bl, bool)
     bad_fix = np.zeros(n_bl, np.int64)
     # per-signal white-noise estimates (variance of one SD) from the triple differences: robust, exponentially
@@ -343,6 +352,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             az_ant[:] = np.arctan2(los_b[:, 1], los_b[:, 0])[None, :]
             below = ever_fixed[:, None] & ~(el_ant >= s.elevation_mask_antenna_deg * DEG)
             reason = np.where((reason == 0) & below[:, :, None], 2, reason)
+        pcv_m = np.zeros((n_bl, n_sat, n_sig))
+        if pcv_tables and R_mask is not None and t - R_mask_t <= PCV_ATTITUDE_AGE_S:
+            pcv_m, empty = _pcv_epoch(pcv_tables, los_b, R_ant_first, n_sig, ever_fixed)
+            reason = np.where((reason == 0) & empty, 10, reason)
         # C/N0
         low = cn0 < sig_cn0[None, None, :]
         reason = np.where((reason == 0) & low, 3, reason)
@@ -494,7 +507,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 coef[:mc_n, 4] = 1.0
             cols[mc_n:, 4] = st.amb_index[jp, sp, fp]
             coef[mc_n:, 4] = lam[fp]
-            z = np.concatenate([sdc_c[jc, sc, fc], sdp_c[jp, sp, fp]])
+            z = np.concatenate([sdc_c[jc, sc, fc], sdp_c[jp, sp, fp] - pcv_m[jp, sp, fp]])
             if s.noise_estimation:
                 # the configured sigmas are floors: receivers smooth their code (tiny code TDs), and time-
                 # correlated errors (multipath) never show in a triple difference
@@ -695,8 +708,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         out_n[k] = n_used
         if dynamic:
             out_w[k] = st.x[0:3]
-        if attitude_fn is not None and np.all(fixed_now) and k % 10 == 0:
+        if attitude_fn is not None and np.all(fixed_now) and k % (1 if pcv_tables else 10) == 0:
             R_mask = attitude_fn(out_b[k], fixed_now)
+            R_mask_t = t
         # residual records (used and rejected): one (rows, 10) block per epoch
         jr, sr, fr_ = np.nonzero(avail_c)
         if jr.size:
@@ -744,6 +758,14 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
              "multipath_correlation_factor": float(mp_infl)}
     return FilterResult(out_ok, out_b, out_P, out_fixed, out_n, out_ratio, out_w, residuals, events,
                         first_fix, first_data, fix_log, noise)
+
+
+def _pcv_epoch(tables, los_b, R_ant_first, n_sig, fixed):
+    """(correction m (n_bl, n_sat, n_sig), no-correction mask) of an epoch: maps apply to fixed baselines only;
+    a fixed baseline's phase without a correction (empty bin) leaves the solution (seed 000 sec. 3.2)."""
+    corr, has = epoch_correction_m(tables, los_b, R_ant_first, n_sig)
+    on = fixed[:, None, None] & has[:, None, :]
+    return np.where(on, np.nan_to_num(corr), 0.0), on & ~np.isfinite(corr)
 
 
 def _pseudo_update(st: _State, D: np.ndarray, a_fix: np.ndarray) -> None:

@@ -44,6 +44,10 @@ class AttitudeConfig(BaseModel):
     calibrated_baselines: dict | None = Field(
         None, description="A calibration job's baselines.json object (CONVENTIONS.md) replacing the a priori "
                           "antenna positions.")
+    pcv_map_ids: list[str] = Field(
+        [], max_length=32, description="Ids of stored differential PCV maps (/v1/pcv-maps), at most one per "
+                                       "baseline and signal, subtracted from the phase single differences of "
+                                       "fixed baselines (directions with an empty bin then leave the solution).")
 
     @field_validator("signals")
     @classmethod
@@ -58,6 +62,7 @@ class AttitudeConfig(BaseModel):
         d = self.model_dump()
         cn0 = {"L1": d.pop("cn0_mask_l1_dbhz"), "L2": d.pop("cn0_mask_l2_dbhz")}
         cal = d.pop("calibrated_baselines") or {}
+        d.pop("pcv_map_ids")          # resolved from the store by the pipeline (maps_for_settings)
         cal_map = {}
         for b in cal.get("baselines", []) if isinstance(cal, dict) else []:
             if {"from", "to", "calibrated_m"} <= set(b):
@@ -75,3 +80,26 @@ JOB_TYPE = JobType(
     produces=("attitude.csv", "baselines.csv", "residuals.csv", "events.csv", "summary.json", "attitude.aem",
               "heading.nmea", "euler.png", "fix_status.png", "dop.png", "residuals.png", "skyplot.png",
               "report.html"))
+
+
+def maps_for_settings(docs: list[tuple[str, dict]], baselines: list[tuple[str, str]]) -> dict:
+    """(first, second, frequency) -> map dict for AttitudeSettings.pcv_maps from (map id, CONVENTIONS JSON)
+    pairs; ValueError naming the map when one is malformed, is not for a baseline of the platform, or repeats a
+    (pair, frequency)."""
+    from worker.gnss.io.errors import ParseError
+    from worker.gnss.io.pcv_map import parse_pcv_map
+
+    out: dict = {}
+    for map_id, doc in docs:
+        try:
+            grid = parse_pcv_map(doc, f"PCV map {map_id}")
+        except ParseError as exc:
+            raise ValueError(str(exc)) from exc
+        key = (grid.first, grid.second, grid.frequency)
+        if (grid.first, grid.second) not in set(map(tuple, baselines)):
+            raise ValueError(f"PCV map {map_id} is for the pair {grid.first}>{grid.second}, not a baseline of the "
+                             f"platform ({', '.join(f'{a}>{b}' for a, b in baselines)})")
+        if key in out:
+            raise ValueError(f"two PCV maps for {grid.first}>{grid.second} {grid.frequency} (one is {map_id})")
+        out[key] = grid.to_json()
+    return out

@@ -19,6 +19,14 @@ def run(ctx: JobContext, config) -> None:
         inputs = load_inputs(files)
     except InputProblem as exc:
         raise JobInputError(exc.title, exc.detail, file=exc.file, field=exc.field) from exc
+    if config.pcv_map_ids:
+        from worker.jobs.attitude import maps_for_settings
+
+        docs = [(map_id, ctx.input_pcv_map(map_id)) for map_id in config.pcv_map_ids]
+        try:
+            settings.pcv_maps = maps_for_settings(docs, list(inputs.platform.baselines))
+        except ValueError as exc:
+            raise JobInputError("Unusable PCV map", str(exc), field="config.pcv_map_ids") from exc
     last = [0.0]
 
     def progress(fraction, stage=None):
@@ -33,6 +41,7 @@ def run(ctx: JobContext, config) -> None:
         raise JobInputError(exc.title, exc.detail, file=exc.file, field=exc.field) from exc
     ctx.progress(0.92, "writing products")
     sol.summary["observation_set_id"] = obs_set.id
+    sol.summary["pcv_map_ids"] = list(config.pcv_map_ids)
     products = all_products(sol)
     for name, content in products.items():
         ctx.write_product(name, content)
