@@ -76,6 +76,9 @@ class JobContext:
     log_lines: list[str] = field(default_factory=list)
     pcv_maps: list[tuple[str, dict]] = field(default_factory=list)
     _map_offset: int = 0
+    #: one record per finished fan-out task, in task order: stage, index, label, worker, attempts,
+    #: started_at / finished_at (aware UTC datetimes), seconds (written by worker.fanout)
+    task_records: list[dict] = field(default_factory=list)
     # map id -> the team's stored PCV map (CONVENTIONS JSON) or None; set by the runner (tests: any callable)
     _load_pcv_map: Callable[[str], dict | None] | None = None
 

@@ -57,7 +57,8 @@ def ring(rt, job_id: str) -> None:
     from worker.queue import enqueue_task
 
     with rt.Session() as s:
-        ids = s.execute(select(JobTask.id).where(JobTask.job_id == job_id, JobTask.state == "pending")).scalars().all()
+        ids = s.execute(select(JobTask.id).where(JobTask.job_id == job_id, JobTask.state == "pending")
+                        .order_by(JobTask.idx)).scalars().all()  # queue order = task order (longest first)
     for task_id in ids:
         enqueue_task(rt.huey, task_id)
 
@@ -184,11 +185,10 @@ def gather(rt, ctx, function: str, payloads: list[dict], progress_span: tuple[fl
             time.sleep(0.2)
     with rt.Session() as s:
         rows = s.execute(select(JobTask).where(*in_this).order_by(JobTask.idx)).scalars().all()
-        task_log = [f"task {r.idx:4d} {r.payload.get('label', '')!s:<24} worker={r.worker} attempts={r.attempts} "
-                    f"seconds={(r.finished_at - r.started_at).total_seconds():.2f}" for r in rows]
+        records = [_record(stage, r.idx - offset, r.payload.get("label", ""), r.worker, r.attempts, r.started_at,
+                           r.finished_at) for r in rows]
         shas = [r.result_sha256 for r in rows]
-    for line in task_log:
-        ctx.log(line)
+    _log_records(ctx, records)
     return [pickle.loads(rt.blobs.path(sha).read_bytes()) for sha in shas]
 
 
@@ -219,8 +219,26 @@ def run_locally(ctx, function: str, payloads: list[dict], progress_span: tuple[f
     """The same contract without a service (scripts, unit tests): run every task here, in order."""
     lo, hi = progress_span
     fn = _load(function)
-    out = []
+    out, records = [], []
     for i, payload in enumerate(payloads):
         ctx.progress(lo + (hi - lo) * i / max(len(payloads), 1), f"{stage}: {i}/{len(payloads)} done")
+        start = utcnow()
         out.append(fn(payload, ctx.sets))
+        records.append(_record(stage, i, payload.get("label", ""), "local", 1, start, utcnow()))
+    _log_records(ctx, records)
     return out
+
+
+def _record(stage: str, index: int, label: str, worker: str | None, attempts: int, started_at, finished_at) -> dict:
+    seconds = (finished_at - started_at).total_seconds() if started_at and finished_at else None
+    return {"stage": stage, "index": index, "label": str(label), "worker": worker, "attempts": attempts,
+            "started_at": started_at, "finished_at": finished_at, "seconds": seconds}
+
+
+def _log_records(ctx, records: list[dict]) -> None:
+    """Keep the fan-out's task records on the context (ctx.task_records) and in the job log."""
+    ctx.task_records.extend(records)
+    for r in records:
+        secs = "?" if r["seconds"] is None else f"{r['seconds']:.2f}"
+        ctx.log(f"task {r['index']:4d} {r['label']:<24} worker={r['worker']} attempts={r['attempts']} "
+                f"started={r['started_at'].isoformat() if r['started_at'] else '?'} seconds={secs}")

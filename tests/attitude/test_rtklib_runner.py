@@ -52,8 +52,8 @@ def test_reproduces_issue_6_rtklib_figures(tmp_path):
 
 def test_gps_only_rtklib_agrees_with_gnssatt_not_with_the_multi_gnss_readme(tmp_path):
     """On GPS L1 C/A + L2 alone, RTKLIB's baseline is 3 mm shorter and 0.4 deg flatter than the README's (multi-GNSS)
-    one, and gnssatt, GPS-only too, agrees with RTKLIB on the same signals: that is where the xfail of
-    test_real_nagoya.py::test_nagoya_matches_rtklib_level comes from."""
+    one, and gnssatt, GPS-only too, agrees with RTKLIB on the same signals: that is why
+    test_real_nagoya.py::test_nagoya_matches_rtklib_level runs gnssatt with Galileo, BeiDou and QZSS."""
     import json
 
     from tests.attitude.test_real_nagoya import PLATFORM
@@ -75,6 +75,39 @@ def test_gps_only_rtklib_agrees_with_gnssatt_not_with_the_multi_gnss_readme(tmp_
     assert abs(b["median_azimuth_deg"] - r_az) < 0.05
     assert abs(b["median_length_m"] - r_len) < 0.002
     assert abs(b["median_elevation_deg"] - r_el) < 0.2
+
+
+def test_multi_gnss_gnssatt_agrees_with_rtklib_epoch_by_epoch(tmp_path):
+    """G+E+C+J L1+L2 on both sides (RTKLIB navsys 57, instantaneous AR, 15 deg mask; gnssatt `systems` G/E/C/J,
+    kinematic, elevation weights): the same baseline epoch by epoch. Measured: median differences 0.002 deg azimuth,
+    -0.016 deg elevation, -0.1 mm length; epoch-wise correlation 0.7-0.8 (both see the same multipath); gnssatt's
+    scatter 0.031 / 0.065 deg against RTKLIB's 0.037 / 0.086 deg."""
+    import json
+
+    from tests.attitude.test_real_nagoya import PLATFORM
+    from worker.attitude.process import load_inputs, process
+    from worker.attitude.settings import AttitudeSettings
+
+    r = _run(tmp_path, **{"pos1-navsys": "57", "pos2-armode": "instantaneous"})
+    assert r.fixed.all()
+    d = real_set(NAGOYA)
+    plat = tmp_path / "platform.json"
+    plat.write_text(json.dumps(PLATFORM))
+    files = [("base.obs", "rinex_obs", d / "base.obs"), ("rover.obs", "rinex_obs", d / "rover.obs"),
+             ("base.nav", "rinex_nav", d / "base.nav"), ("platform.json", "platform", plat)]
+    g = process(load_inputs(files), AttitudeSettings(mode="kinematic", weighting="elevation",
+                                                     systems=["G", "E", "C", "J"]))
+    bt = g.baseline_table
+    assert bt["fixed"].all()
+    _, sow = g.pobs.time.week_sow()
+    common, ig, ir = np.intersect1d(np.round(sow[bt["epoch"]]), np.round(r.gps_sow), return_indices=True)
+    assert common.size == 301
+    for a, b, med, corr in ((bt["azimuth_deg"][ig], r.azimuth_deg()[ir], 0.01, 0.5),
+                            (bt["elevation_deg"][ig], r.elevation_deg()[ir], 0.05, 0.4),
+                            (bt["length_m"][ig], r.length_m()[ir], 0.0005, 0.4)):
+        assert abs(np.median(a - b)) < med
+        assert np.corrcoef(a, b)[0, 1] > corr
+        assert a.std() <= 1.1 * b.std()
 
 
 def test_read_pos_of_the_authors_rtkpost_file():

@@ -2,7 +2,7 @@
 integer ambiguity resolution.
 
 State (fixed layout with index maps; ambiguities appended and removed as satellites come and go):
-    [omega (3, dynamic mode only)] + per baseline j: [b_j ECEF (3), c*dt_j (1), code bias of signal 2 (1, dual
+    [omega (3, dynamic mode only)] + per baseline j: [b_j ECEF (3), c*dt_j (1), code bias of signals 2.. (1 each, dual
     frequency only)] + SD ambiguities (cycles), one per (baseline, satellite, signal) in use.
 Measurement model of a single difference (second antenna minus first) of satellite s, signal f, after removing
 an epoch clock estimate c*dt0 from code:
@@ -31,7 +31,7 @@ from worker.attitude.ambiguity import (
     first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
 )
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
-from worker.attitude.settings import AttitudeSettings
+from worker.attitude.settings import AttitudeSettings, cn0_mask_of
 from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
 from worker.estimation.ekf import joseph_update_sparse, rotation_rk4_stm
 from worker.gnss.constants import C_M_S
@@ -87,13 +87,16 @@ class _State:
         self.n_bl, self.n_sat, self.n_sig, self.dynamic = n_bl, n_sat, n_sig, dynamic
         self.off_w = 0
         n_pc = n_sig if phase_clock else 0
-        blk = 4 + (1 if n_sig > 1 else 0) + n_pc
+        n_bias = max(n_sig - 1, 0)               # inter-signal (frequency, system) code bias vs signal 1
+        blk = 4 + n_bias + n_pc
         base0 = 3 if dynamic else 0
-        # baseline j: b at b_off[j]..+2, clock +3, [code bias of signal 2 +4], [phase clock per signal]
+        # baseline j: b at b_off[j]..+2, clock +3, [code bias of signals 2.. +4..], [phase clock per signal]
         self.b_off = base0 + blk * np.arange(n_bl)
         self.clk = self.b_off + 3
-        self.bias = self.b_off + 4 if n_sig > 1 else np.full(n_bl, -1)
-        first_pc = 4 + (1 if n_sig > 1 else 0)
+        # (n_bl, n_sig) state index of the code bias of each signal (-1: signal 1, the clock's reference)
+        self.bias = np.full((n_bl, n_sig), -1, dtype=np.int64)
+        self.bias[:, 1:] = self.b_off[:, None] + 4 + np.arange(n_bias)[None, :]
+        first_pc = 4 + n_bias
         # (n_bl, n_sig) state index of the phase clock of each signal; the code clock when not separate
         self.pclk = (self.b_off[:, None] + first_pc + np.arange(n_sig)[None, :]) if phase_clock \
             else np.repeat(self.clk[:, None], n_sig, axis=1)
@@ -194,7 +197,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     t_s = (pobs.time - pobs.time[0]) if n_ep else np.zeros(0)
     t_s = np.asarray(t_s, dtype=np.float64)
     lengths = np.linalg.norm(body_baselines_m, axis=1)
-    sig_cn0 = np.array([s.cn0_mask_dbhz.get(sig, -np.inf) for sig in pobs.signals])
+    sig_cn0 = np.array([cn0_mask_of(s, sig) for sig in pobs.signals])
     ia = np.array([b[0] for b in baselines])
     ib = np.array([b[1] for b in baselines])
     # --- initial state ---
@@ -204,8 +207,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         st.x[o:o + 3] = b0[j]
         sig0 = max(s.sigma0_baseline_m, 1.2 * lengths[j])
         st.P[np.arange(o, o + 3), np.arange(o, o + 3)] = sig0 ** 2
-        if n_sig > 1:
-            st.P[st.bias[j], st.bias[j]] = s.sigma0_code_bias_m ** 2
+        st.P[st.bias[j, 1:], st.bias[j, 1:]] = s.sigma0_code_bias_m ** 2
     if dynamic:
         st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
     q_w = (s.sigma_omega_deg_s * DEG) ** 2 / s.tau_omega_s          # rad^2/s^2 per s
@@ -504,8 +506,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             cols[mc_n:, 3] = st.pclk[jp, fp]
             coef[:, 3] = cfac[sb]
             if n_sig > 1:
-                is2 = fc > 0
-                cols[:mc_n, 4] = np.where(is2, st.bias[jc], -1)
+                cols[:mc_n, 4] = st.bias[jc, fc]             # -1 (no term) for signal 1
                 coef[:mc_n, 4] = 1.0
             cols[mc_n:, 4] = st.amb_index[jp, sp, fp]
             coef[mc_n:, 4] = lam[fp]

@@ -126,6 +126,11 @@ def pcv_tables_for(maps: dict, antennas: list[str], baselines: list[tuple[int, i
     for j, (a, b) in enumerate(baselines):
         for f, sig in enumerate(signals):
             doc = maps.get((antennas[a], antennas[b], sig))
+            if doc is None:                     # GPS "L1"/"L2" maps also serve "G:L1"/"G:L2" and the reverse
+                from worker.attitude.settings import SIGNAL_ALIASES
+                canon = SIGNAL_ALIASES.get(sig, sig)
+                doc = next((d for (x, y, fq), d in maps.items() if x == antennas[a] and y == antennas[b]
+                            and SIGNAL_ALIASES.get(fq, fq) == canon), None)
             if doc is not None:
                 out[(j, f)] = pcv_table(doc["azimuth_deg"], doc["elevation_deg"], doc["values_mm"])
     return out

@@ -13,7 +13,7 @@ import numpy as np
 from worker.attitude.filter import FilterResult, run_filter
 from worker.attitude.geometry import EpochGeometry, compute_geometry, platform_state_from_sp3
 from worker.attitude.observations import PlatformObs, build_platform_obs
-from worker.attitude.settings import AttitudeSettings
+from worker.attitude.settings import AttitudeSettings, effective_signals, signal_system
 from worker.attitude.solution import attitude_from_baselines, baseline_az_el, euler_and_sigma
 from worker.gnss import rotations as rot
 from worker.gnss.frames import (R_enu_from_ecef, R_gcrf_from_ecef, R_ned_from_ecef, R_orbital_from_ecef,
@@ -113,14 +113,42 @@ def load_inputs(files: list[tuple[str, str, Path]]) -> AttitudeInputs:
     return inputs
 
 
-def _sat_state(inputs: AttitudeInputs):
+def _sat_state(inputs: AttitudeInputs, systems=("G",)):
+    """(sat_state callable, source) for satellites of `systems`: the GNSS SP3, else the broadcast records of each
+    system (worker.gnss.orbits.broadcast.BroadcastOrbit per system; BeiDou BDT and GEO handled there). A
+    system without records leaves its satellites without geometry (a warning); no records at all is an error."""
     if inputs.gnss_sp3 is not None:
         from worker.gnss.geometry import sp3_state
         return sp3_state(inputs.gnss_sp3), "sp3"
     from worker.gnss.orbits.broadcast import BroadcastOrbit
-    if "G" not in inputs.nav.kepler:
-        raise InputProblem("No GPS ephemerides", f"{inputs.nav.name} holds no GPS records", file=inputs.nav.name)
-    return BroadcastOrbit(inputs.nav.kepler["G"]), "broadcast"
+    have = [x for x in systems if x in inputs.nav.kepler]
+    missing = [x for x in systems if x not in inputs.nav.kepler]
+    if not have:
+        raise InputProblem("No ephemerides", f"{inputs.nav.name} holds no records of {'/'.join(systems)}",
+                           file=inputs.nav.name)
+    if missing:
+        inputs.warnings.append(f"{inputs.nav.name}: no ephemerides of system(s) {'/'.join(missing)}; their "
+                               "satellites are not used")
+    if have == ["G"]:
+        return BroadcastOrbit(inputs.nav.kepler["G"]), "broadcast"
+    return _multi_system_state({x: BroadcastOrbit(inputs.nav.kepler[x]) for x in have}), "broadcast"
+
+
+def _multi_system_state(orbits: dict):
+    """A sat_state callable (sats, t) -> (r, v, clk, clk_rate) dispatching each satellite to its system's orbit."""
+    def state(sats, t):
+        sats = np.atleast_1d(np.asarray(sats)).astype(str)
+        n = sats.size
+        ts = GpsTime(np.broadcast_to(np.asarray(t.s), (n,)), np.broadcast_to(np.asarray(t.frac), (n,)))
+        r, v = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
+        clk, rate = np.full(n, np.nan), np.full(n, np.nan)
+        letters = np.array([x[:1] for x in sats])
+        for sysl, orbit in orbits.items():
+            m = letters == sysl
+            if m.any():
+                r[m], v[m], clk[m], rate[m] = orbit(sats[m], ts[m])
+        return r, v, clk, rate
+    return state
 
 
 def _platform_state(inputs: AttitudeInputs, pobs: PlatformObs, master: str):
@@ -177,10 +205,15 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     plat = inputs.platform
     antennas = list(inputs.obs)
     prog(0.02, "aligning observations")
-    pobs = build_platform_obs(inputs.obs, settings.signals)
+    try:
+        signals = effective_signals(settings)
+    except ValueError as e:
+        raise InputProblem("Unknown signals", str(e), field="signals") from e
+    systems = list(dict.fromkeys(signal_system(x) for x in signals))
+    pobs = build_platform_obs(inputs.obs, signals)
     if len(pobs.time) == 0 or len(pobs.sats) == 0:
-        raise InputProblem("No GPS observations", "the observation files hold no GPS epochs for "
-                           f"{'/'.join(settings.signals)}")
+        raise InputProblem("No observations", f"the observation files hold no {'/'.join(systems)} epochs for "
+                           f"{'/'.join(signals)}")
     ant_index = {a: i for i, a in enumerate(antennas)}
     baselines = [(a, b) for a, b in plat.baselines if a in ant_index and b in ant_index]
     bl_idx = [(ant_index[a], ant_index[b]) for a, b in baselines]
@@ -194,7 +227,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     master = plat.master if plat.master in ant_index else antennas[0]
     r_p, v_p, psrc = _platform_state(inputs, pobs, master)
     prog(0.10, "satellite geometry")
-    sat_state, orbit_src = _sat_state(inputs)
+    sat_state, orbit_src = _sat_state(inputs, systems)
     observed = np.isfinite(pobs.code_m).any(axis=(0, 3))
     geom = compute_geometry(pobs.time, pobs.sats, observed, sat_state, r_p, v_p, psrc)
     R_ref_from_ecef = _R_ref_from_ecef(plat.kind, r_p, v_p)                      # (n_ep, 3, 3)

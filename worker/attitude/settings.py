@@ -5,12 +5,83 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-#: Signals the filter knows, per name: (code, phase, C/N0 RINEX 3 codes in order of preference, carrier Hz).
+#: Signals the filter knows, per name: system letter, (code, phase, C/N0) RINEX 3 codes in order of preference,
+#: carrier frequency (Hz) and the default C/N0 mask (dB-Hz). Names are system-qualified ("E:E5b"); "L1" and "L2"
+#: are the GPS signals under their historical names (every GPS-only config, product and test keeps them).
+#: Frequencies: IS-GPS-200N 3.3.1.1, IS-GPS-705 3.3.1.1 (L5), Galileo OS SIS ICD 2.1 Table 2, BDS-SIS-ICD-B1I 3.0
+#: 4.2 (B1I 1561.098 MHz), BDS-SIS-ICD-B2I/B3I (1207.14 / 1268.52 MHz), IS-QZSS-PNT-005 (as GPS). RINEX 3.04
+#: Table 4-8 codes (BeiDou B1I is band "2": C2I; B2I band "7", B3I band "6").
+_GPS_L1 = {"system": "G", "code": ["C1C"], "phase": ["L1C"], "snr": ["S1C"], "freq_hz": 1575.42e6,
+           "cn0_mask_dbhz": 35.0}
+_GPS_L2 = {"system": "G", "code": ["C2W", "C2L", "C2X", "C2S"], "phase": ["L2W", "L2L", "L2X", "L2S"],
+           "snr": ["S2W", "S2L", "S2X", "S2S"], "freq_hz": 1227.60e6, "cn0_mask_dbhz": 30.0}
+
+
+def _spec(system: str, bands: str, attrs: str, freq_hz: float, cn0: float) -> dict:
+    """A SIGNALS entry: every (band, attribute) pair in preference order, e.g. bands '7', attrs 'QXI'."""
+    pairs = [b + a for b in bands for a in attrs]
+    return {"system": system, "code": ["C" + p for p in pairs], "phase": ["L" + p for p in pairs],
+            "snr": ["S" + p for p in pairs], "freq_hz": freq_hz, "cn0_mask_dbhz": cn0}
+
+
 SIGNALS: dict[str, dict] = {
-    "L1": {"code": ["C1C"], "phase": ["L1C"], "snr": ["S1C"], "freq_hz": 1575.42e6},
-    "L2": {"code": ["C2W", "C2L", "C2X", "C2S"], "phase": ["L2W", "L2L", "L2X", "L2S"],
-           "snr": ["S2W", "S2L", "S2X", "S2S"], "freq_hz": 1227.60e6},
+    "L1": _GPS_L1,
+    "L2": _GPS_L2,
+    "G:L1": _GPS_L1,
+    "G:L2": _GPS_L2,
+    "G:L5": _spec("G", "5", "QXI", 1176.45e6, 30.0),
+    "E:E1": _spec("E", "1", "CXB", 1575.42e6, 35.0),
+    "E:E5a": _spec("E", "5", "QXI", 1176.45e6, 30.0),
+    "E:E5b": _spec("E", "7", "QXI", 1207.14e6, 30.0),
+    "C:B1I": _spec("C", "2", "IXQ", 1561.098e6, 35.0),
+    "C:B2I": _spec("C", "7", "IXQ", 1207.14e6, 30.0),
+    "C:B3I": _spec("C", "6", "IXQ", 1268.52e6, 30.0),
+    "J:L1": _spec("J", "1", "CXZ", 1575.42e6, 35.0),
+    "J:L2": _spec("J", "2", "LXS", 1227.60e6, 30.0),
+    "J:L5": _spec("J", "5", "QXI", 1176.45e6, 30.0),
 }
+#: historical names -> system-qualified names
+SIGNAL_ALIASES = {"L1": "G:L1", "L2": "G:L2"}
+#: the `systems` preset: per system its first two frequency slots as RTKLIB 2.4.3 numbers them ("L1+L2":
+#: GPS/QZSS L1 + L2, Galileo E1 + E5b, BeiDou B1I + B2I). GLONASS (FDMA) is not supported.
+SYSTEM_SIGNALS = {"G": ("G:L1", "G:L2"), "E": ("E:E1", "E:E5b"), "C": ("C:B1I", "C:B2I"), "J": ("J:L1", "J:L2")}
+
+
+def signal_system(name: str) -> str:
+    """System letter (G, E, C, J) of a signal name of SIGNALS."""
+    return SIGNALS[name]["system"]
+
+
+def effective_signals(settings: "AttitudeSettings") -> list[str]:
+    """The filter's signals: `settings.signals`, or with `settings.systems` the preset pair of every system in
+    that order (SYSTEM_SIGNALS). Raises ValueError for an unknown signal or system, or a repeated signal."""
+    if settings.systems:
+        unknown = [x for x in settings.systems if x not in SYSTEM_SIGNALS]
+        if unknown:
+            raise ValueError(f"systems {unknown} not supported (G, E, C, J)")
+        sig = [name for x in dict.fromkeys(settings.systems) for name in SYSTEM_SIGNALS[x]]
+    else:
+        sig = list(settings.signals)
+    unknown = [x for x in sig if x not in SIGNALS]
+    if unknown:
+        raise ValueError(f"signals {unknown} unknown (known: {', '.join(SIGNALS)})")
+    canon = [SIGNAL_ALIASES.get(x, x) for x in sig]
+    if len(set(canon)) != len(canon):
+        raise ValueError(f"signals {sig} repeat a signal")
+    return sig
+
+
+def cn0_mask_of(settings: "AttitudeSettings", name: str) -> float:
+    """C/N0 mask (dB-Hz) of signal `name`: settings.cn0_mask_dbhz by that name or by its alias ("L1" also masks
+    "G:L1" and the reverse), else the signal's default in SIGNALS; -inf for a name SIGNALS does not know."""
+    masks = settings.cn0_mask_dbhz
+    if name in masks:
+        return float(masks[name])
+    canon = SIGNAL_ALIASES.get(name, name)
+    for key, val in masks.items():
+        if SIGNAL_ALIASES.get(key, key) == canon:
+            return float(val)
+    return float(SIGNALS[name]["cn0_mask_dbhz"]) if name in SIGNALS else -float("inf")
 
 
 @dataclass
@@ -18,7 +89,9 @@ class AttitudeSettings:
     """Every tuning constant of the filter. Defaults: seed 000 Tables 1-2 unless noted."""
 
     mode: str = "dynamic"                       # dynamic (common angular velocity) | kinematic (baseline noise)
-    signals: list = field(default_factory=lambda: ["L1", "L2"])
+    signals: list = field(default_factory=lambda: ["L1", "L2"])   # names of SIGNALS (GPS L1 + L2 by default)
+    systems: list | None = None                 # preset replacing `signals`: e.g. ["G", "E", "C", "J"] = the first
+                                                # two frequencies of each system (SYSTEM_SIGNALS, RTKLIB "L1+L2")
     # --- Table 1: measurement noise of single differences ---
     sigma_code_m: float = 0.30
     sigma_phase_m: float = 0.003
@@ -48,12 +121,13 @@ class AttitudeSettings:
     sigma0_ambiguity_cyc: float = 500.0
     sigma_baseline_kinematic_m: float = 1.0     # kinematic mode: per baseline component per tau (seed 000 sec. 4.1)
     tau_baseline_s: float = 1.0
-    sigma0_code_bias_m: float = 10.0            # inter-signal code bias of a baseline (2nd signal vs 1st), constant
+    sigma0_code_bias_m: float = 10.0            # inter-signal code bias of a baseline (each signal after the first
+                                                # vs the first: inter-frequency and inter-system), constant
     rk4_step_s: float = 1.0
     # --- Table 2: editing limits ---
     elevation_mask_local_deg: float = -90.0
     elevation_mask_antenna_deg: float = 0.0     # applied only once the baseline is fixed
-    cn0_mask_dbhz: dict = field(default_factory=lambda: {"L1": 35.0, "L2": 30.0})
+    cn0_mask_dbhz: dict = field(default_factory=lambda: {"L1": 35.0, "L2": 30.0})   # others: SIGNALS default
     td_code_m: float = 0.50
     td_phase_cyc: float = 0.25
     max_length_error_m: float = 0.03            # ambiguity acceptance: |length - known| (Table 2)

@@ -178,12 +178,12 @@ def _select_as_receiver(eph, sat: str, t: GpsTime, max_age_s: float | None, allo
     Implements: IS-GPS-200N sec. 20.3.4.4-20.3.4.5 (fit interval, toe at its centre), and the receiver's rule of
     using the most recently received data set (sec. 20.3.4.1: a new IODE supersedes the old one at cut-over).
     """
-    from worker.gnss.io.rinex_nav import MAX_AGE_S, select_ephemeris
+    from worker.gnss.io.rinex_nav import MAX_AGE_S, healthy_records, select_ephemeris
 
     nearest = np.atleast_1d(select_ephemeris(eph, sat, t, max_age_s=max_age_s, allow_unhealthy=allow_unhealthy))
     cand = np.flatnonzero(np.asarray(eph.sat) == sat)
     if not allow_unhealthy:
-        cand = cand[np.asarray(eph.health)[cand] == 0]
+        cand = cand[healthy_records(eph, cand)]
     if cand.size == 0:
         return nearest
     sub = eph.take(cand)

@@ -89,7 +89,7 @@ def emission_time_and_position(sat_state, sats, r_rx_ecef_m, t_rx: GpsTime, *,
     converged = np.zeros(n, bool)
     out = None
     for _ in range(max_iter):
-        t_tx = t_rx - tau
+        t_tx = t_rx - np.where(np.isfinite(tau), tau, 0.075)     # a satellite without a state stays NaN below
         out = sat_state(sats, t_tx)
         r_rot = sagnac_rotate(out[0], tau, omega_rad_s)
         tau_new = np.linalg.norm(r_rot - r_rx, axis=-1) / C_M_S
@@ -98,7 +98,7 @@ def emission_time_and_position(sat_state, sats, r_rx_ecef_m, t_rx: GpsTime, *,
         if np.all(converged | ~np.isfinite(tau)):
             break
     # final evaluation at the converged tau so position and time agree exactly
-    t_tx = t_rx - tau
+    t_tx = t_rx - np.where(np.isfinite(tau), tau, 0.075)
     out = sat_state(sats, t_tx)
     r_rot = sagnac_rotate(out[0], tau, omega_rad_s)
     v = out[1] if len(out) > 1 and out[1] is not None else np.full((n, 3), np.nan)

@@ -15,8 +15,17 @@ class AttitudeConfig(BaseModel):
     mode: Literal["dynamic", "kinematic"] = Field(
         "dynamic", description="dynamic: common angular velocity, no baseline process noise; kinematic: baseline "
                                "process noise (sigma_baseline_kinematic_m per tau), no angular velocity.")
-    signals: list[Literal["L1", "L2"]] = Field(["L1", "L2"], min_length=1, max_length=2,
-                                               description="GPS L1 C/A and/or L2 P(Y) (L2C if P(Y) is absent).")
+    signals: list[str] = Field(["L1", "L2"], min_length=1, max_length=16,
+                               description="Signals, each one system on one frequency: 'L1' (GPS L1 C/A), 'L2' (GPS "
+                                           "L2 P(Y), L2C if P(Y) is absent), or system-qualified 'G:L5', 'E:E1', "
+                                           "'E:E5a', 'E:E5b', 'C:B1I', 'C:B2I', 'C:B3I', 'J:L1', 'J:L2', 'J:L5'.")
+    systems: list[Literal["G", "E", "C", "J"]] | None = Field(
+        None, min_length=1, max_length=4,
+        description="Preset replacing `signals`: the first two frequencies of each system (GPS/QZSS L1+L2, Galileo "
+                    "E1+E5b, BeiDou B1I+B2I), e.g. ['G', 'E', 'C', 'J']. GLONASS is not supported.")
+    cn0_mask_dbhz: dict[str, float] = Field(
+        {}, description="C/N0 masks (dB-Hz) of other signals by name (defaults: 35 on the first frequency of a "
+                        "system, 30 on the others).")
     sigma_code_m: float = Field(0.30, gt=0, le=100, description="Single-difference code noise (m).")
     sigma_phase_m: float = Field(0.003, gt=0, le=1, description="Single-difference phase noise (m).")
     weighting: Literal["none", "cn0", "elevation"] = Field("none", description="Observation weighting.")
@@ -59,15 +68,37 @@ class AttitudeConfig(BaseModel):
     @field_validator("signals")
     @classmethod
     def _unique(cls, v):
-        if len(set(v)) != len(v):
+        from worker.attitude.settings import SIGNAL_ALIASES, SIGNALS
+
+        unknown = [x for x in v if x not in SIGNALS]
+        if unknown:
+            raise ValueError(f"unknown signals {unknown}; known: {', '.join(SIGNALS)}")
+        if len({SIGNAL_ALIASES.get(x, x) for x in v}) != len(v):
             raise ValueError("signals must not repeat")
+        return v
+
+    @field_validator("systems")
+    @classmethod
+    def _unique_systems(cls, v):
+        if v is not None and len(set(v)) != len(v):
+            raise ValueError("systems must not repeat")
+        return v
+
+    @field_validator("cn0_mask_dbhz")
+    @classmethod
+    def _known_masks(cls, v):
+        from worker.attitude.settings import SIGNALS
+
+        bad = [k for k, x in v.items() if k not in SIGNALS or not 0 <= x <= 70]
+        if bad:
+            raise ValueError(f"cn0_mask_dbhz: unknown signal or mask outside 0-70 dB-Hz: {bad}")
         return v
 
     def to_settings(self):
         from worker.attitude.settings import AttitudeSettings
 
         d = self.model_dump()
-        cn0 = {"L1": d.pop("cn0_mask_l1_dbhz"), "L2": d.pop("cn0_mask_l2_dbhz")}
+        cn0 = {**d.pop("cn0_mask_dbhz"), "L1": d.pop("cn0_mask_l1_dbhz"), "L2": d.pop("cn0_mask_l2_dbhz")}
         cal = d.pop("calibrated_baselines") or {}
         d.pop("pcv_map_ids")          # resolved from the store by the pipeline (maps_for_settings)
         cal_map = {}

@@ -69,4 +69,4 @@ JOB_TYPE = JobType(
     min_sets=1, max_sets=None,
     produces=("baselines.json", "baselines.csv", "pcv_<first>_<second>_<frequency>.json",
               "pcv_maps.png", "pcv_counts.png", "residual_statistics.json", "held_out_attitude.json",
-              "calibration_summary.json", "report.html"))
+              "calibration_summary.json", "tasks.csv", "report.html"))

@@ -9,11 +9,17 @@ from __future__ import annotations
 
 import json
 import time
+from datetime import datetime, timezone
 
 import numpy as np
 
 from worker.context import JobContext
 from worker.errors import JobInputError
+
+
+STAGE_PASS1 = "pass 1 (baselines, PCV statistics)"
+STAGE_PASS2 = "pass 2 (residuals, final maps, held-out set)"
+HELD_OUT_COST = 3.0  # the held-out task's cost in set extractions (pass 2)
 
 
 def _options(cfg: dict):
@@ -71,22 +77,32 @@ def _load(payload: dict, sets):
 
 
 def statistics_task(payload: dict, sets):
-    """Pass 1 of one set: SetStats (worker.calibration.campaign) or {"input_error": ...}."""
-    from worker.calibration.campaign import set_statistics
+    """Pass 1 of one set: SetStats (worker.calibration.campaign) or {"input_error": ...}.
 
-    t0 = time.perf_counter()
+    Also the set's own campaign check (reference attitude against the observation span, worker.calibration.checks)
+    that needs its reference file read: done here, in parallel, instead of in the parent before the fan-out."""
+    from worker.calibration.campaign import set_statistics
+    from worker.calibration.checks import CampaignError, check_campaign
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    s = _find(sets, payload["set_id"])
+    try:
+        check_campaign(_set_infos([s], read_reference=True),
+                       max_reference_gap_s=float(payload["config"]["max_reference_gap_s"]))
+    except CampaignError as exc:
+        return {"input_error": {"title": exc.title, "detail": exc.detail, "file": exc.file}}
     data, options, err = _load(payload, sets)
     if err:
         return err
     stats = set_statistics(data, options)
-    return {"stats": stats, "seconds": time.perf_counter() - t0}
+    return {"stats": stats, "seconds": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
 
 
 def final_task(payload: dict, sets):
     """Pass 2 of one set: SetFinal or {"input_error": ...}."""
     from worker.calibration.campaign import set_final
 
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     data, options, err = _load(payload, sets)
     if err:
         return err
@@ -96,7 +112,7 @@ def final_task(payload: dict, sets):
         bl, sig = key.rsplit(" ", 1)
         maps[tuple(bl.split(">")) + (sig,)] = np.array([np.nan if v is None else v for v in values], float)
     final = set_final(data, calibrated, maps, options, held_out=payload["held_out"])
-    return {"final": final, "seconds": time.perf_counter() - t0}
+    return {"final": final, "seconds": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
 
 
 def _raise_input_errors(results: list, payloads: list) -> None:
@@ -106,25 +122,57 @@ def _raise_input_errors(results: list, payloads: list) -> None:
             raise JobInputError(e["title"], e["detail"], file=e.get("file"), field="observation_set_ids")
 
 
-def _set_infos(sets, max_gap_s: float):
+def _obs_span(s):
+    """(first, last) GpsTime of a set's observations from the upload summaries (no RINEX parsing)."""
+    from worker.gnss.time import GpsTime
+
+    obs = s.of_kind("rinex_obs")
+    firsts = [GpsTime.from_iso(f.summary["time_first"]) for f in obs if f.summary.get("time_first")]
+    lasts = [GpsTime.from_iso(f.summary["time_last"]) for f in obs if f.summary.get("time_last")]
+    first = min(firsts, key=lambda t: (int(t.s), float(t.frac))) if firsts else None
+    last = max(lasts, key=lambda t: (int(t.s), float(t.frac))) if lasts else None
+    return first, last
+
+
+def _set_infos(sets, read_reference):
+    """SetInfo of each set (worker.calibration.checks); the reference file is parsed only when read_reference is
+    True or a collection holding the set's id (the calibration sets' references are checked in their own pass-1
+    task; the parent checks what the summaries and platform.json give, and the held-out set's reference)."""
     from worker.calibration.checks import SetInfo
     from worker.gnss.io.reference_attitude import read_reference_attitude
-    from worker.gnss.time import GpsTime
 
     infos = []
     for s in sets:
-        plat = s.platform()
-        obs = s.of_kind("rinex_obs")
-        firsts = [GpsTime.from_iso(f.summary["time_first"]) for f in obs if f.summary.get("time_first")]
-        lasts = [GpsTime.from_iso(f.summary["time_last"]) for f in obs if f.summary.get("time_last")]
-        first = min(firsts, key=lambda t: (int(t.s), float(t.frac))) if firsts else None
-        last = max(lasts, key=lambda t: (int(t.s), float(t.frac))) if lasts else None
+        first, last = _obs_span(s)
         refs = s.of_kind("reference_attitude")
         ref_times = None
-        if refs:
+        if refs and (read_reference is True or (read_reference and s.id in read_reference)):
             ref_times = read_reference_attitude(refs[0].path.read_bytes(), refs[0].name).time
-        infos.append(SetInfo(s.id, _label(s), plat, first, last, refs[0].name if refs else None, ref_times))
+        infos.append(SetInfo(s.id, _label(s), s.platform(), first, last, refs[0].name if refs else None, ref_times))
     return infos
+
+
+def _cost(s) -> float:
+    """Expected cost of a set's task: its observation span (s); 0 when unknown."""
+    first, last = _obs_span(s)
+    return float(last - first) if first is not None and last is not None else 0.0
+
+
+def _longest_first(payloads: list[dict], costs: list[float]) -> list[int]:
+    """Task order for a fan-out: longest expected first (LPT scheduling: the last tasks to start are the short
+    ones, so workers finish together); ties keep the set order. Results are put back in set order before any
+    sum, so the order never changes the maps."""
+    return sorted(range(len(payloads)), key=lambda i: (-costs[i], i))
+
+
+def _map_in_order(ctx: JobContext, function: str, payloads: list[dict], costs: list[float], **kw) -> list:
+    """ctx.map over payloads submitted longest first; results returned in payload order."""
+    order = _longest_first(payloads, costs)
+    results = ctx.map(function, [payloads[i] for i in order], **kw)
+    out = [None] * len(payloads)
+    for i, r in zip(order, results):
+        out[i] = r
+    return out
 
 
 def _map_doc(platform: str, key, grid, values, count, sigma) -> dict:
@@ -143,8 +191,12 @@ def run(ctx: JobContext, config) -> None:
 
     cfg = config.model_dump()
     options = _options(cfg)
+    t_start = time.perf_counter()
+    started_at = datetime.now(timezone.utc)
     ctx.progress(0.0, "checking the campaign")
-    infos = _set_infos(ctx.sets, options.extract.max_reference_gap_s)
+    named = {s.id for s in ctx.sets if config.held_out_set in (s.id, s.name)} if config.held_out_set else set()
+    # the calibration sets' reference coverage is checked in their pass-1 tasks, in parallel
+    infos = _set_infos(ctx.sets, read_reference=named)
     try:
         check_campaign(infos, max_reference_gap_s=options.extract.max_reference_gap_s, held_out=config.held_out_set)
     except CampaignError as exc:
@@ -158,9 +210,10 @@ def run(ctx: JobContext, config) -> None:
 
     # --- pass 1 ---
     t0 = time.perf_counter()
+    t_checks = t0 - t_start
     p1 = [{"set_id": s.id, "label": _label(s), "config": cfg} for s in cal_sets]
-    r1 = ctx.map("worker.pipelines.calibration:statistics_task", p1, progress_span=(0.02, 0.5),
-                 stage="pass 1 (baselines, PCV statistics)")
+    r1 = _map_in_order(ctx, "worker.pipelines.calibration:statistics_task", p1, [_cost(s) for s in cal_sets],
+                       progress_span=(0.02, 0.5), stage=STAGE_PASS1)
     _raise_input_errors(r1, p1)
     t_pass1 = time.perf_counter() - t0
     stats = [r["stats"] for r in r1]
@@ -185,8 +238,10 @@ def run(ctx: JobContext, config) -> None:
     cal_payload = {f"{a}>{b}": [float(x) for x in v] for (a, b), v in calibrated.items()}
     p2 = [{"set_id": s.id, "label": _label(s), "config": cfg, "calibrated": cal_payload, "maps": maps_payload,
            "held_out": s.id in held_ids} for s in cal_sets + held[:1]]
-    r2 = ctx.map("worker.pipelines.calibration:final_task", p2, progress_span=(0.52, 0.9),
-                 stage="pass 2 (residuals, final maps, held-out set)")
+    # the held-out set costs ~3 set extractions (two more for the attitude comparison): first in the queue
+    costs2 = [_cost(s) * (HELD_OUT_COST if s.id in held_ids else 1.0) for s in cal_sets + held[:1]]
+    r2 = _map_in_order(ctx, "worker.pipelines.calibration:final_task", p2, costs2, progress_span=(0.52, 0.9),
+                       stage=STAGE_PASS2)
     _raise_input_errors(r2, p2)
     t_pass2 = time.perf_counter() - t0
     finals = [r["final"] for r in r2]
@@ -198,6 +253,7 @@ def run(ctx: JobContext, config) -> None:
     final_maps = finish_maps(map_results, finals, options)
 
     # --- products ---
+    t0 = time.perf_counter()
     ctx.progress(0.92, "writing products")
     ctx.write_product("baselines.json", baselines_document(platform.name, rows))
     ctx.write_product("baselines.csv", baselines_table_csv(rows))
@@ -230,13 +286,16 @@ def run(ctx: JobContext, config) -> None:
     resid = combine_residual_stats(finals)
     if held_ids:
         resid["held_out"] = combine_residual_stats(finals, include_held_out=True)
+    t_plots = time.perf_counter() - t0
     ctx.write_product("residual_statistics.json", resid)
     held_att = [f.attitude for f in finals if f.held_out]
     if held_att:
         ctx.write_product("held_out_attitude.json", held_att[0])
     per_set = [{"set": s.label, "epochs": s.n_epochs, "reference_coverage": round(s.coverage, 4),
                 "epochs_used": {f"{a}>{b}": n for (a, b), n in s.n_epochs_used.items()},
-                "pass1_seconds": round(r["seconds"], 3)} for s, r in zip(stats, r1)]
+                "pass1_seconds": round(r["seconds"], 3), "pass1_cpu_s": round(r.get("cpu_s", np.nan), 3),
+                "pass2_seconds": round(q["seconds"], 3), "pass2_cpu_s": round(q.get("cpu_s", np.nan), 3)}
+               for s, r, q in zip(stats, r1, r2)]
     summary = {
         "platform": platform.name, "sets": len(cal_sets), "held_out_set": [_label(s) for s in held[:1]],
         "extractor": "reference-aided kinematic (worker.calibration.extract): epoch-wise integer fixing with the "
@@ -246,9 +305,17 @@ def run(ctx: JobContext, config) -> None:
                  "min_count": config.min_count},
         "baselines": baselines_document(platform.name, rows)["baselines"],
         "maps": maps_summary,
-        "timing_s": {"pass1": round(t_pass1, 3), "maps": round(t_maps, 3), "pass2": round(t_pass2, 3)},
+        "timing_s": {"checks": round(t_checks, 3), "pass1": round(t_pass1, 3), "maps": round(t_maps, 3),
+                     "pass2": round(t_pass2, 3), "maps_products_and_plots": round(t_plots, 3),
+                     "total": round(time.perf_counter() - t_start, 3),
+                     "set_cpu_s_median": {"pass1": round(float(np.median([r.get("cpu_s", np.nan) for r in r1])), 3),
+                                          "pass2": round(float(np.median([r.get("cpu_s", np.nan)
+                                                                          for r in r2[:len(cal_sets)]])), 3)},
+                     "held_out_cpu_s": [round(r.get("cpu_s", np.nan), 3) for r in r2[len(cal_sets):]]},
         "per_set": per_set,
+        "workers": workers_summary(ctx.task_records),
     }
+    ctx.write_product("tasks.csv", tasks_csv(ctx.task_records, started_at))
     ctx.write_product("calibration_summary.json", summary)
     from worker.report import html_report
 
@@ -260,4 +327,29 @@ def run(ctx: JobContext, config) -> None:
     ctx.progress(1.0, "done")
 
 
-__all__ = ["run", "statistics_task", "final_task"]
+def tasks_csv(records: list[dict], job_start: datetime) -> str:
+    """The fan-out log: one row per task (pass, task index in queue order, set, worker, attempts, start and end in
+    seconds since the pipeline started, duration), so which worker ran which set when is visible."""
+    def rel(t):
+        return "" if t is None else f"{(t - job_start).total_seconds():.3f}"
+
+    lines = ["pass,task,set,worker,attempts,start_s,end_s,seconds"]
+    for r in records:
+        stage = 1 if r["stage"] == STAGE_PASS1 else 2 if r["stage"] == STAGE_PASS2 else r["stage"]
+        label = str(r["label"]).replace('"', "'")
+        lines.append(f'{stage},{r["index"]},"{label}",{r["worker"] or ""},{r["attempts"]},{rel(r["started_at"])},'
+                     f'{rel(r["finished_at"])},{"" if r["seconds"] is None else format(r["seconds"], ".3f")}')
+    return "\n".join(lines) + "\n"
+
+
+def workers_summary(records: list[dict]) -> dict:
+    """Per worker: tasks run and busy seconds (from the task records)."""
+    out: dict = {}
+    for r in records:
+        w = out.setdefault(r["worker"] or "?", {"tasks": 0, "busy_s": 0.0})
+        w["tasks"] += 1
+        w["busy_s"] = round(w["busy_s"] + (r["seconds"] or 0.0), 3)
+    return out
+
+
+__all__ = ["run", "statistics_task", "final_task", "tasks_csv", "workers_summary"]

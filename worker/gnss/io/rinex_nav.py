@@ -757,12 +757,22 @@ def _build_glonass(ctx: _Ctx, rows, header_leap: int | None) -> GlonassEphemeris
 
 # --- selection -------------------------------------------------------------------------------------------
 
+def healthy_records(kepler: KeplerEphemeris, idx: np.ndarray) -> np.ndarray:
+    """(n,) bool: records idx are healthy for an L1/L2 user: health == 0; QZSS ignores the least significant bit
+    of its 6-bit LNAV health word (the L6/LEX signal, not L1 C/A or L2C: IS-QZSS-PNT-005 sec. 4.1.2.3; RTKLIB
+    2.4.3 satexclude masks it the same way, svh & 0xFE)."""
+    h = np.asarray(kepler.health)[idx]
+    if getattr(kepler, "system", "G") == "J":
+        return (h & ~1) == 0
+    return h == 0
+
+
 def select_ephemeris(kepler: KeplerEphemeris, sat: str, t: GpsTime, *, max_age_s: float | None = None,
                      allow_unhealthy: bool = False):
     """Index of the record of `sat` to use at GPS time(s) `t`, or -1 where none qualifies (int or (n,) int64).
 
     Rules, deterministic:
-    1. only records of `sat`; only healthy ones (health == 0) unless `allow_unhealthy`;
+    1. only records of `sat`; only healthy ones (`healthy_records`) unless `allow_unhealthy`;
     2. only records with |t - toe| <= max age: `max_age_s` if given, else half the curve-fit interval for
        GPS/QZSS (IS-GPS-200 sec. 20.3.4.4: toe sits mid-fit; at least 2 h) and `MAX_AGE_S` for E/C;
     3. among the records already transmitted at `t`, the latest transmission (the upload a receiver would
@@ -779,7 +789,7 @@ def select_ephemeris(kepler: KeplerEphemeris, sat: str, t: GpsTime, *, max_age_s
     t1 = GpsTime(np.atleast_1d(t.s), np.atleast_1d(t.frac))
     out = np.full(len(t1), -1, dtype=np.int64)
     if not allow_unhealthy:
-        cand = cand[kepler.health[cand] == 0]
+        cand = cand[healthy_records(kepler, cand)]
     if cand.size:
         sub = kepler.take(cand)
         toe = sub.toe_gpst()
