@@ -2,7 +2,7 @@
 truth, the held-out attitude comparison, campaign wall time in-process and through the service on 1..N workers,
 per-set cost, and identical maps across runs.
 
-    .venv/bin/python -m bench.bench_calibration [--sets 30] [--workers 1,2,3] [--no-service] [--ekf]
+    .venv/bin/python -m bench.bench_calibration [--sets 30] [--workers 1,2,3] [--no-service] [--ekf] [--twin]
     .venv/bin/python -m bench.bench_calibration --scale [--workers 1,2,3] [--repeat 3] [--backend pg] [--write]
 
 `--scale` runs only the service timing (campaign wall time per worker count, median of --repeat jobs on one
@@ -11,8 +11,11 @@ its block of the "Calibration" section of docs/BENCHMARKS.md.
 
 Inputs: `--sets` calibration passes + 1 held-out pass of the `calibration` preset, durations cycling over
 45..100 min, 35 mm p-p PCV per antenna (~50 mm differential), Table 3 offsets, reference attitude 2 arcsec,
-seed 2024 (each pass simulated as its own run, see tests/calibration/_campaign.py). A noiseless twin campaign
-(no noise, no multipath, no reference noise; same geometry, PCO, PCV) gives the estimator's noiseless limit.
+seed 2024 (each pass simulated as its own run, see tests/calibration/_campaign.py). Truth: the injected antenna
+offsets, PCO and PCV expressed in the calibration's baseline/map split (tests/calibration/_campaign.py
+`truth_split`, worker/calibration/decomposition.py); `--twin` also calibrates a noiseless twin campaign (no noise,
+no multipath, no reference noise). `--ekf`: the attitude filter on the held-out set with a priori baselines,
+calibrated baselines, and calibrated baselines + the PCV maps.
 Service runs use SQLite + the SQLite queue unless GNSSATT_TEST_DATABASE_URL / GNSSATT_TEST_QUEUE_URL are set.
 """
 from __future__ import annotations
@@ -33,8 +36,8 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from tests.calibration._campaign import (compare_maps_mm, input_set, simulate_campaign, truth_map_mm,  # noqa: E402
-                                         truth_of)
+from tests.calibration._campaign import (compare_maps_mm, input_set, simulate_campaign, truth_of,  # noqa: E402
+                                         truth_split)
 
 SEED = 2024
 
@@ -310,22 +313,32 @@ def write_scale_block(path: Path, text: str) -> None:
     path.write_text(doc)
 
 
-def ekf_held_out(d: Path, calibrated: dict) -> dict:
-    """The attitude job's filter (issue 6, dynamic mode) on the held-out set with a priori vs calibrated baselines
-    (the filter does not apply PCV maps yet)."""
+def ekf_held_out(d: Path, calibrated: dict, maps: dict | None = None) -> dict:
+    """The attitude job's filter (issue 6, dynamic mode) on the held-out set with a priori baselines, calibrated
+    baselines, and calibrated baselines + PCV maps ((first, second, freq) -> map JSON) applied by the filter."""
     from worker.attitude.process import load_inputs, process
     from worker.attitude.settings import AttitudeSettings
 
     s = input_set(d)
     inp = load_inputs([(f.name, f.kind, f.path) for f in s.files])
     out = {}
-    for tag, cal in (("a_priori", {}), ("calibrated_baselines", calibrated)):
+    runs = [("a_priori", {}, {}), ("calibrated_baselines", calibrated, {})]
+    if maps:
+        runs.append(("calibrated_baselines_and_maps", calibrated, maps))
+    for tag, cal, pcv in runs:
         t0 = time.perf_counter()
-        sol = process(inp, AttitudeSettings(mode="dynamic", calibrated_baselines=cal))
+        sol = process(inp, AttitudeSettings(mode="dynamic", calibrated_baselines=cal, pcv_maps=pcv))
         ref = sol.summary.get("reference", {}).get("fixed", {})
         out[tag] = {k: {"bias_deg": round(v["bias_deg"], 4), "sigma_deg": round(v["sigma_deg"], 4)}
                     for k, v in ref.items()}
         out[tag]["seconds"] = round(time.perf_counter() - t0, 1)
+    a0 = out["a_priori"]
+    for tag in [t for t, _, _ in runs[1:]]:
+        out[tag]["cut_percent"] = {k: {"bias": round(100 * (1 - abs(out[tag][k]["bias_deg"]) / abs(a0[k]["bias_deg"])), 1)
+                                       if a0[k]["bias_deg"] else None,
+                                       "sigma": round(100 * (1 - out[tag][k]["sigma_deg"] / a0[k]["sigma_deg"]), 1)
+                                       if a0[k]["sigma_deg"] else None}
+                                   for k in a0 if isinstance(a0[k], dict) and k in out[tag]}
     return out
 
 
@@ -335,6 +348,7 @@ def main() -> None:
     ap.add_argument("--workers", default="1,2,3")
     ap.add_argument("--no-service", action="store_true")
     ap.add_argument("--ekf", action="store_true")
+    ap.add_argument("--twin", action="store_true", help="also calibrate the noiseless twin campaign")
     ap.add_argument("--work", default="/tmp/gnssatt_bench_calibration")
     ap.add_argument("--scale", action="store_true",
                     help="only the service timing: --repeat jobs per worker count on one service")
@@ -358,56 +372,54 @@ def main() -> None:
             write_scale_block(REPO / "docs" / "BENCHMARKS.md", text)
         return
     twin = simulate(work / "twin", n, {"noise": False, "multipath": False, "cn0_jitter_db": 0.0,
-                                       "reference_sigma_arcsec": 0.0})
+                                       "reference_sigma_arcsec": 0.0}) if args.twin else None
     t_sim = time.perf_counter() - t0
     held = dirs[-1]
     cfg = {"held_out_set": "cal" + f"{n - 1:03d}"}
     prod, wall, ctx = run_inprocess(dirs, cfg, "cal", work / "jobs")
     cfg_twin = {"held_out_set": "twn" + f"{n - 1:03d}"}
-    prod_twin, wall_twin, _ = run_inprocess(twin, cfg_twin, "twn", work / "jobs")
+    prod_twin = run_inprocess(twin, cfg_twin, "twn", work / "jobs")[0] if twin else None
     prod_again, wall_again, _ = run_inprocess(dirs, cfg, "cal", work / "jobs_again")
     identical = all(prod[k] == prod_again[k] for k in prod if k.startswith("pcv_") and k.endswith(".json"))
 
     truth = truth_of(dirs[0])
     doc = json.loads(prod["baselines.json"])
-    doc_twin = json.loads(prod_twin["baselines.json"])
-    baselines = []
-    for b, bt in zip(doc["baselines"], doc_twin["baselines"]):
+    doc_twin = json.loads(prod_twin["baselines.json"]) if prod_twin else None
+    baselines, maps = [], []
+    for i, b in enumerate(doc["baselines"]):
         key = (b["from"], b["to"])
-        cal, sig = np.asarray(b["calibrated_m"]), np.asarray(b["sigma_m"])
-        phys = truth["baselines"][key]["mean_m"]
-        limit = np.asarray(bt["calibrated_m"])
-        baselines.append({
-            "baseline": f"{key[0]}>{key[1]}",
-            "a_priori_minus_physical_mm": np.round((np.asarray(b["a_priori_m"]) - phys) * 1e3, 2).tolist(),
-            "calibrated_minus_physical_mm": np.round((cal - phys) * 1e3, 2).tolist(),
-            "noiseless_limit_minus_physical_mm": np.round((limit - phys) * 1e3, 2).tolist(),
-            "calibrated_minus_noiseless_limit_mm": np.round((cal - limit) * 1e3, 3).tolist(),
-            "sigma_mm": np.round(sig * 1e3, 3).tolist(),
-            "sigma_formal_mm": np.round(np.asarray(b["sigma_formal_m"]) * 1e3, 4).tolist(),
-            "within_0p5mm_of_limit": bool(np.all(np.abs(cal - limit) <= 0.5e-3)),
-            "within_3sigma_of_limit": bool(np.all(np.abs(cal - limit) <= 3 * sig)),
-            "n_epochs": b["n_epochs"]})
-    maps = []
-    for (first, second) in truth["baselines"]:
-        cal = np.asarray(next(b["calibrated_m"] for b in doc["baselines"] if (b["from"], b["to"]) == (first, second)))
+        est, counts = {}, {}
         for sig in ("L1", "L2"):
-            m = json.loads(prod[f"pcv_{first}_{second}_{sig}.json"])
-            values = np.array([[np.nan if v is None else v for v in row] for row in m["values_mm"]])
-            count = np.asarray(m["count"])
-            az, el = np.meshgrid(m["azimuth_deg"], m["elevation_deg"])
-            want = truth_map_mm(truth, (first, second, sig), cal, az, el)
-            raw_pcv = truth_map_mm(truth, (first, second, sig), truth["baselines"][(first, second)]
-                                   ["per_frequency_m"][sig], az, el)
-            entry = {"map": f"{first}>{second} {sig}", "bins_with_value": int(np.isfinite(values).sum()),
-                     "truth_p2p_mm": round(float(np.nanmax(raw_pcv[np.isfinite(values)])
-                                                 - np.nanmin(raw_pcv[np.isfinite(values)])), 1),
-                     "rms_vs_truth_mm": round(compare_maps_mm(values, want, count), 3)}
+            m = json.loads(prod[f"pcv_{key[0]}_{key[1]}_{sig}.json"])
+            est[sig] = np.array([[np.nan if v is None else v for v in row] for row in m["values_mm"]])
+            counts[sig] = np.where(np.isfinite(est[sig]), np.asarray(m["count"]), 0)
+        # the injected truth in the calibration's baseline/map split (worker/calibration/decomposition.py)
+        bt, mt = truth_split(truth, key, m["azimuth_deg"], m["elevation_deg"], counts)
+        cal, sig_m = np.asarray(b["calibrated_m"]), np.asarray(b["sigma_m"])
+        phys = truth["baselines"][key]["mean_m"]
+        entry = {
+            "baseline": f"{key[0]}>{key[1]}",
+            "a_priori_minus_truth_mm": np.round((np.asarray(b["a_priori_m"]) - bt) * 1e3, 2).tolist(),
+            "calibrated_minus_truth_mm": np.round((cal - bt) * 1e3, 3).tolist(),
+            "truth_minus_physical_mean_mm": np.round((bt - phys) * 1e3, 2).tolist(),
+            "sigma_mm": np.round(sig_m * 1e3, 3).tolist(),
+            "sigma_formal_mm": np.round(np.asarray(b["sigma_formal_m"]) * 1e3, 4).tolist(),
+            "within_0p5mm": bool(np.all(np.abs(cal - bt) <= 0.5e-3)),
+            "within_3sigma": bool(np.all(np.abs(cal - bt) <= 3 * sig_m)),
+            "n_epochs": b["n_epochs"]}
+        if doc_twin:
+            entry["calibrated_minus_noiseless_twin_mm"] = np.round(
+                (cal - np.asarray(doc_twin["baselines"][i]["calibrated_m"])) * 1e3, 3).tolist()
+        baselines.append(entry)
+        for sig in ("L1", "L2"):
+            values, count = est[sig], counts[sig]
+            entry = {"map": f"{key[0]}>{key[1]} {sig}", "bins_with_value": int(np.isfinite(values).sum()),
+                     "truth_p2p_mm": round(float(np.nanmax(mt[sig][count > 0]) - np.nanmin(mt[sig][count > 0])), 1),
+                     "rms_vs_truth_mm": round(compare_maps_mm(values, mt[sig], count), 3)}
             for min_n in (100, 300):
                 v = np.where(count >= min_n, values, np.nan)
-                entry[f"rms_vs_truth_count_ge_{min_n}_mm"] = round(compare_maps_mm(v, want, count), 3)
+                entry[f"rms_vs_truth_count_ge_{min_n}_mm"] = round(compare_maps_mm(v, mt[sig], count), 3)
                 entry[f"bins_count_ge_{min_n}"] = int(np.isfinite(v).sum())
-            entry["rms_vs_raw_injected_pcv_mm"] = round(compare_maps_mm(values, raw_pcv, count), 3)
             maps.append(entry)
     held_att = json.loads(prod["held_out_attitude.json"])
     summary = json.loads(prod["calibration_summary.json"])
@@ -430,7 +442,13 @@ def main() -> None:
     }
     if args.ekf:
         cal = {(b["from"], b["to"]): np.asarray(b["calibrated_m"]) for b in doc["baselines"]}
-        result["ekf_held_out"] = ekf_held_out(held, cal)
+        pcv = {}
+        for (first, second) in cal:
+            for sig in ("L1", "L2"):
+                name = f"pcv_{first}_{second}_{sig}.json"
+                if name in prod:
+                    pcv[(first, second, sig)] = json.loads(prod[name])
+        result["ekf_held_out"] = ekf_held_out(held, cal, pcv)
     if not args.no_service:
         runs = []
         for w in [int(x) for x in args.workers.split(",") if x]:

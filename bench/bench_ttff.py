@@ -5,10 +5,10 @@ on one and two workers.
     .venv/bin/python -m bench.bench_ttff study   --count 200 --seed 1 --procs 2   # -> /tmp/bench_ttff_study.json
     .venv/bin/python -m bench.bench_ttff cubesat --count 4 --seed 1              # -> /tmp/bench_ttff_cubesat.json
     .venv/bin/python -m bench.bench_ttff job     --count 200 --workers 1 2        # -> /tmp/bench_ttff_job.json
-    .venv/bin/python -m bench.bench_ttff report  [--write]                        # tables; --write: BENCHMARKS.md
+    .venv/bin/python -m bench.bench_ttff report  [--rtk A.json B.json] [--write]  # tables; --write: BENCHMARKS.md
 
 Starts (worker.ttff.starts): yaw +-180, pitch +-70, roll +-40 deg from Earth pointing, slewing back at a peak rate
-uniform in 0.1-0.5 deg/s, CASSIOPE-like antennas, simulator preset `ttff` with REALISTIC_OVERRIDES (docs/ttff.md
+uniform in 0.1-0.5 deg/s, CASSIOPE-like antennas, simulator preset `ttff` as it is (its realism: docs/ttff.md
 "Realism"), 120 s per start, seed named on the command line. Same seed -> same files (RTKLIB's bench re-simulates
 them: bench/bench_ttff_rtklib.py).
 """
@@ -123,6 +123,7 @@ def cmd_job(args) -> None:
             cl = svc.client(key)
             cfg = {"simulate": {"count": args.count, "seed": args.seed}, "duration_s": args.duration,
                    "single_epoch_step_s": args.step}
+            load0 = list(os.getloadavg())
             t0 = time.monotonic()
             r = cl.post("/v1/jobs", json={"type": "ttff", "observation_set_ids": [], "config": cfg})
             r.raise_for_status()
@@ -135,7 +136,10 @@ def cmd_job(args) -> None:
             wall = time.monotonic() - t0
             summ = cl.get(f"/v1/jobs/{job_id}/products/summary.json").json() if j["state"] == "succeeded" else None
             out[str(n)] = {"state": j["state"], "wall_s": round(wall, 1), "error": j.get("error"),
-                           "task_seconds_total": summ and summ.get("task_seconds_total")}
+                           "task_seconds_total": summ and summ.get("task_seconds_total"),
+                           "task_cpu_seconds_total": summ and summ.get("task_cpu_seconds_total"),
+                           "tasks_per_worker": summ and summ.get("tasks_per_worker"),
+                           "load_average_before": load0, "load_average_after": list(os.getloadavg())}
             print(n, "worker(s):", out[str(n)], flush=True)
         finally:
             svc.shutdown()
@@ -156,14 +160,21 @@ def report(study: dict, cubesat: dict | None, job: dict | None, rtk: dict | None
     runs = [row for r in study["results"] for row in r["runs"]]
     s = summarize(runs)["methods"]
     n = study["count"]
-    lines = [f"{machine_line()}. {n} simulated starts (`ttff` preset + REALISTIC_OVERRIDES, seed {study['seed']}, "
+    rk, rtk_n = {}, "not run"
+    if rtk:
+        from bench.bench_ttff_rtklib import summarize_rtklib
+        rk, rtk_n = summarize_rtklib(rtk), f"the first {rtk['count']}"
+    lines = [f"{machine_line()}. {n} simulated starts (`ttff` preset as it is, seed {study['seed']}, "
              f"{study['duration_s']:.0f} s each), yaw ±180 / pitch ±70 / roll ±40 deg, slew back 0.1-0.5 deg/s. "
              f"Command: `python -m bench.bench_ttff study --count {n} --seed {study['seed']}` (then `report`).",
              "",
              "Instant fix [%] per baseline (0-2 = GPS-2>GPS-0, 1-2 = GPS-2>GPS-1); mean non-zero TTFF [s] in "
-             "brackets; wrong first fixes; single-epoch success (epoch methods, every 10 s):", "",
+             "brackets; wrong first fixes (gnssatt: fixed integers against the simulator's truth integers; RTKLIB: "
+             "fixed direction > 3 deg from the truth); single-epoch success (epoch methods, every 10 s; RTKLIB "
+             "instantaneous mode, every epoch):", "",
              "| configuration | seed 000 Table 5 (20 real starts) | paper's method: EKF + MLAMBDA + length | "
-             "epoch-wise MLAMBDA + length | epoch-wise MC-LAMBDA (constrained) |", "|---|---|---|---|---|"]
+             "epoch-wise MLAMBDA + length | epoch-wise MC-LAMBDA (constrained) | RTKLIB moving-base "
+             f"({rtk_n} starts) |", "|---|---|---|---|---|---|"]
     for cfg in ("L1+L2", "L1", "L2"):
         t5 = SEED_000_TABLE5[cfg]
         cells = [f"{t5['instant'][0]} / {t5['instant'][1]} ({t5['mean'][0]} / {t5['mean'][1]})"]
@@ -178,12 +189,26 @@ def report(study: dict, cubesat: dict | None, job: dict | None, rtk: dict | None
                    f"wrong {a['wrong_first_fixes'] + b['wrong_first_fixes']}")
             if m == "filter":
                 txt += f", wrong fixed epochs {a['wrong_fixed_epochs'] + b['wrong_fixed_epochs']}"
+                txt += (f" (epochs off > 3 deg with right integers or not: "
+                        f"{a.get('off_3deg_fixed_epochs', 0) + b.get('off_3deg_fixed_epochs', 0)})")
                 txt += f", never {a['never_fixed']} / {b['never_fixed']}"
             else:
                 txt += (f"; single-epoch {_pct(a['single_epoch_success'])} / {_pct(b['single_epoch_success'])} %, "
                         f"wrong {a['single_epoch_wrong'] + b['single_epoch_wrong']} of "
                         f"{a['single_epoch_epochs'] + b['single_epoch_epochs']}")
             cells.append(txt)
+        fh, ins = rk.get(cfg, {}).get("fix-and-hold"), rk.get(cfg, {}).get("instantaneous")
+        if fh and ins:
+            a, b = (fh[bl] for bl in BASELINES)
+            ia, ib = (ins[bl] for bl in BASELINES)
+            cells.append(f"{_pct(a['instant_fix_share'])} / {_pct(b['instant_fix_share'])} "
+                         f"({a['mean_nonzero_ttff_s'] or '–'} / {b['mean_nonzero_ttff_s'] or '–'}); "
+                         f"wrong {a['wrong_first_fixes'] + b['wrong_first_fixes']}, never {a['never_fixed']} / "
+                         f"{b['never_fixed']} (fix-and-hold); instantaneous: single-epoch "
+                         f"{_pct(ia['single_epoch_success'])} / {_pct(ib['single_epoch_success'])} %, wrong fixed "
+                         f"epochs {ia['wrong_fixed_epochs'] + ib['wrong_fixed_epochs']}")
+        else:
+            cells.append("no L2-only setting" if cfg == "L2" else "–")
         lines.append(f"| {cfg} | " + " | ".join(cells) + " |")
     secs = [r.get("task_seconds", 0.0) for r in study["results"]]
     lines += ["", f"Per start (simulation + study of 3 configurations x 3 methods): median "
@@ -204,8 +229,11 @@ def report(study: dict, cubesat: dict | None, job: dict | None, rtk: dict | None
                       f"step {job['step_s']:.0f} s, all 3 configurations and 3 methods), submitted through the API "
                       f"(`python -m bench.bench_ttff job --count {job['count']} --workers 1 2`):", ""]
         for n_w, v in job["workers"].items():
+            la = v.get("load_average_before")
             lines.append(f"- {n_w} worker(s): {v['state']}, {v['wall_s']} s wall (sum of task times "
-                         f"{v['task_seconds_total']} s)")
+                         f"{v['task_seconds_total']} s wall, {v.get('task_cpu_seconds_total')} s CPU; load average "
+                         f"before {la and ' / '.join(f'{x:.1f}' for x in la)}; tasks per worker "
+                         f"{v.get('tasks_per_worker')})")
     return "\n".join(lines) + "\n"
 
 
@@ -213,7 +241,11 @@ def cmd_report(args) -> None:
     study = json.loads(Path(args.study).read_text())
     cub = json.loads(Path(args.cubesat).read_text()) if Path(args.cubesat).exists() else None
     job = json.loads(Path(args.job).read_text()) if Path(args.job).exists() else None
-    text = report(study, cub, job)
+    rtk = None
+    if args.rtk:
+        from bench.bench_ttff_rtklib import merge_parts
+        rtk = merge_parts([Path(p) for p in args.rtk])
+    text = report(study, cub, job, rtk)
     print(text)
     if args.write:
         from bench._report import replace_section
@@ -248,6 +280,7 @@ def main(argv=None) -> None:
     p.add_argument("--study", default="/tmp/bench_ttff_study.json")
     p.add_argument("--cubesat", default="/tmp/bench_ttff_cubesat.json")
     p.add_argument("--job", default="/tmp/bench_ttff_job.json")
+    p.add_argument("--rtk", nargs="*", default=[], help="bench_ttff_rtklib result file(s) of the same starts")
     p.add_argument("--write", action="store_true")
     args = ap.parse_args(argv)
     {"study": cmd_study, "cubesat": cmd_cubesat, "job": cmd_job, "report": cmd_report}[args.cmd](args)

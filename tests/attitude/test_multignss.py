@@ -206,3 +206,60 @@ def test_multi_system_orbits_explain_the_real_pseudoranges_beidou_geo_included()
     res = emission_time_and_position(state, np.array(geo), r_rx, p.time[k])
     assert np.all(np.abs(np.linalg.norm(res.r_sat_ecef_m, axis=1) - 42164e3) < 100e3)
     assert np.all(np.linalg.norm(res.v_sat_ecef_m_s, axis=1) < 200.0)
+
+
+def test_job_with_systems_preset_runs_end_to_end(tmp_path):
+    """The attitude job through its plug-in with `systems: [G, E, C, J]` on the real Nagoya set: the products name
+    the signals and satellites of every system, and the summary lists the signals used."""
+    import hashlib
+    import json
+
+    from tests.attitude.test_real_nagoya import PLATFORM
+    from tests.conftest import real_set
+    from worker.context import InputFile, InputSet, JobContext
+    from worker.jobs.attitude import AttitudeConfig
+    from worker.pipelines.attitude import run
+
+    d = real_set("static_1m_mosaicx5_nagoya_2024")
+    plat = tmp_path / "platform.json"
+    plat.write_text(json.dumps(PLATFORM))
+    files = [("base.obs", "rinex_obs", d / "base.obs"), ("rover.obs", "rinex_obs", d / "rover.obs"),
+             ("base.nav", "rinex_nav", d / "base.nav"), ("platform.json", "platform", plat)]
+
+    def store(path):
+        data = path.read_bytes()
+        return hashlib.sha256(data).hexdigest(), len(data)
+
+    s = InputSet(id="set-1", name="nagoya", files=[InputFile(n, k, p, {}) for n, k, p in files], summary={})
+    ctx = JobContext(job_id="job-1", attempt=1, sets=[s], workdir=tmp_path / "w", _store_blob=store)
+    ctx._flush_progress = lambda f, stage: None
+    run(ctx, AttitudeConfig(mode="kinematic", weighting="elevation", systems=["G", "E", "C", "J"]))
+    out = tmp_path / "w" / "products"
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["signals"] == ["G:L1", "G:L2", "E:E1", "E:E5b", "C:B1I", "C:B2I", "J:L1", "J:L2"]
+    rows = (out / "residuals.csv").read_text().splitlines()[1:]
+    pairs = {(r.split(",")[3][0], r.split(",")[4]) for r in rows}
+    assert {("G", "G:L2"), ("E", "E:E5b"), ("C", "C:B1I"), ("J", "J:L1")} <= pairs
+    assert all(sig.startswith(sysl + ":") for sysl, sig in pairs)
+    assert len((out / "heading.nmea").read_text().splitlines()) == 301
+
+
+def test_a_system_without_ephemerides_is_left_out_with_a_warning():
+    import dataclasses
+
+    from tests.conftest import real_set
+    from worker.attitude.process import AttitudeInputs, InputProblem, _sat_state
+    from worker.gnss.io.rinex_nav import read_rinex_nav
+    from worker.gnss.time import GpsTime
+
+    d = real_set("static_1m_mosaicx5_nagoya_2024")
+    nav = read_rinex_nav(d / "base.nav", name="base.nav")
+    no_j = dataclasses.replace(nav, kepler={k: v for k, v in nav.kepler.items() if k != "J"})
+    inputs = AttitudeInputs(platform=None, obs={}, obs_names={}, nav=no_j)
+    state, _ = _sat_state(inputs, ["G", "J"])
+    assert len(inputs.warnings) == 1 and "J" in inputs.warnings[0]
+    t = GpsTime(np.array([nav.kepler["G"].toe_gpst().s[0]] * 2), np.zeros(2))
+    r, _, _, _ = state(np.array(["G" + nav.kepler["G"].sat[0][1:], "J03"]), t)
+    assert np.isfinite(r[0]).all() and np.isnan(r[1]).all()
+    with pytest.raises(InputProblem):
+        _sat_state(AttitudeInputs(platform=None, obs={}, obs_names={}, nav=no_j), ["J"])

@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.calibration._campaign import compare_maps_mm, input_set, simulate_campaign, truth_map_mm, truth_of
+from tests.calibration._campaign import (compare_maps_mm, input_set, simulate_campaign, truth_map_mm, truth_of,
+                                         truth_split)
 from worker.context import JobContext
 from worker.errors import JobInputError
 from worker.jobs.calibration import CalibrationConfig
@@ -88,6 +89,20 @@ def test_campaign_recovers_maps_and_is_deterministic(tmp_path, pcv_campaign):
             # 10 x 5 deg bins averaging a bilinear 5-deg pattern with up to 50 mm p-p: a few mm of smoothing
             assert rms < 2.5, (first, second, sig, rms)
             assert np.nanmax(values) - np.nanmin(values) > 15.0  # a real pattern, not a flat map
+    # the baselines against the injected truth in the calibration's baseline/map split (no twin needed): without
+    # noise only the within-bin spread of the samples (10 x 5 deg bins) separates them
+    for first, second in cal:
+        counts = {}
+        for sig in ("L1", "L2"):
+            doc = json.loads(prod[f"pcv_{first}_{second}_{sig}.json"])
+            v = np.array([[np.nan if x is None else x for x in row] for row in doc["values_mm"]])
+            counts[sig] = np.where(np.isfinite(v), np.asarray(doc["count"]), 0)
+        b_true, maps_true = truth_split(truth, (first, second), doc["azimuth_deg"], doc["elevation_deg"], counts)
+        err_mm = (cal[(first, second)] - b_true) * 1e3
+        print(first, second, "baseline - truth (split) mm", np.round(err_mm, 3))
+        assert np.all(np.abs(err_mm) < 0.2), err_mm
+        phys_mm = (truth["baselines"][(first, second)]["mean_m"] - b_true) * 1e3
+        assert np.max(np.abs(phys_mm)) > 1.0, phys_mm   # the PCV's offset-like part is in the baseline
     res = json.loads(prod["residual_statistics.json"])
     for key, after in res["after"].items():
         assert after["rms_mm"] < 0.5 * res["before"][key]["rms_mm"], key

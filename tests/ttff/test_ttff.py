@@ -16,7 +16,7 @@ from worker.pipelines.ttff import payloads, run
 from worker.sim import simulate_scenario
 from worker.ttff.data import load_study_set, subset_signals
 from worker.ttff.single_epoch import SingleEpochOptions, epoch_problem, solve_constrained, solve_lambda
-from worker.ttff.starts import REALISTIC_OVERRIDES, random_starts, start_overrides
+from worker.ttff.starts import BENIGN_OVERRIDES, random_starts, start_overrides
 from worker.ttff.study import StudyOptions, run_set, runs_csv, summarize, table5_rows
 
 DURATION_S = 20.0
@@ -34,7 +34,7 @@ def sim_set(tmp_path_factory):
     """One realistic start (yaw 120, pitch -50, roll 30 deg), 20 s."""
     d = tmp_path_factory.mktemp("ttff_set")
     start = {"index": 3, "yaw_deg": 120.0, "pitch_deg": -50.0, "roll_deg": 30.0, "rate_deg_s": 0.3}
-    simulate_scenario("ttff", d, seed=11, overrides=start_overrides(start, DURATION_S, base=REALISTIC_OVERRIDES))
+    simulate_scenario("ttff", d, seed=11, overrides=start_overrides(start, DURATION_S))
     return d, start
 
 
@@ -170,11 +170,12 @@ def test_pipeline_simulated_and_uploaded(tmp_path, sim_set):
     ctx = _ctx(tmp_path, [up])
     run(ctx, cfg)
     assert {"runs.csv", "runs.json", "summary.json", "table5.html", "table5_filter.csv", "table5_filter.md",
-            "table5_epoch-constrained.md", "report.html"} <= set(ctx.products)
+            "table5_epoch-constrained.md", "report.html", "ttff_table.png", "ttff_histogram.png"} <= set(ctx.products)
     report = (tmp_path / "products" / "report.html").read_text()
     assert "Time to first fix" in report and "Table 5 layout, method filter" in report and "<script" not in report
     summary = json.loads((tmp_path / "products" / "summary.json").read_text())
     assert summary["sets"] == 3
+    assert summary["tasks_per_worker"]["local"][0] == 3 and summary["task_cpu_seconds_total"] > 0
     labels = [s["label"] for s in summary["sets_list"]]
     assert labels == ["uploaded start", "start 000", "start 001"]
     # the uploaded set has no arcs.csv: checked by the reference attitude only
@@ -202,7 +203,12 @@ def test_payloads_are_deterministic():
     cfg = TtffConfig.model_validate({"simulate": {"count": 3, "seed": 2}})
     a = payloads(SimpleNamespace(sets=[]), cfg)
     assert a == payloads(SimpleNamespace(sets=[]), cfg) and len(a) == 3
-    assert a[0]["overrides"]["pcv_peak_to_peak_mm"] == REALISTIC_OVERRIDES["pcv_peak_to_peak_mm"]
+    assert "pcv" not in a[0]["overrides"]          # realism is the preset's own
+    from worker.pipelines.ttff import _options
+    assert _options(a[0]["options"]).filter_settings_by_configuration == {"L2": {"ar_min_ratio_first_fix": 2.0}}
+    b = payloads(SimpleNamespace(sets=[]), TtffConfig.model_validate({"simulate": {"count": 3, "seed": 2,
+                                                                                   "realistic": False}}))
+    assert all(b[0]["overrides"][k] == v for k, v in BENIGN_OVERRIDES.items())
     assert a[0]["overrides"]["start_gps"] != a[1]["overrides"]["start_gps"]
 
 
@@ -210,3 +216,43 @@ def test_job_type_registered():
     from worker.jobs.registry import job_types
     spec = job_types()["ttff"]
     assert spec.min_sets == 0 and spec.max_sets is None
+
+
+def test_ttff_preset_carries_the_realism_and_other_presets_are_unchanged():
+    """Issue 7 item 2 is the preset itself (no bench-level overrides); the other presets keep their values."""
+    from worker.sim.observables import noise_scale
+    from worker.sim.scenarios import make_params
+
+    p = make_params("ttff")
+    assert p.pcv_peak_to_peak_mm == 35.0 and p.mp_code_m == [0.1, 1.0, 2.0]
+    assert p.noise_grows_with_cn0 and p.noise_scale_max == 2.0 and p.l2_noise_factor == 1.2
+    for name in ("earth-pointing", "slew", "hard", "cubesat", "calibration"):
+        q = make_params(name)
+        assert q.noise_scale_max == 4.0 and q.l2_noise_factor == 1.5
+    assert make_params("earth-pointing").pcv_peak_to_peak_mm == 10.0
+    assert make_params("earth-pointing").mp_code_m == [0.1, 0.6, 1.5]
+    cn0 = np.array([50.0, 45.0, 39.0, 30.0, 20.0])
+    np.testing.assert_allclose(noise_scale(cn0, 45.0, True), np.clip(10 ** ((45 - cn0) / 20), 0.5, 4.0))
+    np.testing.assert_allclose(noise_scale(cn0, 45.0, True, 2.0)[2:], [10 ** 0.3, 2.0, 2.0])
+
+
+def test_filter_integers_scored_against_truth(study_set):
+    """The filter's integer constraints agree with the truth arcs; one cycle off on one constraint is flagged
+    from its epoch on, on its baseline only."""
+    from worker.attitude.filter import run_filter
+    from worker.attitude.settings import AttitudeSettings
+    from worker.ttff.study import filter_integer_errors
+
+    ss = study_set
+    fr = run_filter(ss.pobs, ss.geom, ss.bl_idx, ss.body_baselines_m, ss.boresight_body,
+                    AttitudeSettings(signals=["L1", "L2"]), ss.R_ref_from_ecef[0])
+    log = fr.fix_log
+    assert log["epoch"].size >= 10
+    w = filter_integer_errors(ss, log, ["L1", "L2"])
+    assert w.shape == fr.fixed.shape and not w.any()
+    bad = {k: np.array(v, copy=True) for k, v in log.items()}
+    i = int(np.argmax(bad["bl"] == 1))
+    bad["dd_cyc"][i] += 1
+    w = filter_integer_errors(ss, bad, ["L1", "L2"])
+    assert w[bad["epoch"][i]:bad["last_epoch"][i] + 1, 1].all() and not w[:, 0].any()
+    assert not w[:bad["epoch"][i], 1].any()

@@ -21,9 +21,11 @@ import numpy as np
 from worker.calibration.baselines import (BatchSums, BaselineRow, batch_sums, body_from_ecef, combine,
                                           gate_epochs)
 from worker.calibration.binning import BinSums, Grid2D, finalize
+from worker.calibration.decomposition import apply_split, bin_los_body, offset_split
+from worker.calibration.smoothing import smooth_map
 from worker.calibration.extract import ExtractOptions, SetData, extract
 from worker.calibration.pcv import (MapNormal, iterate_map, map_lookup, map_normal, residual_bin_sums,
-                                    residuals_m)
+                                    residuals_m, solve_map)
 from worker.gnss.rotations import quat_conjugate, quat_multiply, quat_to_rotvec, quest
 
 WINDOW_S = 60.0
@@ -39,6 +41,7 @@ class CampaignOptions:
     batch_s: float = 300.0
     max_deviation_m: float = 0.05
     min_reference_coverage: float = 0.9
+    smoothing_order: int = 8   # Zernike order of the map fit (worker.calibration.smoothing); 0 = bin means
 
 
 def _apriori(platform) -> dict:
@@ -103,19 +106,53 @@ class MapResult:
     changes_mm: list
     converged: bool
     count_pass1: np.ndarray
+    baseline_m: np.ndarray | None = None  # (3,) the baseline this map goes with (after the split, if made)
+    shift_m: np.ndarray | None = None     # (3,) baseline change made by the split (decomposition.py)
 
 
-def reduce_maps(stats: list[SetStats], calibrated: dict, signals: list, options: CampaignOptions) -> list[MapResult]:
-    """Iterated maps per baseline and signal with the calibrated baselines ((first, second) -> (3,) m)."""
+def reduce_maps(stats: list[SetStats], calibrated: dict, signals: list, options: CampaignOptions,
+                boresights: dict | None = None) -> list[MapResult]:
+    """Iterated maps per baseline and signal with the calibrated baselines ((first, second) -> (3,) m).
+
+    With `boresights` (antenna id -> body boresight), the baseline/map split is then made explicit
+    (worker.calibration.decomposition, bin counts as weights): every MapResult of a baseline carries the split
+    baseline (`baseline_m`, use it with these maps) and the change (`shift_m`); without, baseline_m is the input.
+    """
     out = []
     n = options.grid.n_bins
+    az_c, el_c = np.meshgrid(options.grid.x_centres_deg, options.grid.y_centres_deg)
     for bl, b in calibrated.items():
+        g = bin_los_body(options.grid, boresights[bl[0]]) if boresights is not None else None
+        mine = []
         for sig in signals:
             normal = MapNormal.total([s.normals[tuple(bl) + (sig,)] for s in stats], n)
             active = normal.count >= max(int(options.min_count), 1)
+            # exact fixed point (CG), then the seed 000 iteration from it: its steps show what is left
             it = iterate_map(normal, b, active, tolerance_mm=options.tolerance_mm,
-                             max_iterations=options.max_iterations)
-            out.append(MapResult(bl[0], bl[1], sig, it.map_m, it.changes_mm, it.converged, normal.count))
+                             max_iterations=options.max_iterations, initial_m=solve_map(normal, b, active))
+            if options.smoothing_order > 0:
+                it.map_m = smooth_map(it.map_m, normal.count.astype(float), az_c.ravel(), el_c.ravel(),
+                                      options.smoothing_order, g)
+            mine.append(MapResult(bl[0], bl[1], sig, it.map_m, it.changes_mm, it.converged, normal.count,
+                                  np.asarray(b, dtype=np.float64), np.zeros(3)))
+        if g is not None and mine:
+            db, a = offset_split([r.map_m for r in mine], [r.count_pass1.astype(float) for r in mine], g)
+            b_new, maps_new = apply_split(b, [r.map_m for r in mine], g, db, a)
+            for r, m in zip(mine, maps_new):
+                r.map_m, r.baseline_m, r.shift_m = m, b_new, db
+        out += mine
+    return out
+
+
+def split_baselines(rows: list[BaselineRow], results: list[MapResult]) -> dict:
+    """Calibrated baselines ((first, second) -> (3,) m) in the maps' split; the rows' means updated in place
+    (their sigmas stay the batch-means sigmas of the epoch-wise baselines)."""
+    out = {}
+    for r in rows:
+        mr = next((m for m in results if (m.first, m.second) == (r.first, r.second)), None)
+        if mr is not None and mr.baseline_m is not None:
+            r.estimate.mean_m = np.asarray(mr.baseline_m, dtype=np.float64)
+        out[(r.first, r.second)] = r.estimate.mean_m
     return out
 
 
@@ -291,5 +328,5 @@ def combine_residual_stats(finals: list[SetFinal], include_held_out: bool = Fals
 
 
 __all__ = ["CampaignOptions", "SetStats", "set_statistics", "reduce_baselines", "MapResult", "reduce_maps",
-           "ResidualSums", "SetFinal", "set_final", "attitude_comparison", "attitude_errors_deg", "finish_maps",
+           "split_baselines", "ResidualSums", "SetFinal", "set_final", "attitude_comparison", "attitude_errors_deg", "finish_maps",
            "combine_residual_stats"]

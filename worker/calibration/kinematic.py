@@ -155,7 +155,8 @@ def solve_baseline(phase_sd_m: np.ndarray, code_sd_m: np.ndarray, los_ecef: np.n
                    b_pred_ecef_m: np.ndarray, wavelength_m: np.ndarray, sigma_phase_m: np.ndarray, *,
                    correction_m: np.ndarray | None = None, gate_m: float = DEFAULT_GATE_M,
                    max_rejections: int = DEFAULT_MAX_REJECTIONS, fix_pred_ecef_m: np.ndarray | None = None,
-                   fix_correction_m: np.ndarray | None = None) -> BaselineFix:
+                   fix_correction_m: np.ndarray | None = None,
+                   variance_factor: np.ndarray | None = None) -> BaselineFix:
     """BaselineFix of one baseline: integers fixed with the prediction, then epoch-wise least squares.
 
     Args:
@@ -165,6 +166,7 @@ def solve_baseline(phase_sd_m: np.ndarray, code_sd_m: np.ndarray, los_ecef: np.n
         wavelength_m, sigma_phase_m: (n_sig,).
         correction_m: (n_ep, n_sat, n_sig) PCV correction subtracted from the phases before the solution, or None.
         fix_pred_ecef_m, fix_correction_m: prediction used only to fix the integers (default: the above).
+        variance_factor: (n_ep, n_sat, n_sig) multiplies sigma_phase_m^2 per sample (C/N0 weighting), or None.
     """
     n_ep, n_sat, n_sig = phase_sd_m.shape
     kappa = clock_from_code_m(code_sd_m, los_ecef, b_pred_ecef_m)
@@ -174,6 +176,8 @@ def solve_baseline(phase_sd_m: np.ndarray, code_sd_m: np.ndarray, los_ecef: np.n
     fc = correction_m if fix_correction_m is None else fix_correction_m
     proj = np.einsum("esk,ek->es", los_ecef, fp)[..., None]
     w = np.broadcast_to(1.0 / sigma_phase_m ** 2, ph.shape).copy()
+    if variance_factor is not None:
+        w = w / np.where(np.isfinite(variance_factor) & (variance_factor > 0), variance_factor, 1.0)
     w[~np.isfinite(ph)] = 0.0
     ints = np.full(ph.shape, np.nan)
     for k in range(n_sig):

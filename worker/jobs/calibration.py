@@ -21,6 +21,9 @@ class CalibrationConfig(BaseModel):
     min_count: int = Field(30, ge=1, le=10_000_000,
                            description="Samples a bin needs for a value; fewer leave it empty (null).")
     max_iterations: int = Field(10, ge=1, le=1000, description="Most PCV iterations.")
+    smoothing_order: int = Field(8, ge=0, le=30, description="Radial order of the Zernike fit that smooths each "
+                                 "map over the hemisphere (structure finer than ~90/N deg is smoothed away); 0 = "
+                                 "plain bin means. Empty bins stay empty either way.")
     tolerance_mm: float = Field(0.1, gt=0.0, le=100.0, description="Stop when the map changes by less (RMS, mm).")
     held_out_set: str | None = Field(None, max_length=200,
                                      description="Id or name of a set kept out of the calibration and used for the "

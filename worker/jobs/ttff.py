@@ -21,8 +21,10 @@ class TtffSimulation(BaseModel):
     rate_deg_s: list[float] = Field([0.1, 0.5], min_length=2, max_length=2,
                                     description="Peak slew-back rate uniform in [min, max] (deg/s).")
     hold_s: float = Field(0.0, ge=0, le=3600, description="Start orientation held this long before the slew back.")
-    realistic: bool = Field(True, description="Apply the realism overrides of docs/ttff.md (50 mm p-p differential "
-                                              "PCV, ~1 m code multipath at the antenna horizon) to the preset.")
+    realistic: bool = Field(True, description="The `ttff` preset as it is (50 mm p-p differential PCV, ~1 m code "
+                                              "multipath at the antenna horizon, C/N0-dependent noise, docs/ttff.md "
+                                              "'Realism'); false: white noise only, no PCV or multipath "
+                                              "(consistency checks).")
     overrides: dict[str, Any] = Field(default_factory=dict,
                                       description="Further simulator parameters of the `ttff` preset "
                                                   "(docs/simulator.md), applied last.")
@@ -53,6 +55,10 @@ class TtffConfig(BaseModel):
     min_ratio_constrained: float = Field(1.5, ge=1.0, le=100.0,
                                          description="Ratio of the constrained objective for an accepted fix.")
     max_length_error_m: float = Field(0.03, gt=0, le=1.0, description="Length test (seed 000 Table 2).")
+    l2_min_ratio_first_fix: float = Field(2.0, ge=0.0, le=100.0,
+                                          description="Paper's method (filter) in the L2-only configuration: a first "
+                                                      "fix also needs this MLAMBDA ratio (0: the length test alone, "
+                                                      "as seed 000; docs/ttff.md 'Wrong fixes of L2').")
     filter_mode: Literal["dynamic", "kinematic"] = Field("dynamic", description="Attitude filter mode.")
 
     @model_validator(mode="after")
@@ -71,4 +77,4 @@ JOB_TYPE = JobType(
                 "fan-out task per set.",
     config_model=TtffConfig, pipeline="worker.pipelines.ttff:run", min_sets=0, max_sets=None,
     produces=("table5_<method>.csv", "table5_<method>.md", "table5.html", "runs.json", "runs.csv", "summary.json",
-              "ttff_table.png", "ttff_histogram.png", "report.html"))
+              "ttff_table.png (up to 50 sets)", "ttff_histogram.png", "report.html"))

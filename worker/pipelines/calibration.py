@@ -35,6 +35,7 @@ def _options(cfg: dict):
                           y_range_deg=(cfg["elevation_min_deg"], cfg["elevation_max_deg"]))
     return CampaignOptions(ext, grid, min_count=cfg["min_count"], tolerance_mm=cfg["tolerance_mm"],
                            max_iterations=cfg["max_iterations"], batch_s=cfg["batch_s"],
+                           smoothing_order=cfg.get("smoothing_order", 8),
                            max_deviation_m=cfg["max_deviation_mm"] * 1e-3,
                            min_reference_coverage=cfg["min_reference_coverage"])
 
@@ -184,7 +185,8 @@ def _map_doc(platform: str, key, grid, values, count, sigma) -> dict:
 
 
 def run(ctx: JobContext, config) -> None:
-    from worker.calibration.campaign import (combine_residual_stats, finish_maps, reduce_baselines, reduce_maps)
+    from worker.calibration.campaign import (combine_residual_stats, finish_maps, reduce_baselines, reduce_maps,
+                                             split_baselines)
     from worker.calibration.baselines import baselines_document, baselines_table_csv
     from worker.calibration.checks import CampaignError, check_campaign
     from worker.gnss.io.platform import parse_platform
@@ -225,7 +227,9 @@ def run(ctx: JobContext, config) -> None:
                             f"{len(cal_sets)} set(s); check the reference attitude and the observations")
     ctx.progress(0.5, "iterating PCV maps")
     t0 = time.perf_counter()
-    map_results = reduce_maps(stats, calibrated, list(config.frequencies), options)
+    map_results = reduce_maps(stats, calibrated, list(config.frequencies), options,
+                              boresights={a: ant.boresight_body for a, ant in platform.antennas.items()})
+    calibrated = split_baselines(rows, map_results)   # baseline/map split made explicit (decomposition.py)
     t_maps = time.perf_counter() - t0
     for m in map_results:
         ctx.log(f"map {m.first}>{m.second} {m.signal}: iterations {len(m.changes_mm)}, changes (mm RMS) "

@@ -16,6 +16,9 @@ from pathlib import Path
 from worker.context import JobContext
 from worker.errors import JobInputError
 
+#: ttff_table.png is drawn up to this many sets (matplotlib's table: ~3 s of the parent's CPU at 200 sets).
+TABLE_PLOT_MAX_SETS = 50
+
 
 def _options(d: dict):
     from worker.ttff.single_epoch import SingleEpochOptions
@@ -26,6 +29,8 @@ def _options(d: dict):
     return StudyOptions(configurations=tuple(d["configurations"]), methods=tuple(d["methods"]),
                         max_duration_s=d["duration_s"], single_epoch_step_s=d["single_epoch_step_s"],
                         filter_settings={"mode": d["filter_mode"], "max_length_error_m": d["max_length_error_m"]},
+                        filter_settings_by_configuration={
+                            "L2": {"ar_min_ratio_first_fix": d.get("l2_min_ratio_first_fix", 2.0)}},
                         single_epoch=se)
 
 
@@ -48,7 +53,7 @@ def set_task(payload: dict, sets) -> dict:
 
     opts = _options(payload["options"])
     label = payload["label"]
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     with _one_thread():
         if payload["source"] == "simulated":
             from worker.sim import simulate_scenario
@@ -84,15 +89,17 @@ def set_task(payload: dict, sets) -> dict:
             out = run_set(ss, opts)
     out["label"] = label
     out["task_seconds"] = round(time.perf_counter() - t0, 3)
+    out["task_cpu_seconds"] = round(time.process_time() - c0, 3)    # the worker process's CPU (one task at a time)
     return out
 
 
 def payloads(ctx: JobContext, config) -> list[dict]:
     """Task payloads: uploaded sets first (in the order given), then the simulated starts."""
-    from worker.ttff.starts import REALISTIC_OVERRIDES, random_starts, start_overrides
+    from worker.ttff.starts import BENIGN_OVERRIDES, random_starts, start_overrides
 
     opts = {k: getattr(config, k) for k in ("configurations", "methods", "duration_s", "single_epoch_step_s",
-                                            "min_ratio_constrained", "max_length_error_m", "filter_mode")}
+                                            "min_ratio_constrained", "max_length_error_m", "filter_mode",
+                                            "l2_min_ratio_first_fix")}
     out = []
     for s in ctx.sets:
         out.append({"source": "upload", "set_id": s.id, "label": s.name or s.id, "options": opts})
@@ -100,7 +107,7 @@ def payloads(ctx: JobContext, config) -> list[dict]:
     if sim is not None:
         starts = random_starts(sim.count, sim.seed, sim.yaw_max_deg, sim.pitch_max_deg, sim.roll_max_deg,
                                tuple(sim.rate_deg_s))
-        base = dict(REALISTIC_OVERRIDES) if sim.realistic else {}
+        base = {} if sim.realistic else dict(BENIGN_OVERRIDES)
         for st in starts:
             ov = start_overrides(st, config.duration_s + 1.0, sim.hold_s, base)
             ov.update(sim.overrides)
@@ -124,6 +131,16 @@ def _html(runs: list[dict], methods: list[str], summary: dict) -> str:
         parts.append("</table>")
     parts.append(f"<p>Wrong fixes in total: {summary['wrong_fixes_total']} (a wrong first fix is marked *).</p>")
     return "\n".join(parts)
+
+
+def _tasks_per_worker(ctx: JobContext) -> dict:
+    """{worker: [tasks, task seconds]} of this job's fan-out (how evenly the sets spread)."""
+    out: dict = {}
+    for r in getattr(ctx, "task_records", None) or []:
+        d = out.setdefault(str(r.get("worker")), [0, 0.0])
+        d[0] += 1
+        d[1] = round(d[1] + (r.get("seconds") or 0.0), 2)
+    return out
 
 
 def run(ctx: JobContext, config) -> None:
@@ -152,6 +169,8 @@ def run(ctx: JobContext, config) -> None:
     summary = summarize(runs)
     summary.update({"configuration": config.model_dump(), "wall_seconds": round(time.perf_counter() - t0, 2),
                     "task_seconds_total": round(sum(r.get("task_seconds", 0.0) for r in results), 2),
+                    "task_cpu_seconds_total": round(sum(r.get("task_cpu_seconds", 0.0) for r in results), 2),
+                    "tasks_per_worker": _tasks_per_worker(ctx),
                     "sets_list": [{"label": r["label"], "initial_euler_deg": r["initial_euler_deg"],
                                    "truth": r["truth"], "n_epochs": r["n_epochs"], "start": r.get("start"),
                                    "seconds": r.get("task_seconds")} for r in results]})
@@ -166,10 +185,16 @@ def run(ctx: JobContext, config) -> None:
     ctx.progress(0.95, "plots")
     pngs: dict[str, bytes] = {}
     try:
-        from worker.plots.ttff import ttff_plots
+        from worker.plots.ttff import ttff_histogram_plot, ttff_plots
 
         main = "filter" if "filter" in methods else methods[0]
-        pngs = ttff_plots([r for r in runs if r["method"] == main], {"job_id": ctx.job_id, "config": {"method": main}})
+        main_runs = [r for r in runs if r["method"] == main]
+        pctx = {"job_id": ctx.job_id, "config": {"method": main}}
+        if len(results) <= TABLE_PLOT_MAX_SETS:
+            pngs = ttff_plots(main_runs, pctx)
+        else:   # a table image of hundreds of rows is unreadable and costs seconds: the tables carry it
+            pngs = {"ttff_histogram.png": ttff_histogram_plot(main_runs, pctx)}
+            ctx.log(f"ttff_table.png left out: {len(results)} sets > {TABLE_PLOT_MAX_SETS} (see table5_*.csv/md)")
         for name, png in pngs.items():
             ctx.write_product(name, png, media_type="image/png")
     except Exception as exc:  # noqa: BLE001 - plots are a convenience; the tables carry the result

@@ -364,15 +364,15 @@ def build_arcs(tracked: np.ndarray, slip: np.ndarray, slip_lli: np.ndarray) -> A
     return arcs
 
 
-def noise_scale(cn0: np.ndarray, ref_dbhz: float, grows: bool) -> np.ndarray:
+def noise_scale(cn0: np.ndarray, ref_dbhz: float, grows: bool, max_scale: float = 4.0) -> np.ndarray:
     """Thermal-noise scale 10^((ref - C/N0)/20) (sigma ~ 1/sqrt(C/N0)), 1 where `grows` is False.
 
-    Clipped to [0.5, 4]: a PLL/DLL near its tracking threshold is lost rather than noisier (the tracking
+    Clipped to [0.5, max_scale]: a PLL/DLL near its tracking threshold is lost rather than noisier (the tracking
     thresholds end the growth; 4 = 12 dB below the reference C/N0).
     """
     if not grows:
         return np.ones_like(cn0)
-    return np.clip(10.0 ** ((ref_dbhz - np.nan_to_num(cn0, nan=ref_dbhz)) / 20.0), 0.5, 4.0)
+    return np.clip(10.0 ** ((ref_dbhz - np.nan_to_num(cn0, nan=ref_dbhz)) / 20.0), 0.5, max_scale)
 
 
 __all__ = ["antenna_frame", "pcv_grid_mm", "bilinear_pcv_mm", "gain_db", "ClockModel", "light_time_geometry",

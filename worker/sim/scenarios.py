@@ -107,6 +107,7 @@ class SimParams:
     noise_doppler_hz: float = 0.03
     noise_grows_with_cn0: bool = True
     noise_ref_cn0_dbhz: float = 45.0
+    noise_scale_max: float = 4.0                 # cap of the C/N0 growth factor (4 = 12 dB below the reference)
     l2_noise_factor: float = 1.5
     # --- events ---
     slip_rate_per_hour: float = 0.0              # per tracked signal at 40 dB-Hz, x10 per -10 dB
@@ -150,6 +151,14 @@ class TtffParams(SimParams):
     random_initial_attitude: bool = True
     wobble_amp_deg: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
     acquisition_delays: bool = False             # receivers start already tracking (activation mid-orbit)
+    # what real spacecraft data have (issue 7 item 2, docs/ttff.md "Realism"): uncalibrated PCV 35 mm p-p per
+    # antenna (~50 mm p-p differential, L2 x1.3; seed 000 Figs. 3-4), code multipath ~1 m at the antenna horizon
+    # (cap 2 m below it), thermal noise growing with falling C/N0 up to x2 (6 mm phase / 0.6 m code at <= 39 dB-Hz)
+    # and L2 P(Y) semi-codeless x1.2 on top of its 6 dB lower C/N0
+    pcv_peak_to_peak_mm: float = 35.0
+    mp_code_m: list = field(default_factory=lambda: [0.1, 1.0, 2.0])
+    noise_scale_max: float = 2.0
+    l2_noise_factor: float = 1.2
 
 
 @dataclass

@@ -284,7 +284,7 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
             else:
                 mp_code = np.zeros((n_ep, n_sv))
                 mp_phase = np.zeros((n_ep, n_sv))
-            fac = ob.noise_scale(cn0[f], p.noise_ref_cn0_dbhz, p.noise_grows_with_cn0) \
+            fac = ob.noise_scale(cn0[f], p.noise_ref_cn0_dbhz, p.noise_grows_with_cn0, p.noise_scale_max) \
                 * (p.l2_noise_factor if f == "L2" else 1.0)
             if p.noise:
                 n_code = nrng.standard_normal((n_ep, n_sv)) * p.noise_code_m * fac
