@@ -14,10 +14,11 @@ from worker.ttff.data import load_study_set
 from worker.ttff.study import StudyOptions, _filter_runs
 
 DURATION_S = 20.0
-#: starts 3-5 of `bench_ttff study --seed 1` (20 s): on start 4 the L1 filter with MLAMBDA + length fixes both
-#: baselines late (2 s, 1 s). Over 80 starts of 120 s the constrained first fix is later on a few baselines (by
-#: 1-6 s) and sooner on many more (docs/ttff.md "Attitude job option").
-STARTS = (3, 4, 5)
+#: starts 3, 4 and 13 of `bench_ttff study --seed 1` (20 s, the `ttff` preset of commit e0e0b58): on starts 4 and
+#: 13 the L1 filter with MLAMBDA + length fixes one baseline late (6 s, 2 s). Over 40 starts of 120 s the
+#: constrained L1 first fix is later on 2 of 80 baselines (by 1 and 4 s) and sooner on 15 (docs/ttff.md); a
+#: change of the preset changes these starts.
+STARTS = (3, 4, 13)
 
 
 @pytest.fixture(scope="module")
