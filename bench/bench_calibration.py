@@ -136,7 +136,7 @@ class ScaleService:
     """One API + database (fresh: SQLite file, or a scratch PostgreSQL database + unique Redis queue) with the
     campaign uploaded once; the number of worker processes is changed between jobs (workers wait idle, warm)."""
 
-    def __init__(self, work: Path, pg: tuple[str, str] | None):
+    def __init__(self, work: Path, pg: tuple[str, str] | None, own_session: bool = False):
         from tests.e2e.conftest import Service
 
         self.scratch_db = None
@@ -157,6 +157,20 @@ class ScaleService:
         shutil.rmtree(work, ignore_errors=True)
         work.mkdir(parents=True)
         self.svc = Service(work, "pg" if pg else "sqlite", db_url, queue_url)
+        if own_session:
+            # each worker in its own session, as separate service units would be: with the kernel's autogroup
+            # scheduling (sched_autogroup_enabled=1) all processes of one session share ONE fair CPU share, so on
+            # a machine busy with other sessions' work 2 workers started from one shell get no more CPU than 1
+            svc = self.svc
+
+            def spawn(args, log_name):
+                log = svc.tmp / f"{log_name}-{len(svc.logs)}.log"
+                svc.logs.append(log)
+                return subprocess.Popen([sys.executable, "-m", "client.cli", *args], cwd=REPO, env=svc.env,
+                                        stdout=open(log, "wb"), stderr=subprocess.STDOUT,
+                                        start_new_session=log_name == "worker")
+
+            svc._spawn = spawn
         self.svc.env["GNSSATT_LEASE_SECONDS"] = "60"  # heavy tasks under load must not lose their lease
         self.svc.env["GNSSATT_HEARTBEAT_SECONDS"] = "5"
         self.svc.env["OPENBLAS_NUM_THREADS"] = "1"
@@ -243,7 +257,7 @@ def scale(args, dirs: list[Path], work: Path) -> dict:
     if args.backend == "pg":
         pg = (os.environ.get("GNSSATT_TEST_DATABASE_URL", "postgresql+psycopg://postgres@127.0.0.1:5432/test"),
               os.environ.get("GNSSATT_TEST_QUEUE_URL", "redis://127.0.0.1:6379/0"))
-    svc = ScaleService(work / f"scale_{args.backend}", pg)
+    svc = ScaleService(work / f"scale_{args.backend}", pg, own_session=args.own_session)
     runs: list[dict] = []
     try:
         t_up = svc.upload(dirs)
@@ -260,9 +274,17 @@ def scale(args, dirs: list[Path], work: Path) -> dict:
         svc.shutdown()
     shas = [r["sha256"] for r in runs]
     med = {w: float(np.median([r["wall_s"] for r in runs if r["n_workers"] == w])) for w in workers}
-    return {"backend": args.backend, "sets": len(dirs) - 1, "upload_s": t_up, "runs": runs,
+    return {"backend": args.backend, "own_session": args.own_session, "sets": len(dirs) - 1, "upload_s": t_up,
+            "runs": runs, "autogroup": _autogroup(),
             "identical": all(s == shas[0] for s in shas) and len(shas[0]) >= 2, "median_wall_s": med,
             "speedup": {w: med[workers[0]] / med[w] for w in workers}}
+
+
+def _autogroup() -> str:
+    try:
+        return Path("/proc/sys/kernel/sched_autogroup_enabled").read_text().strip()
+    except OSError:
+        return "?"
 
 
 def scale_markdown(res: dict, command: str) -> str:
@@ -279,7 +301,11 @@ def scale_markdown(res: dict, command: str) -> str:
              f"default grid), uploaded once ({res['upload_s']:.0f} s); each job timed submit to `succeeded`, "
              f"workers already running and idle; {len(runs) // len(workers)} job(s) per worker count, interleaved. "
              f"**Load average (1 min) during the runs: {min(loads):.1f} to {max(loads):.1f}** on 2 cores (other "
-             f"sessions' work); wall times and the speed-up are only meaningful on a quiet machine.", "",
+             f"sessions' work); wall times and the speed-up are only meaningful on a quiet machine. Workers "
+             + ("each in their own session (own CPU share under the kernel's autogroup scheduling, as separate "
+                "service units)" if res.get("own_session") else "started from the bench's session (with "
+                "sched_autogroup_enabled=" + str(res.get("autogroup")) + " they share one CPU share while other "
+                "sessions are busy)") + ".", "",
              "| workers | wall s (median) | runs | speed-up vs 1 | parent stages s (checks / pass 1 / maps / pass 2 / "
              "products) | tasks per worker (busy s) |", "|---|---|---|---|---|---|"]
     for w in workers:
@@ -298,6 +324,21 @@ def scale_markdown(res: dict, command: str) -> str:
               f"over all {len(runs)} runs: {'yes' if res['identical'] else 'NO'}. The fan-out of every job is its "
               "`tasks.csv` product (pass, queue position, set, worker, start/end s); the held-out task is first "
               "in pass 2's queue and the sets go longest first."]
+    two = [r for r in runs if r["n_workers"] == (2 if 2 in workers else workers[-1])]
+    if two:
+        mid = sorted(two, key=lambda r: r["wall_s"])[len(two) // 2]
+        names = {w: f"worker-{i + 1}" for i, w in enumerate(sorted({t["worker"] for t in mid["tasks"]}))}
+        lines += ["", f"Excerpt of that job's `tasks.csv` ({mid['n_workers']} workers, {mid['wall_s']:.1f} s; "
+                  "worker names shortened; first and last tasks of each pass):", "", "```",
+                  "pass,task,set,worker,attempts,start_s,end_s,seconds"]
+        for p in ("1", "2"):
+            rows = [t for t in mid["tasks"] if t["pass"] == p]
+            shown = rows[:4] + ([{"pass": "..."}] if len(rows) > 7 else []) + rows[max(4, len(rows) - 3):]
+            for t in shown:
+                lines.append("..." if t["pass"] == "..." else ",".join(
+                    [t["pass"], t["task"], t["set"], names[t["worker"]], t["attempts"], t["start_s"], t["end_s"],
+                     t["seconds"]]))
+        lines.append("```")
     return "\n".join(lines)
 
 
@@ -356,6 +397,8 @@ def main() -> None:
     ap.add_argument("--backend", choices=("pg", "sqlite"), default="pg",
                     help="--scale: PostgreSQL + Redis (GNSSATT_TEST_DATABASE_URL / GNSSATT_TEST_QUEUE_URL or the "
                          "local defaults) or SQLite + Huey")
+    ap.add_argument("--own-session", action="store_true",
+                    help="--scale: start each worker in its own session (own CPU share under autogroup scheduling)")
     ap.add_argument("--write", action="store_true", help="--scale: rewrite the scale block of docs/BENCHMARKS.md")
     args = ap.parse_args()
     work = Path(args.work)

@@ -105,6 +105,12 @@ def cmd_cubesat(args) -> None:
     Path(args.out).write_text(json.dumps({"count": args.count, "seed": args.seed, "results": res}))
 
 
+def _proc_cpu_s(pid: int) -> float:
+    """User + system CPU seconds of a process (/proc/<pid>/stat fields 14-15), all its threads."""
+    f = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(f[11]) + int(f[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def cmd_job(args) -> None:
     """The `ttff` job over `count` simulated starts on a real service (API + N worker processes)."""
     import httpx  # noqa: F401 - the Service helper needs it
@@ -124,6 +130,7 @@ def cmd_job(args) -> None:
             cfg = {"simulate": {"count": args.count, "seed": args.seed}, "duration_s": args.duration,
                    "single_epoch_step_s": args.step}
             load0 = list(os.getloadavg())
+            cpu0 = [_proc_cpu_s(w.pid) for w in svc.workers]
             t0 = time.monotonic()
             r = cl.post("/v1/jobs", json={"type": "ttff", "observation_set_ids": [], "config": cfg})
             r.raise_for_status()
@@ -134,11 +141,13 @@ def cmd_job(args) -> None:
                     break
                 time.sleep(0.5)
             wall = time.monotonic() - t0
+            worker_cpu = [round(_proc_cpu_s(w.pid) - c, 2) for w, c in zip(svc.workers, cpu0)]
             summ = cl.get(f"/v1/jobs/{job_id}/products/summary.json").json() if j["state"] == "succeeded" else None
             out[str(n)] = {"state": j["state"], "wall_s": round(wall, 1), "error": j.get("error"),
                            "task_seconds_total": summ and summ.get("task_seconds_total"),
                            "task_cpu_seconds_total": summ and summ.get("task_cpu_seconds_total"),
                            "tasks_per_worker": summ and summ.get("tasks_per_worker"),
+                           "worker_cpu_s": worker_cpu,
                            "load_average_before": load0, "load_average_after": list(os.getloadavg())}
             print(n, "worker(s):", out[str(n)], flush=True)
         finally:
@@ -233,7 +242,8 @@ def report(study: dict, cubesat: dict | None, job: dict | None, rtk: dict | None
             lines.append(f"- {n_w} worker(s): {v['state']}, {v['wall_s']} s wall (sum of task times "
                          f"{v['task_seconds_total']} s wall, {v.get('task_cpu_seconds_total')} s CPU; load average "
                          f"before {la and ' / '.join(f'{x:.1f}' for x in la)}; tasks per worker "
-                         f"{v.get('tasks_per_worker')})")
+                         f"{v.get('tasks_per_worker')}; CPU of the worker processes during the job "
+                         f"{v.get('worker_cpu_s')} s)")
     return "\n".join(lines) + "\n"
 
 

@@ -106,14 +106,26 @@ class JobContext:
 
     # --- fan-out ---------------------------------------------------------------------------------
     def map(self, function: str, payloads: list[dict], *, progress_span: tuple[float, float] = (0.0, 0.9),
-            stage: str = "tasks") -> list:
+            stage: str = "tasks", shared: Any = None) -> list:
         """Run `function(payload, sets) -> result` ("module:function") for every payload on any worker
         (this one included) and return the results in payload order. Progress counts finished tasks.
         A pipeline may fan out several times; each call gets its own task rows (call them in the same order
-        on every attempt, so a retried job reuses the results it already has)."""
+        on every attempt, so a retried job reuses the results it already has).
+        `shared`: one picklable object every task needs (e.g. maps): stored once in the blob store instead of in
+        every task row, and handed to each task as payload["_shared"]."""
         if self._map is None:
             from worker.fanout import run_locally
+            if shared is not None:
+                payloads = [{**p, "_shared": shared} for p in payloads]
             return run_locally(self, function, payloads, progress_span, stage)
+        if shared is not None:
+            import pickle
+
+            path = self.workdir / "shared" / f"map{self._map_offset}.pickle"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_bytes(pickle.dumps(shared, protocol=5))
+            sha, _ = self._store_blob(path)
+            payloads = [{**p, "_shared_sha256": sha} for p in payloads]
         offset = self._map_offset
         self._map_offset += len(payloads)
         return self._map(function, payloads, progress_span, stage, offset)

@@ -119,6 +119,8 @@ def run_task(rt, task_id: str, token: str, sets: list[InputSet] | None = None) -
     try:
         if sets is None:
             sets = load_inputs(rt, job_id)
+        if "_shared_sha256" in payload:
+            payload["_shared"] = _shared_object(rt, payload["_shared_sha256"])
         result = _load(function)(payload, sets)
         sha, _ = rt.blobs.put_bytes(pickle.dumps(result, protocol=5))
         ok = _settle(rt, task_id, token, state="done", result_sha256=sha)
@@ -133,6 +135,18 @@ def run_task(rt, task_id: str, token: str, sets: list[InputSet] | None = None) -
     finally:
         stop.set()
         thread.join(timeout=5)
+
+
+_SHARED: dict[str, Any] = {}  # sha256 -> unpickled shared object of a fan-out (the last few, per process)
+
+
+def _shared_object(rt, sha: str) -> Any:
+    """The `shared` object of a ctx.map (stored once in the blob store), cached per process."""
+    if sha not in _SHARED:
+        if len(_SHARED) >= 2:
+            _SHARED.pop(next(iter(_SHARED)))
+        _SHARED[sha] = pickle.loads(rt.blobs.path(sha).read_bytes())
+    return _SHARED[sha]
 
 
 def _settle(rt, task_id: str, token: str, **values) -> bool:

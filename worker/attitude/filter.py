@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from worker.attitude.adaptive import OmegaNoiseAdapter
 from worker.attitude.ambiguity import (
     first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
 )
@@ -211,6 +212,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     if dynamic:
         st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
     q_w = (s.sigma_omega_deg_s * DEG) ** 2 / s.tau_omega_s          # rad^2/s^2 per s
+    adapter = OmegaNoiseAdapter(q_w, s.adaptive_omega_window, s.adaptive_omega_gain,
+                                s.adaptive_omega_gate) \
+        if dynamic and s.adaptive_omega_noise else None
     q_b = s.sigma_baseline_kinematic_m ** 2 / s.tau_baseline_s       # m^2 per s
     var_clk = (s.sigma_clock_s * C_M_S) ** 2
     cn0_growth = s.weighting == "cn0" or s.noise_cn0_growth
@@ -281,6 +285,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         st.P[:, bi] = 0.0
         st.P[bi, bi] = max(s.sigma0_baseline_m, 1.2 * lengths[j]) ** 2
         bad_fix[j] = 0
+        if adapter is not None:
+            adapter.reset()
         ev(k, "fix_reset", j, detail=f"{why}: ambiguities restart")
 
     def ev(k, kind, j=None, sat=None, sig=None, detail=""):
@@ -308,16 +314,17 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 st.P[sub, :] = Phi @ st.P[sub, :]
                 st.P[:, sub] = st.P[:, sub] @ Phi.T
                 # discrete process noise of the omega random walk and its effect on b (integrated over dt)
+                Qw = adapter.q_rate() if adapter is not None else np.eye(3) * q_w       # (3, 3) rad^2/s^3
                 Q = np.zeros((sub.size, sub.size))
-                Q[0:3, 0:3] = np.eye(3) * q_w * dt
+                Q[0:3, 0:3] = Qw * dt
                 for j in range(n_bl):
                     r = 3 + 3 * j
                     Bx = -_skew(b1[j])
-                    Q[r:r + 3, 0:3] = Bx * q_w * dt ** 2 / 2
+                    Q[r:r + 3, 0:3] = Bx @ Qw * dt ** 2 / 2
                     Q[0:3, r:r + 3] = Q[r:r + 3, 0:3].T
                     for i in range(n_bl):
                         ri = 3 + 3 * i
-                        Q[r:r + 3, ri:ri + 3] = Bx @ (-_skew(b1[i])).T * q_w * dt ** 3 / 3
+                        Q[r:r + 3, ri:ri + 3] = Bx @ Qw @ (-_skew(b1[i])).T * dt ** 3 / 3
                 st.P[np.ix_(sub, sub)] += Q
             else:
                 st.P[all_b_idx, all_b_idx] += q_b * dt
@@ -541,6 +548,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             hx = np.einsum("mk,mk->m", np.where(cols >= 0, coef, 0.0), st.x[ok_cols])
             innov = z - hx
             x1, P1, S, good = joseph_update_sparse(st.x, st.P, cols, coef, var, innov)
+            if good and adapter is not None and ever_fixed.all() and prev_t is not None:
+                adapter.observe(x1[0:3] - st.x[0:3], st.P[0:3, 0:3], P1[0:3, 0:3], t - prev_t)
             if good:
                 st.x, st.P = x1, P1
             st.amb_last_t[cols[mc_n:, 4] - st.n_fixed_part] = t
@@ -638,6 +647,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                         st.P[:, 0:3] = 0.0
                         st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
                         ev(k, "omega_reset", j, detail=f"the fix turned the baseline by {turn_deg:.2f} deg")
+                        if adapter is not None:
+                            adapter.reset()
                     for g, _ in outcome.groups or groups:
                         st.amb_fixed[g - st.n_fixed_part] = True
                     ev(k, "fix", j, detail=f"{outcome.n_dd} DD ambiguities, ratio {outcome.ratio:.2f}, "

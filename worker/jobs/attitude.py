@@ -24,8 +24,11 @@ class AttitudeConfig(BaseModel):
         description="Preset replacing `signals`: the first two frequencies of each system (GPS/QZSS L1+L2, Galileo "
                     "E1+E5b, BeiDou B1I+B2I), e.g. ['G', 'E', 'C', 'J']. GLONASS is not supported.")
     cn0_mask_dbhz: dict[str, float] = Field(
-        {}, description="C/N0 masks (dB-Hz) of other signals by name (defaults: 35 on the first frequency of a "
-                        "system, 30 on the others).")
+        {}, description="C/N0 masks (dB-Hz) of other signals by name (default: cn0_mask_default_dbhz).")
+    cn0_mask_default_dbhz: float | None = Field(
+        0.0, ge=0, le=70, description="C/N0 mask of signals not named (default 0: none, the noise model weights weak "
+                                      "signals); null: seed 000 Table 2 style, 35 on the first frequency of a system, "
+                                      "30 on the others.")
     sigma_code_m: float = Field(0.30, gt=0, le=100, description="Single-difference code noise (m).")
     sigma_phase_m: float = Field(0.003, gt=0, le=1, description="Single-difference phase noise (m).")
     weighting: Literal["none", "cn0", "elevation"] = Field("none", description="Observation weighting.")
@@ -39,9 +42,11 @@ class AttitudeConfig(BaseModel):
     sigma0_ambiguity_cyc: float = Field(500.0, gt=0, le=1e6)
     sigma_baseline_kinematic_m: float = Field(1.0, gt=0, le=100)
     elevation_mask_local_deg: float = Field(-90.0, ge=-90, le=90)
-    elevation_mask_antenna_deg: float = Field(0.0, ge=-90, le=90)
-    cn0_mask_l1_dbhz: float = Field(35.0, ge=0, le=70)
-    cn0_mask_l2_dbhz: float = Field(30.0, ge=0, le=70)
+    elevation_mask_antenna_deg: float = Field(
+        -90.0, ge=-90, le=90, description="Antenna-frame elevation mask once fixed (seed 000 Table 2: 0; default off, "
+                                          "the noise model weights low satellites).")
+    cn0_mask_l1_dbhz: float = Field(0.0, ge=0, le=70, description="C/N0 mask of L1 (Table 2: 35; default off).")
+    cn0_mask_l2_dbhz: float = Field(0.0, ge=0, le=70, description="C/N0 mask of L2 (Table 2: 30; default off).")
     td_code_m: float = Field(0.5, gt=0, le=1000)
     td_phase_cyc: float = Field(0.25, gt=0, le=100)
     max_length_error_m: float = Field(0.03, gt=0, le=10)

@@ -107,9 +107,10 @@ def final_task(payload: dict, sets):
     data, options, err = _load(payload, sets)
     if err:
         return err
-    calibrated = {tuple(k.split(">")): np.asarray(v, float) for k, v in payload["calibrated"].items()}
+    shared = payload.get("_shared", payload)  # the maps and baselines, stored once for all tasks
+    calibrated = {tuple(k.split(">")): np.asarray(v, float) for k, v in shared["calibrated"].items()}
     maps = {}
-    for key, values in payload["maps"].items():
+    for key, values in shared["maps"].items():
         bl, sig = key.rsplit(" ", 1)
         maps[tuple(bl.split(">")) + (sig,)] = np.array([np.nan if v is None else v for v in values], float)
     final = set_final(data, calibrated, maps, options, held_out=payload["held_out"])
@@ -240,12 +241,12 @@ def run(ctx: JobContext, config) -> None:
     maps_payload = {f"{m.first}>{m.second} {m.signal}": [None if not np.isfinite(v) else round(float(v), 7)
                                                           for v in m.map_m] for m in map_results}
     cal_payload = {f"{a}>{b}": [float(x) for x in v] for (a, b), v in calibrated.items()}
-    p2 = [{"set_id": s.id, "label": _label(s), "config": cfg, "calibrated": cal_payload, "maps": maps_payload,
-           "held_out": s.id in held_ids} for s in cal_sets + held[:1]]
+    p2 = [{"set_id": s.id, "label": _label(s), "config": cfg, "held_out": s.id in held_ids}
+          for s in cal_sets + held[:1]]
     # the held-out set costs ~3 set extractions (two more for the attitude comparison): first in the queue
     costs2 = [_cost(s) * (HELD_OUT_COST if s.id in held_ids else 1.0) for s in cal_sets + held[:1]]
     r2 = _map_in_order(ctx, "worker.pipelines.calibration:final_task", p2, costs2, progress_span=(0.52, 0.9),
-                       stage=STAGE_PASS2)
+                       stage=STAGE_PASS2, shared={"calibrated": cal_payload, "maps": maps_payload})
     _raise_input_errors(r2, p2)
     t_pass2 = time.perf_counter() - t0
     finals = [r["final"] for r in r2]
