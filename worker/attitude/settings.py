@@ -175,4 +175,7 @@ class AttitudeSettings:
     # --- attitude ---
     attitude_method: str = "quest"              # quest (weights by baseline length) | triad
     pcv_maps: dict = field(default_factory=dict)   # (first, second, freq) -> map dict (CONVENTIONS layout)
+    pcv_empty_bins: str = "exclude"             # a fixed baseline's phase in an empty map bin: "exclude" (seed 000
+                                                # sec. 3.2: observations without PCV correction leave once fixed)
+                                                # | "keep" (used uncorrected, as without maps)
     calibrated_baselines: dict = field(default_factory=dict)  # (first, second) -> body vector (3,)

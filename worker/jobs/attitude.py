@@ -65,6 +65,9 @@ class AttitudeConfig(BaseModel):
     calibrated_baselines: dict | None = Field(
         None, description="A calibration job's baselines.json object (CONVENTIONS.md) replacing the a priori "
                           "antenna positions.")
+    pcv_empty_bins: Literal["exclude", "keep"] = Field(
+        "exclude", description="A fixed baseline's phase whose map bin is empty: exclude it (seed 000 sec. 3.2) or "
+                               "keep it uncorrected.")
     pcv_map_ids: list[str] = Field(
         [], max_length=32, description="Ids of stored differential PCV maps (/v1/pcv-maps), at most one per "
                                        "baseline and signal, subtracted from the phase single differences of "
