@@ -28,7 +28,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from worker.attitude.adaptive import OmegaNoiseAdapter
-from worker.attitude.ambiguity import resolve_lambda, round_newcomers
+from worker.attitude.ambiguity import (
+    first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
+)
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
 from worker.attitude.fastops import clip as _clip, count_pairs as _count_pairs, median1d as _median1d
 from worker.attitude.fastops import nanmedian1 as _nanmedian1, nz as _nz
@@ -571,6 +573,14 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             afix = st.amb_fixed[used_amb - st.n_fixed_part]
             n_used = _count_pairs(jp, sp, n_bl, n_sat)
             n_fixed_used = _count_pairs(jp[afix], sp[afix], n_bl, n_sat)
+        joint_ar = {}          # ambiguity_search "constrained": one MC-LAMBDA first fix of all baselines together
+        if s.ambiguity_search == "constrained" and n_bl >= 2 and mp_n and not st.amb_fixed.any():
+            gb = {j: first_fix_groups(cols[mc_n:, 4][jp == j], fp[jp == j], el_loc[sp[jp == j]], n_sig)
+                  for j in range(n_bl) if pa[j] and n_used[j] >= s.ar_min_sats}
+            gb = {j: g for j, g in gb.items() if g and sum(x.size - 1 for x, _ in g) >= s.ar_min_dd}
+            if len(gb) >= 2:
+                joint_ar = {j: o for j, o in resolve_joint_constrained(st.x, st.P, gb, b_idx, body_baselines_m,
+                                                                      s).items() if o.accepted}
         for j in range(n_bl):
             if n_used[j] and first_data[j] < 0:
                 first_data[j] = k
@@ -586,15 +596,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             has_group = [bool(np.any(st.amb_fixed[(st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f)]))
                          for f in range(n_sig)]
             if not any(has_group):
-                groups = []
-                for f in range(n_sig):
-                    g = idx_j[sig_j == f]
-                    if g.size >= 2:
-                        groups.append((g, int(np.argmax(el_j[sig_j == f]))))
+                groups = first_fix_groups(idx_j, sig_j, el_j, n_sig)
                 if not groups or sum(g.size - 1 for g, _ in groups) < s.ar_min_dd:
                     continue
-                outcome = resolve_lambda(st.x, st.P, groups, b_idx[j], lengths[j], s.max_length_error_m,
-                                         s.min_ratio)
+                outcome = joint_ar.get(j) or resolve_first_fix(st.x, st.P, groups, b_idx[j], lengths[j], s)
                 out_ratio[k, j] = outcome.ratio
                 if outcome.accepted and not (outcome.ratio >= s.ar_min_ratio_first_fix):
                     outcome.accepted = False
@@ -637,7 +642,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                         ev(k, "omega_reset", j, detail=f"the fix turned the baseline by {turn_deg:.2f} deg")
                         if adapter is not None:
                             adapter.reset()
-                    for g, _ in groups:
+                    for g, _ in outcome.groups or groups:
                         st.amb_fixed[g - st.n_fixed_part] = True
                     ev(k, "fix", j, detail=f"{outcome.n_dd} DD ambiguities, ratio {outcome.ratio:.2f}, "
                                          f"length {outcome.length_m:.4f} m")

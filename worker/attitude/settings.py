@@ -155,6 +155,11 @@ class AttitudeSettings:
     max_length_error_m: float = 0.03            # ambiguity acceptance: |length - known| (Table 2)
     # --- ambiguity resolution (not in the paper: our choices, with reasons in docs/attitude.md) ---
     min_ratio: float = 0.0                      # 0 = ratio only reported (the paper validates by length)
+    ambiguity_search: str = "lambda"            # lambda (MLAMBDA + length, the paper) | constrained (C-LAMBDA with
+                                                # the known length, docs/ttff.md; first fixes of a baseline)
+    min_ratio_constrained: float = 3.0          # constrained: ratio of the constrained objective to accept
+    min_ratio_constrained_joint: float = 1.5    # constrained, >= 2 baselines, none fixed: ratio of the joint
+                                                # MC-LAMBDA objective (+ length and angle tests; docs/ttff.md)
     ar_min_ratio_first_fix: float = 0.0         # a first fix of a baseline also needs this ratio
     max_angle_error_m: float = 0.03             # a first fix must agree with every baseline already fixed: angle
                                                 # between them vs the body angle within atan(this / l_min) (1.6 deg

@@ -51,6 +51,13 @@ class AttitudeConfig(BaseModel):
     td_phase_cyc: float = Field(0.25, gt=0, le=100)
     max_length_error_m: float = Field(0.03, gt=0, le=10)
     min_ratio: float = Field(0.0, ge=0, le=1000, description="Also require this ratio (0: ratio only reported).")
+    ambiguity_search: Literal["lambda", "constrained"] = Field(
+        "lambda", description="Integer search of a baseline's first fix: lambda (MLAMBDA + length validation, "
+                              "seed 000) or constrained (C-LAMBDA: the known baseline length inside the search, "
+                              "accepted by the ratio of the constrained objective and the length test; fixes "
+                              "single-frequency starts sooner, docs/ttff.md).")
+    min_ratio_constrained: float = Field(3.0, ge=1, le=1000,
+                                         description="constrained: ratio of the constrained objective to accept.")
     attitude_method: Literal["quest", "triad"] = "quest"
     initial_q_body_from_ecef: list[float] | None = Field(
         None, min_length=4, max_length=4, description="Initial attitude; default Earth pointing (spacecraft) or "
