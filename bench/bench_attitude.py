@@ -58,7 +58,7 @@ def run_mode(d: Path, mode: str) -> dict:
     import worker.attitude.process as P
     from worker.attitude.process import load_inputs, process
     from worker.attitude.products import all_products
-    from worker.attitude.settings import AttitudeSettings
+    from worker.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
     from worker.gnss import rotations as rot
 
     tf = [0.0]
@@ -73,7 +73,7 @@ def run_mode(d: Path, mode: str) -> dict:
     P.run_filter = timed
     try:
         t0 = time.perf_counter()
-        sol = process(load_inputs(files_of(d)), AttitudeSettings(mode=mode))
+        sol = process(load_inputs(files_of(d)), AttitudeSettings(mode=mode, **ALL_PHASES))
         prods = all_products(sol)
         wall = time.perf_counter() - t0
     finally:
@@ -138,7 +138,7 @@ def run_slews(tmp: Path) -> list[str]:
     from tests.attitude.test_adaptive import _lag_deg
     from tests.attitude.test_attitude_sim import errors
     from worker.attitude.process import load_inputs, process
-    from worker.attitude.settings import AttitudeSettings
+    from worker.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
     from worker.sim import simulate_scenario
 
     lines = ["", "Slews (seed 000 Fig. 6; clean, seed 0, dynamic mode; Table 1 = default settings; adaptive = "
@@ -152,7 +152,7 @@ def run_slews(tmp: Path) -> list[str]:
         simulate_scenario("slew", d, seed=SEED, overrides={**over, **CLEAN})
         inputs = load_inputs(files_of(d))
         for name, on in (("Table 1", False), ("adaptive", True)):
-            sol = process(inputs, AttitudeSettings(mode="dynamic", adaptive_omega_noise=on))
+            sol = process(inputs, AttitudeSettings(mode="dynamic", adaptive_omega_noise=on, **ALL_PHASES))
             ang, _ = errors(d, sol)
             f = sol.att_fixed
             t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]

@@ -41,7 +41,8 @@ def set_files(d: Path) -> list:
                ("reference_attitude.csv", "reference_attitude", d / "reference_attitude.csv")])
 
 
-def study_payloads(count: int, seed: int, duration_s: float, realistic: bool = True) -> list[dict]:
+def study_payloads(count: int, seed: int, duration_s: float, realistic: bool = True,
+                   methods: list | None = None) -> list[dict]:
     """The same payloads the `ttff` job builds for a `simulate` block (worker.pipelines.ttff.payloads)."""
     from types import SimpleNamespace
 
@@ -49,7 +50,7 @@ def study_payloads(count: int, seed: int, duration_s: float, realistic: bool = T
     from worker.pipelines.ttff import payloads
 
     cfg = TtffConfig.model_validate({"simulate": {"count": count, "seed": seed, "realistic": realistic},
-                                     "duration_s": duration_s})
+                                     "duration_s": duration_s, **({"methods": methods} if methods else {})})
     return payloads(SimpleNamespace(sets=[]), cfg)
 
 
@@ -61,7 +62,7 @@ def _task(payload: dict) -> dict:
 def cmd_study(args) -> None:
     from multiprocessing import get_context
 
-    pl = study_payloads(args.count, args.seed, args.duration)
+    pl = study_payloads(args.count, args.seed, args.duration, methods=args.methods)
     t0 = time.perf_counter()
     out = []
     with get_context("fork").Pool(args.procs) as pool:
@@ -270,6 +271,8 @@ def main(argv=None) -> None:
     p.add_argument("--duration", type=float, default=120.0)
     p.add_argument("--procs", type=int, default=max(1, min(2, os.cpu_count() or 1)))
     p.add_argument("--out", default="/tmp/bench_ttff_study.json")
+    p.add_argument("--methods", nargs="+", default=None,
+                   help="ttff methods (default the job's; add filter-constrained for the attitude job option)")
     p = sub.add_parser("cubesat")
     p.add_argument("--count", type=int, default=4)
     p.add_argument("--seed", type=int, default=1)

@@ -4,8 +4,9 @@ double-difference solution such as RTKLIB's; dynamic mode must do better).
 
 On white-noise data with the right integers an epoch-wise estimator cannot beat weighted least squares on the
 same phases, and should not be worse; what it can lose is data. The first test checks the filter against the
-floor on exactly the phases it used (so the estimator itself is right), the second that its data selection
-keeps the floor of all tracked phases (the Table 2 C/N0 and antenna-frame masks did not: std 1.2x).
+floor on exactly the phases it used (so the estimator itself is right), the second that the "all phases" selection
+(settings.ALL_PHASES) keeps the floor of all tracked phases (the default Table 2 C/N0 and antenna-frame masks do
+not: std 1.2x).
 """
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ import pytest
 from tests.attitude.conftest import set_files
 from tests.attitude.floor import true_integer_floor, used_phase_mask
 from worker.attitude.process import load_inputs, process
-from worker.attitude.settings import TABLE2_MASKS, AttitudeSettings
+from worker.attitude.settings import ALL_PHASES, AttitudeSettings
 
 #: the clean pass's white phase noise per receiver (simulator preset, truth/observations_*.csv n_phase_*):
 #: L1 3 mm, L2 4.5 mm; one single difference sqrt(2) times that
@@ -39,8 +40,8 @@ def _true_baselines(d, sol):
 @pytest.fixture(scope="module")
 def kinematic(clean_pass):
     inputs = load_inputs(set_files(clean_pass))
-    return {"default": process(inputs, AttitudeSettings(mode="kinematic")),
-            "table2": process(inputs, AttitudeSettings(mode="kinematic", **TABLE2_MASKS))}
+    return {"all_phases": process(inputs, AttitudeSettings(mode="kinematic", **ALL_PHASES)),
+            "table2": process(inputs, AttitudeSettings(mode="kinematic"))}   # the defaults: seed 000 Table 2 masks
 
 
 def _stats(d, sol, b_est):
@@ -65,11 +66,11 @@ def test_kinematic_equals_the_true_integer_floor_on_its_own_phases(clean_pass, k
         assert np.all(g[:, 0] < 1.08 * fl[:, 0]), (name, g, fl)
 
 
-def test_default_data_selection_reaches_the_floor_of_all_phases(clean_pass, kinematic):
-    sol = kinematic["default"]
+def test_all_phases_selection_reaches_the_floor_of_all_phases(clean_pass, kinematic):
+    sol = kinematic["all_phases"]
     floor_all = _stats(clean_pass, sol, true_integer_floor(sol, clean_pass / "truth", SD_SIGMA_M))
     g = _stats(clean_pass, sol, sol.fr.b_ecef_m)
     g2 = _stats(clean_pass, kinematic["table2"], kinematic["table2"].fr.b_ecef_m)
     assert np.all(g[:, 1] < 1.08 * floor_all[:, 1]), (g, floor_all)
-    # Table 2's masks drop the low satellites that fix the direction best: measurably worse than the default
+    # Table 2's masks drop the low satellites that fix the direction best: measurably worse than all phases
     assert np.all(g2[:, 1] > 1.05 * g[:, 1]), (g2, g)
