@@ -106,7 +106,7 @@ def _filter_runs(ss: StudySet, cfg: str, method: str, opts: StudyOptions) -> lis
 
     t0 = time.process_time()
     sigs = list(CONFIGURATIONS[cfg])
-    kw = dict(TABLE2_MASKS)          # the paper's method: seed 000 Table 2 editing masks (C/N0 L1 35 / L2 30 dB-Hz)
+    kw = dict(TABLE2_MASKS)          # the paper's method: seed 000 Table 2 editing masks, explicitly
     kw.update(opts.filter_settings)
     kw.update(opts.filter_settings_by_configuration.get(cfg, {}))
     if method == "filter-constrained":
