@@ -363,18 +363,20 @@ def ekf_held_out(d: Path, calibrated: dict, maps: dict | None = None) -> dict:
     s = input_set(d)
     inp = load_inputs([(f.name, f.kind, f.path) for f in s.files])
     out = {}
-    runs = [("a_priori", {}, {}), ("calibrated_baselines", calibrated, {})]
+    runs = [("a_priori", {}, {}, "exclude"), ("calibrated_baselines", calibrated, {}, "exclude")]
     if maps:
-        runs.append(("calibrated_baselines_and_maps", calibrated, maps))
-    for tag, cal, pcv in runs:
+        runs.append(("calibrated_baselines_and_maps", calibrated, maps, "exclude"))
+        runs.append(("calibrated_baselines_and_maps_empty_bins_kept", calibrated, maps, "keep"))
+    for tag, cal, pcv, empty in runs:
         t0 = time.perf_counter()
-        sol = process(inp, AttitudeSettings(mode="dynamic", calibrated_baselines=cal, pcv_maps=pcv))
+        sol = process(inp, AttitudeSettings(mode="dynamic", calibrated_baselines=cal, pcv_maps=pcv,
+                                            pcv_empty_bins=empty))
         ref = sol.summary.get("reference", {}).get("fixed", {})
         out[tag] = {k: {"bias_deg": round(v["bias_deg"], 4), "sigma_deg": round(v["sigma_deg"], 4)}
                     for k, v in ref.items()}
         out[tag]["seconds"] = round(time.perf_counter() - t0, 1)
     a0 = out["a_priori"]
-    for tag in [t for t, _, _ in runs[1:]]:
+    for tag in [r[0] for r in runs[1:]]:
         out[tag]["cut_percent"] = {k: {"bias": round(100 * (1 - abs(out[tag][k]["bias_deg"]) / abs(a0[k]["bias_deg"])), 1)
                                        if a0[k]["bias_deg"] else None,
                                        "sigma": round(100 * (1 - out[tag][k]["sigma_deg"] / a0[k]["sigma_deg"]), 1)

@@ -41,7 +41,8 @@ def set_files(d: Path) -> list:
                ("reference_attitude.csv", "reference_attitude", d / "reference_attitude.csv")])
 
 
-def study_payloads(count: int, seed: int, duration_s: float, realistic: bool = True) -> list[dict]:
+def study_payloads(count: int, seed: int, duration_s: float, realistic: bool = True,
+                   methods: list | None = None) -> list[dict]:
     """The same payloads the `ttff` job builds for a `simulate` block (worker.pipelines.ttff.payloads)."""
     from types import SimpleNamespace
 
@@ -49,7 +50,7 @@ def study_payloads(count: int, seed: int, duration_s: float, realistic: bool = T
     from worker.pipelines.ttff import payloads
 
     cfg = TtffConfig.model_validate({"simulate": {"count": count, "seed": seed, "realistic": realistic},
-                                     "duration_s": duration_s})
+                                     "duration_s": duration_s, **({"methods": methods} if methods else {})})
     return payloads(SimpleNamespace(sets=[]), cfg)
 
 
@@ -61,7 +62,7 @@ def _task(payload: dict) -> dict:
 def cmd_study(args) -> None:
     from multiprocessing import get_context
 
-    pl = study_payloads(args.count, args.seed, args.duration)
+    pl = study_payloads(args.count, args.seed, args.duration, methods=args.methods)
     t0 = time.perf_counter()
     out = []
     with get_context("fork").Pool(args.procs) as pool:
@@ -104,6 +105,12 @@ def cmd_cubesat(args) -> None:
     Path(args.out).write_text(json.dumps({"count": args.count, "seed": args.seed, "results": res}))
 
 
+def _proc_cpu_s(pid: int) -> float:
+    """User + system CPU seconds of a process (/proc/<pid>/stat fields 14-15), all its threads."""
+    f = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(f[11]) + int(f[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def cmd_job(args) -> None:
     """The `ttff` job over `count` simulated starts on a real service (API + N worker processes)."""
     import httpx  # noqa: F401 - the Service helper needs it
@@ -123,6 +130,7 @@ def cmd_job(args) -> None:
             cfg = {"simulate": {"count": args.count, "seed": args.seed}, "duration_s": args.duration,
                    "single_epoch_step_s": args.step}
             load0 = list(os.getloadavg())
+            cpu0 = [_proc_cpu_s(w.pid) for w in svc.workers]
             t0 = time.monotonic()
             r = cl.post("/v1/jobs", json={"type": "ttff", "observation_set_ids": [], "config": cfg})
             r.raise_for_status()
@@ -133,11 +141,13 @@ def cmd_job(args) -> None:
                     break
                 time.sleep(0.5)
             wall = time.monotonic() - t0
+            worker_cpu = [round(_proc_cpu_s(w.pid) - c, 2) for w, c in zip(svc.workers, cpu0)]
             summ = cl.get(f"/v1/jobs/{job_id}/products/summary.json").json() if j["state"] == "succeeded" else None
             out[str(n)] = {"state": j["state"], "wall_s": round(wall, 1), "error": j.get("error"),
                            "task_seconds_total": summ and summ.get("task_seconds_total"),
                            "task_cpu_seconds_total": summ and summ.get("task_cpu_seconds_total"),
                            "tasks_per_worker": summ and summ.get("tasks_per_worker"),
+                           "worker_cpu_s": worker_cpu,
                            "load_average_before": load0, "load_average_after": list(os.getloadavg())}
             print(n, "worker(s):", out[str(n)], flush=True)
         finally:
@@ -232,7 +242,8 @@ def report(study: dict, cubesat: dict | None, job: dict | None, rtk: dict | None
             lines.append(f"- {n_w} worker(s): {v['state']}, {v['wall_s']} s wall (sum of task times "
                          f"{v['task_seconds_total']} s wall, {v.get('task_cpu_seconds_total')} s CPU; load average "
                          f"before {la and ' / '.join(f'{x:.1f}' for x in la)}; tasks per worker "
-                         f"{v.get('tasks_per_worker')})")
+                         f"{v.get('tasks_per_worker')}; CPU of the worker processes during the job "
+                         f"{v.get('worker_cpu_s')} s)")
     return "\n".join(lines) + "\n"
 
 
@@ -260,6 +271,8 @@ def main(argv=None) -> None:
     p.add_argument("--duration", type=float, default=120.0)
     p.add_argument("--procs", type=int, default=max(1, min(2, os.cpu_count() or 1)))
     p.add_argument("--out", default="/tmp/bench_ttff_study.json")
+    p.add_argument("--methods", nargs="+", default=None,
+                   help="ttff methods (default the job's; add filter-constrained for the attitude job option)")
     p = sub.add_parser("cubesat")
     p.add_argument("--count", type=int, default=4)
     p.add_argument("--seed", type=int, default=1)

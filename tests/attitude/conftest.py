@@ -50,3 +50,14 @@ def hard_pass(tmp_path_factory) -> Path:
 def realistic_pass(tmp_path_factory) -> Path:
     """The earth-pointing preset as it is: C/N0-dependent noise, multipath, PCV 10 mm p-p, PCO scatter."""
     return _simulate(tmp_path_factory, "realistic", "earth-pointing", 11, {"duration_s": 600.0})
+
+
+#: seed 000 Fig. 6 (bottom), shortened: Earth pointing, pitch 0 -> 50 deg within one minute, then back to -40 deg
+PITCH_SLEW = {"start_gps": "2018-06-06T16:31:00", "duration_s": 300.0,
+              "waypoints": [[0.0, 0.0, 0.0, 0.0], [60.0, 0.0, 0.0, 0.0], [120.0, 0.0, 50.0, 0.0],
+                            [300.0, 0.0, -40.0, 0.0]]}
+
+
+@pytest.fixture(scope="session")
+def pitch_slew_pass(tmp_path_factory) -> Path:
+    return _simulate(tmp_path_factory, "pitch_slew", "slew", 0, {**PITCH_SLEW, **CLEAN})

@@ -128,7 +128,9 @@ def test_effective_signals_and_masks():
     s = AttitudeSettings(cn0_mask_dbhz={"L1": 38.0, "L2": 31.0, "C:B2I": 20.0})
     assert cn0_mask_of(s, "L1") == 38.0 and cn0_mask_of(s, "G:L1") == 38.0      # the alias masks GPS L1 too
     assert cn0_mask_of(s, "G:L2") == 31.0 and cn0_mask_of(s, "C:B2I") == 20.0
-    assert cn0_mask_of(s, "E:E1") == 35.0 and cn0_mask_of(s, "E:E5b") == 30.0  # defaults of the table
+    assert cn0_mask_of(s, "E:E1") == 35.0 and cn0_mask_of(s, "E:E5b") == 30.0  # default: Table 2 style per system
+    t2 = AttitudeSettings(cn0_mask_dbhz={"L1": 38.0}, cn0_mask_default_dbhz=0.0)
+    assert cn0_mask_of(t2, "E:E1") == 0.0 and cn0_mask_of(t2, "E:E5b") == 0.0    # 0: no mask (noise model)
     assert cn0_mask_of(AttitudeSettings(cn0_mask_dbhz={"G:L1": 40.0}), "L1") == 40.0
 
 
@@ -156,7 +158,8 @@ def test_job_config_systems_and_signals():
 
     s = AttitudeConfig(systems=["G", "E", "C", "J"], cn0_mask_dbhz={"C:B1I": 33.0}).to_settings()
     assert effective_signals(s) == ["G:L1", "G:L2", "E:E1", "E:E5b", "C:B1I", "C:B2I", "J:L1", "J:L2"]
-    assert cn0_mask_of(s, "C:B1I") == 33.0 and cn0_mask_of(s, "G:L1") == 35.0
+    assert cn0_mask_of(s, "C:B1I") == 33.0 and cn0_mask_of(s, "G:L1") == 35.0 and cn0_mask_of(s, "E:E1") == 35.0 \
+        and cn0_mask_of(s, "E:E5b") == 30.0                                       # defaults: Table 2 style
     assert AttitudeConfig(signals=["L1", "E:E1"]).to_settings().signals == ["L1", "E:E1"]
     assert AttitudeConfig().to_settings().signals == ["L1", "L2"] and AttitudeConfig().systems is None
     for bad in ({"signals": ["L1", "G:L1"]}, {"signals": ["E6"]}, {"systems": ["R"]}, {"systems": ["G", "G"]},

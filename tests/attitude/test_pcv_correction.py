@@ -168,3 +168,25 @@ def test_job_config_resolves_maps_from_the_store(tmp_path, pcv_pass):
         run(_ctx(tmp_path / "d", set_files(pcv_pass), {"x": bad}), AttitudeConfig(pcv_map_ids=["x"]))
     with pytest.raises(ValueError, match="two PCV maps"):
         maps_for_settings([("a", store["map-0"]), ("b", store["map-0"])], [("GPS-2", "GPS-0"), ("GPS-2", "GPS-1")])
+
+
+def test_empty_bins_exclude_or_keep(pcv_pass):
+    """A map with a hole: with "exclude" the phases in it leave the solution once fixed (reason pcv_empty), with
+    "keep" they stay in, uncorrected."""
+    from worker.attitude.filter import REASONS
+    from worker.attitude.process import load_inputs, process
+    from worker.attitude.settings import AttitudeSettings
+
+    maps = true_maps(pcv_pass)
+    holed = {}
+    for k, doc in maps.items():
+        el = np.asarray(doc["elevation_deg"])
+        holed[k] = {**doc, "values_mm": [[None if e < 10.0 else v for v in row] for e, row in zip(el, doc["values_mm"])]}
+    inputs = load_inputs(set_files(pcv_pass))
+    code = {v: k for k, v in REASONS.items()}["pcv_empty"]
+    n_empty = {}
+    for mode in ("exclude", "keep"):
+        sol = process(inputs, AttitudeSettings(pcv_maps=holed, pcv_empty_bins=mode))
+        n_empty[mode] = int(np.sum(sol.fr.residuals["reason"] == code))
+        assert sol.att_fixed.mean() > 0.9
+    assert n_empty["exclude"] > 100 and n_empty["keep"] == 0, n_empty

@@ -3,7 +3,6 @@ continuation lines, errors with line numbers, speed."""
 from __future__ import annotations
 
 import gzip
-import time
 
 import numpy as np
 import pytest
@@ -79,12 +78,10 @@ def _naive_as_records(path):
     return out
 
 
-def test_real_cod_clock_against_independent_parse_and_fast():
+def test_real_cod_clock_against_independent_parse():
+    """Values against an independent line parse (the read's speed is bench/bench_nav_sp3.py's, not a test's)."""
     path = real_set("leo_grace_a_2007080") / "cod14193.clk.gz"
-    t0 = time.perf_counter()
     c = read_rinex_clock(path)
-    elapsed_s = time.perf_counter() - t0
-    assert elapsed_s < 2.0, f"read took {elapsed_s:.2f} s"
     assert c.clock_s.shape == (2880, 30) and len(c.receivers) == 108 and c.version == 2.0
     ref = _naive_as_records(path)
     assert len(ref) == int(np.isfinite(c.clock_s).sum()) == 86400

@@ -1,7 +1,7 @@
 """Fuzzing the RINEX clock reader on a small text: only ParseError, bounded time."""
 from __future__ import annotations
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from tests.gnss.test_rinex_clock import clock_text
@@ -17,6 +17,8 @@ BASE_2 = clock_text("2.00", [(k, n[:4], s, v) for k, n, s, v in RECS])
 
 @settings(max_examples=200, deadline=1000, suppress_health_check=[HealthCheck.too_slow])
 @given(st.one_of(mutated(BASE_3), mutated(BASE_2)))
+@example(BASE_3.replace(b"G01", b"G\x1c1", 1))   # a control character inside a satellite id (found by fuzzing)
+@example(BASE_3.replace(b"G01", "G\u00b2".encode("latin-1", "replace"), 1))
 def test_fuzz_clock_only_parse_error(data):
     try:
         c = read_rinex_clock(data, name="fuzz.clk")

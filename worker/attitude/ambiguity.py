@@ -12,7 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["ArOutcome", "dd_matrix", "resolve_constrained", "resolve_lambda", "round_newcomers"]
+__all__ = ["ArOutcome", "dd_matrix", "first_fix_groups", "resolve_constrained", "resolve_first_fix",
+           "resolve_joint_constrained", "resolve_lambda", "round_newcomers"]
 
 
 @dataclass
@@ -30,6 +31,7 @@ class ArOutcome:
     length_m: float
     n_dd: int
     reason: str = ""
+    groups: list | None = None    # the groups this outcome fixes when not all of the attempt's (joint search)
 
 
 def dd_matrix(amb_idx: np.ndarray, ref_pos: int, n_state: int) -> np.ndarray:
@@ -134,3 +136,108 @@ def resolve_constrained(x: np.ndarray, P: np.ndarray, groups: list[tuple[np.ndar
     if not (ratio >= min_ratio):
         return ArOutcome(False, D, a_fix, ratio, length, D.shape[0], f"constrained ratio {ratio:.2f} < {min_ratio:.2f}")
     return ArOutcome(True, D, a_fix, ratio, length, D.shape[0])
+
+
+def resolve_first_fix(x: np.ndarray, P: np.ndarray, groups: list[tuple[np.ndarray, int]], b_idx: np.ndarray,
+                      known_length_m: float, settings) -> ArOutcome:
+    """The first-fix attempt of one baseline with the search the settings ask for (``ambiguity_search``):
+    ``"lambda"``: `resolve_lambda` (seed 000 sec. 2: MLAMBDA + length, ``min_ratio``); ``"constrained"``:
+    `resolve_constrained` (C-LAMBDA with the known length, Teunissen 2010; ratio ``min_ratio_constrained``)."""
+    mode = getattr(settings, "ambiguity_search", "lambda")
+    if mode == "constrained":
+        return resolve_constrained(x, P, groups, b_idx, known_length_m, settings.max_length_error_m,
+                                   max(settings.min_ratio_constrained, settings.min_ratio))
+    if mode != "lambda":
+        raise ValueError(f"ambiguity_search {mode!r}: expected 'lambda' or 'constrained'")
+    return resolve_lambda(x, P, groups, b_idx, known_length_m, settings.max_length_error_m, settings.min_ratio)
+
+
+def first_fix_groups(idx: np.ndarray, sig: np.ndarray, elevation: np.ndarray, n_sig: int) -> list:
+    """Per signal with >= 2 ambiguities: (state indices of the SD ambiguities observed now, position of the
+    reference = the highest local elevation), the DD layout of a first-fix attempt of one baseline."""
+    groups = []
+    for f in range(n_sig):
+        g = idx[sig == f]
+        if g.size >= 2:
+            groups.append((g, int(np.argmax(elevation[sig == f]))))
+    return groups
+
+
+def resolve_joint_constrained(x: np.ndarray, P: np.ndarray, groups_by_baseline: dict, b_idx: np.ndarray,
+                              body_baselines_m: np.ndarray, settings) -> dict:
+    """Per baseline j of ``groups_by_baseline`` (>= 2 baselines, none fixed yet): its ArOutcome of one joint
+    MC-LAMBDA attempt with the body geometry known and the attitude as unknown.
+
+    The DD float of all baselines (worker.estimation.constrained_search.float_from_single_differences), the exact
+    MC-LAMBDA minimiser (constrained_search_by_baselines: Teunissen 2007; Giorgi et al. 2010), accepted for all
+    baselines together when the ratio of the constrained objective reaches ``settings.min_ratio_constrained_joint``,
+    every integer-conditioned baseline b_hat(a) passes the length test and every pair the angle test
+    (``settings.max_length_error_m`` / ``settings.max_angle_error_m``, widened to 3 sigma of b_hat(a) where that
+    is larger: worker.ttff.single_epoch.geometric_tolerance_m). The same search and validation as the epoch-wise
+    ``epoch-constrained`` method of the ttff study (docs/ttff.md). With several signals and no acceptance, the
+    first signal's groups alone are tried (the outcome's ``groups`` then names them).
+    """
+
+    out = _joint_constrained(x, P, groups_by_baseline, b_idx, body_baselines_m, settings)
+    if not next(iter(out.values())).accepted and all(len(g) > 1 for g in groups_by_baseline.values()):
+        # several signals and not accepted: the first signal alone (its weaker partners then follow as newcomers
+        # of a fixed baseline); the same first-signal fallback as worker.ttff.single_epoch
+        first = {j: g[:1] for j, g in groups_by_baseline.items()}
+        out1 = _joint_constrained(x, P, first, b_idx, body_baselines_m, settings)
+        if next(iter(out1.values())).accepted:
+            for j, o in out1.items():
+                o.groups = first[j]
+            return out1
+    return out
+
+
+def _joint_constrained(x, P, groups_by_baseline, b_idx, body_baselines_m, settings) -> dict:
+    from worker.estimation.ar_validation import baseline_angle_test, baseline_length_test
+    from worker.estimation.constrained_search import (
+        DDBlock, constrained_search_by_baselines, float_from_single_differences,
+    )
+    from worker.estimation.lambda_search import AmbiguitySearchError
+    from worker.ttff.single_epoch import geometric_tolerance_m
+
+    use = sorted(groups_by_baseline)
+    Ds, blocks, sd_idx, refs, rows, off = {}, [], [], [], [], 0
+    for pos, j in enumerate(use):
+        gs = [(g, r) for g, r in groups_by_baseline[j] if g.size >= 2]
+        Ds[j] = np.concatenate([dd_matrix(g, r, x.size) for g, r in gs], axis=0)
+        start = off
+        for g, r in gs:
+            blocks.append(DDBlock(pos, str(len(blocks)), 1.0, tuple(int(v) for v in np.delete(g, r)), int(g[r]),
+                                  np.zeros((g.size - 1, 3))))
+            sd_idx.append(g)
+            refs.append(r)
+            off += g.size - 1
+        rows.append(np.arange(start, off))
+    F = np.asarray(body_baselines_m, float)[use]
+    sol = float_from_single_differences(x, P, sd_idx, [b_idx[j] for j in use], blocks, refs)
+    nan = float("nan")
+    try:
+        res = constrained_search_by_baselines(sol.a_float_cyc, 0.5 * (sol.Q_a + sol.Q_a.T), sol.b_float_m,
+                                              0.5 * (sol.Q_b + sol.Q_b.T), sol.Q_ab, F, rows,
+                                              ratio_cap=max(2.0, 1.34 * settings.min_ratio_constrained_joint),
+                                              max_nodes=50_000)
+    except (AmbiguitySearchError, ValueError, np.linalg.LinAlgError) as exc:
+        return {j: ArOutcome(False, Ds[j], None, nan, nan, Ds[j].shape[0], f"MC-LAMBDA failed: {str(exc)[:80]}")
+                for j in use}
+    B = res.b_unconstrained_m.reshape(-1, 3)
+    tol = geometric_tolerance_m(sol, settings.max_length_error_m, 3.0)
+    _, len_ok = baseline_length_test(B, np.linalg.norm(F, axis=1), tol)
+    ang_tol = tol * (max(settings.max_angle_error_m, 2.0 * settings.max_length_error_m) / settings.max_length_error_m)
+    _, ang_ok = baseline_angle_test(B, F, tol_m=ang_tol)
+    ratio = float(res.ratio)
+    why = []
+    if not ratio >= settings.min_ratio_constrained_joint:
+        why.append(f"joint constrained ratio {ratio:.2f} < {settings.min_ratio_constrained_joint:.2f}")
+    if not np.all(len_ok):
+        why.append("length of b_hat(a) " + ", ".join(f"{np.linalg.norm(b):.4f}" for b in B) + " m")
+    if not np.all(ang_ok):
+        why.append("angle between the baselines")
+    out = {}
+    for pos, j in enumerate(use):
+        out[j] = ArOutcome(not why, Ds[j], res.fixed[0][rows[pos]].astype(np.float64), ratio,
+                           float(np.linalg.norm(B[pos])), Ds[j].shape[0], "; ".join(why))
+    return out

@@ -27,8 +27,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from worker.attitude.ambiguity import resolve_lambda, round_newcomers
+from worker.attitude.adaptive import OmegaNoiseAdapter
+from worker.attitude.ambiguity import (
+    first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
+)
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
+from worker.attitude.fastops import clip as _clip, count_pairs as _count_pairs, median1d as _median1d
+from worker.attitude.fastops import nanmedian1 as _nanmedian1, nz as _nz
+from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from worker.attitude.settings import AttitudeSettings, cn0_mask_of
 from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
 from worker.estimation.ekf import joseph_update_sparse, rotation_rk4_stm
@@ -150,25 +156,15 @@ class _State:
             self.n_fixed_part + np.arange(self.amb_key.shape[0])
 
 
-def _nanmedian1(a: np.ndarray) -> np.ndarray:
-    """Median over axis 1 ignoring NaN (NaN where a slice has no finite value); a fast np.nanmedian(a, axis=1)."""
-    srt = np.sort(a, axis=1)                      # NaN sort last
-    n = np.isfinite(a).sum(axis=1)
-    lo = np.clip((n - 1) // 2, 0, None)
-    hi = np.clip(n // 2, 0, None)
-    v = 0.5 * (np.take_along_axis(srt, lo[:, None], 1)[:, 0] + np.take_along_axis(srt, hi[:, None], 1)[:, 0])
-    return np.where(n > 0, v, np.nan)
-
-
 def _cn0_factor(cn0_dbhz: np.ndarray) -> np.ndarray:
     """Variance factor 10^((45 - C/N0)/10), clipped to [0.25, 16] (noise doubles per -6 dB; 45 dB-Hz = Table 1)."""
-    return np.clip(10.0 ** ((45.0 - np.nan_to_num(cn0_dbhz, nan=45.0)) / 10.0), 0.25, 16.0)
+    return _clip(10.0 ** ((45.0 - _nz(cn0_dbhz, 45.0)) / 10.0), 0.25, 16.0)
 
 
 def _mp_var(off_boresight_rad: np.ndarray, sigma_boresight_m: float, sigma_horizon_m: float) -> np.ndarray:
     """Variance (m^2) of the time-correlated error of one SD: sigma grows from the boresight value with the square
     of the off-boresight angle, reaching sigma_horizon_m at the antenna horizon (90 deg); capped at 120 deg."""
-    x = np.clip(np.nan_to_num(off_boresight_rad, nan=np.pi / 2) / (np.pi / 2), 0.0, 4.0 / 3.0)
+    x = _clip(_nz(off_boresight_rad, np.pi / 2) / (np.pi / 2), 0.0, 4.0 / 3.0)
     return (sigma_boresight_m + (sigma_horizon_m - sigma_boresight_m) * x * x) ** 2
 
 
@@ -209,6 +205,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     if dynamic:
         st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
     q_w = (s.sigma_omega_deg_s * DEG) ** 2 / s.tau_omega_s          # rad^2/s^2 per s
+    adapter = OmegaNoiseAdapter(q_w, s.adaptive_omega_window, s.adaptive_omega_gain,
+                                s.adaptive_omega_gate) \
+        if dynamic and s.adaptive_omega_noise else None
     q_b = s.sigma_baseline_kinematic_m ** 2 / s.tau_baseline_s       # m^2 per s
     var_clk = (s.sigma_clock_s * C_M_S) ** 2
     cn0_growth = s.weighting == "cn0" or s.noise_cn0_growth
@@ -227,7 +226,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     out_n = np.zeros((n_ep, n_bl), np.int64)
     out_ratio = np.full((n_ep, n_bl), np.nan)
     out_w = np.full((n_ep, 3), np.nan)
-    res_blocks: list[np.ndarray] = []
+    res_blocks: list[tuple] = []          # per epoch: see _residual_records
     events: list[dict] = []
     first_fix = np.full(n_bl, -1)
     first_data = np.full(n_bl, -1)
@@ -279,11 +278,18 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         st.P[:, bi] = 0.0
         st.P[bi, bi] = max(s.sigma0_baseline_m, 1.2 * lengths[j]) ** 2
         bad_fix[j] = 0
+        if adapter is not None:
+            adapter.reset()
         ev(k, "fix_reset", j, detail=f"{why}: ambiguities restart")
 
     def ev(k, kind, j=None, sat=None, sig=None, detail=""):
         events.append({"epoch": k, "event": kind, "baseline": j, "sat": sat, "signal": sig, "detail": detail})
 
+    blk = None                                              # SdBlock of the current epochs
+    sub_w_b = np.concatenate([np.arange(3), all_b_idx])      # omega and baselines (dynamic propagation)
+    eye_sub = np.eye(sub_w_b.size)
+    ix_sub = np.ix_(sub_w_b, sub_w_b)
+    ix_b = np.ix_(all_b_idx, all_b_idx)
     for k in range(n_ep):
         st.epoch = k
         if progress is not None and k % 100 == 0:
@@ -297,8 +303,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 bb = st.x[all_b_idx].reshape(n_bl, 3)
                 b1, Pbb, Pbw = rotation_rk4_stm(bb, w, dt, s.rk4_step_s)
                 st.x[all_b_idx] = b1.ravel()
-                sub = np.concatenate([np.arange(3), all_b_idx])
-                Phi = np.eye(sub.size)
+                sub = sub_w_b
+                Phi = eye_sub.copy()
                 for j in range(n_bl):
                     r = 3 + 3 * j
                     Phi[r:r + 3, r:r + 3] = Pbb[j]
@@ -306,17 +312,19 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 st.P[sub, :] = Phi @ st.P[sub, :]
                 st.P[:, sub] = st.P[:, sub] @ Phi.T
                 # discrete process noise of the omega random walk and its effect on b (integrated over dt)
+                Qw = adapter.q_rate() if adapter is not None else np.eye(3) * q_w       # (3, 3) rad^2/s^3
                 Q = np.zeros((sub.size, sub.size))
-                Q[0:3, 0:3] = np.eye(3) * q_w * dt
+                Q[0:3, 0:3] = Qw * dt
+                Bxs = [-_skew(b1[j]) for j in range(n_bl)]
                 for j in range(n_bl):
                     r = 3 + 3 * j
-                    Bx = -_skew(b1[j])
-                    Q[r:r + 3, 0:3] = Bx * q_w * dt ** 2 / 2
+                    Bx = Bxs[j]
+                    Q[r:r + 3, 0:3] = Bx @ Qw * dt ** 2 / 2
                     Q[0:3, r:r + 3] = Q[r:r + 3, 0:3].T
                     for i in range(n_bl):
                         ri = 3 + 3 * i
-                        Q[r:r + 3, ri:ri + 3] = Bx @ (-_skew(b1[i])).T * q_w * dt ** 3 / 3
-                st.P[np.ix_(sub, sub)] += Q
+                        Q[r:r + 3, ri:ri + 3] = Bx @ Qw @ Bxs[i].T * dt ** 3 / 3
+                st.P[ix_sub] += Q
             else:
                 st.P[all_b_idx, all_b_idx] += q_b * dt
         # white-noise clocks: reset every epoch
@@ -326,29 +334,22 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         st.P[st.white, st.white] = var_clk
 
         # ---------------- single differences and QC ----------------
-        pa = pobs.present[ia, k] & pobs.present[ib, k]                     # (n_bl,)
-        gv = geom.valid[k]                                                  # (n_sat,)
-        u = np.where(gv[:, None], geom.los_ecef[k], 0.0)                    # (n_sat, 3)
-        rdot = geom.range_rate_m_s[k]
-        cfac = 1.0 - rdot / C_M_S                                           # clock partial
-        sdc = pobs.code_m[ib, k] - pobs.code_m[ia, k]                       # (n_bl, n_sat, n_sig)
-        sdp = pobs.phase_m[ib, k] - pobs.phase_m[ia, k]
-        cn0 = np.fmin(pobs.cn0_dbhz[ia, k], pobs.cn0_dbhz[ib, k])
-        lli = np.maximum(pobs.lli[ia, k], 0) | np.maximum(pobs.lli[ib, k], 0)
-        avail_c = np.isfinite(sdc) & pa[:, None, None] & gv[None, :, None]
-        avail_p = np.isfinite(sdp) & avail_c
-        reason = np.where(avail_c, 0, 8)
-        # local horizon
+        if blk is None or k - blk.k0 >= blk.pa.shape[0]:
+            blk = sd_block(pobs, geom, ia, ib, k, min(k + BLOCK_EPOCHS, n_ep), s.elevation_mask_local_deg * DEG,
+                           sig_cn0)
+        i = k - blk.k0
+        pa, u, cfac = blk.pa[i], blk.u[i], blk.cfac[i]                      # (n_bl,) (n_sat, 3) (n_sat,)
+        sdc, sdp, cn0, lli = blk.sdc[i], blk.sdp[i], blk.cn0[i], blk.lli[i]  # (n_bl, n_sat, n_sig)
+        avail_c, avail_p = blk.avail_c[i], blk.avail_p[i]
+        reason = blk.reason[i].copy()                                       # 8 no SD, 1 local horizon
         el_loc = geom.elevation_local_rad[k]
-        bad_el = ~(el_loc >= s.elevation_mask_local_deg * DEG)
-        reason = np.where((reason == 0) & bad_el[None, :, None], 1, reason)
         # antenna frame, once fixed (sec. 3.2 compromise)
         el_ant = np.full((n_bl, n_sat), np.nan)
         az_ant = np.full((n_bl, n_sat), np.nan)
         # antenna-frame elevation for the noise model: by the current attitude once known, else the initial one
         los_b = u @ (R_mask if R_mask is not None else R_body_from_ecef_0).T           # (n_sat, 3) body
-        el_w = np.fmin(np.arcsin(np.clip(los_b @ boresight_body[ia].T, -1, 1)),
-                       np.arcsin(np.clip(los_b @ boresight_body[ib].T, -1, 1))).T      # (n_bl, n_sat)
+        el_w = np.fmin(np.arcsin(_clip(los_b @ boresight_body[ia].T, -1, 1)),
+                       np.arcsin(_clip(los_b @ boresight_body[ib].T, -1, 1))).T      # (n_bl, n_sat)
         if R_mask is not None:
             el_ant[:] = el_w
             az_ant[:] = np.arctan2(los_b[:, 1], los_b[:, 0])[None, :]
@@ -357,10 +358,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         pcv_m = np.zeros((n_bl, n_sat, n_sig))
         if pcv_tables and R_mask is not None and t - R_mask_t <= PCV_ATTITUDE_AGE_S:
             pcv_m, empty = _pcv_epoch(pcv_tables, los_b, R_ant_first, n_sig, ever_fixed)
-            reason = np.where((reason == 0) & empty, 10, reason)
+            if s.pcv_empty_bins == "exclude":
+                reason = np.where((reason == 0) & empty, 10, reason)
         # C/N0
-        low = cn0 < sig_cn0[None, None, :]
-        reason = np.where((reason == 0) & low, 3, reason)
+        reason = np.where((reason == 0) & blk.low_cn0[i], 3, reason)
         use_c = reason == 0
         use_p = use_c & avail_p
         # epoch clock estimate from code (first signal): c dt0 = median(SD_code + u.b) / (1 - rdot/c)
@@ -373,7 +374,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # predicted from the last estimate and the differential drift: free-running clocks drift by up to ~10 us/s
         # relative to each other, so across an outage the change alone is no jump
         clk_pred = prev_clk0 + clk_rate * (t - prev_clk0_t)
-        clk0 = np.where(have0, clk0_raw, np.nan_to_num(clk_pred))
+        clk0 = np.where(have0, clk0_raw, _nz(clk_pred))
         corr = cfac[None, :, None] * clk0[:, None, None]
         sdc_c = sdc - corr
         sdp_c = sdp - corr
@@ -404,7 +405,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             mc = _nanmedian1(np.where(td_c_ok, td_c, np.nan))                 # (n_bl, n_sig)
             mp = _nanmedian1(np.where(td_p_ok, td_p, np.nan))
             # a common phase jump without a code jump: a receiver clock jump not applied to phase -> integer shift
-            common = np.nan_to_num(mp - mc)
+            common = _nz(mp - mc)
             for j, f in zip(*np.nonzero(np.abs(common) > 1000.0)):
                 n_cyc = np.round(common[j, f] / lam[f])
                 sel = (st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f)
@@ -421,37 +422,40 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                     for f in range(n_sig):
                         for kk, td, okk, mref, big in ((0, td_c, td_c_ok, mc, 5.0), (1, td_p, td_p_ok, mp, lam[f])):
                             sel = okk[..., f]
-                            r = np.abs((td - np.nan_to_num(mref)[:, None, :])[..., f][sel])
+                            r = np.abs((td[..., f] - _nz(mref[:, f])[:, None])[sel])
                             x = lw[..., f][sel]
                             keep = (r < big) & (r > 0)
                             if keep.sum() >= 3:
                                 x, y = x[keep], np.log(r[keep])
                                 a = 1.0 / min(gam_n[kk, f] + 1.0, NOISE_EPOCHS)
-                                mom[kk, f] += a * (np.array([x.mean(), y.mean(), (x * x).mean(), (x * y).mean()])
-                                                   - mom[kk, f])
+                                nx = x.size            # means as sum / size (what ndarray.mean computes)
+                                mom[kk, f] += a * (np.array([x.sum() / nx, y.sum() / nx, (x * x).sum() / nx,
+                                                             (x * y).sum() / nx]) - mom[kk, f])
                                 gam_n[kk, f] += 1
                                 vx = mom[kk, f, 2] - mom[kk, f, 0] ** 2
                                 if gam_n[kk, f] >= NOISE_MIN_EPOCHS and vx > 0.05:
-                                    gamma[kk, f] = np.clip(2.0 * (mom[kk, f, 3] - mom[kk, f, 0] * mom[kk, f, 1]) / vx,
+                                    gamma[kk, f] = _clip(2.0 * (mom[kk, f, 3] - mom[kk, f, 0] * mom[kk, f, 1]) / vx,
                                                            0.0, 1.5)
                 wfac_c = np.exp(gamma[0][None, None, :] * lw)
                 wfac_p = np.exp(gamma[1][None, None, :] * lw)
+                dc_all = (td_c - _nz(mc)[:, None, :]) / np.sqrt(wfac_c)
+                dp_all = (td_p - _nz(mp)[:, None, :]) / np.sqrt(wfac_p)
                 for f in range(n_sig):
-                    dc = ((td_c - np.nan_to_num(mc)[:, None, :]) / np.sqrt(wfac_c))[..., f][td_c_ok[..., f]]
-                    dp = ((td_p - np.nan_to_num(mp)[:, None, :]) / np.sqrt(wfac_p))[..., f][td_p_ok[..., f]]
+                    dc = dc_all[..., f][td_c_ok[..., f]]
+                    dp = dp_all[..., f][td_p_ok[..., f]]
                     if dp.size >= 3 and dc.size >= 3:
                         a = 1.0 / min(est_n[f] + 1.0, NOISE_EPOCHS)
                         # MAD -> sigma of a TD = sqrt(2) sigma of one SD (white noise)
-                        vp = (np.median(np.abs(dp)) / 0.6745) ** 2 / 2.0
-                        vc = (np.median(np.abs(dc)) / 0.6745) ** 2 / 2.0
+                        vp = (_median1d(np.abs(dp)) / 0.6745) ** 2 / 2.0
+                        vc = (_median1d(np.abs(dc)) / 0.6745) ** 2 / 2.0
                         est_var_p[f] += a * (vp - est_var_p[f])
                         est_var_c[f] += a * (vc - est_var_c[f])
                         est_n[f] += 1
-            bad_tc = td_c_ok & (np.abs(td_c - np.nan_to_num(mc)[:, None, :]) > s.td_code_m)
+            bad_tc = td_c_ok & (np.abs(td_c - _nz(mc)[:, None, :]) > s.td_code_m)
             # every phase with a state is checked, used or not: a slip while rejected (C/N0, mask) must not
             # survive into the epochs where it is used again
             td_p_chk = np.isfinite(td_p) & avail_p
-            bad_tp = td_p_chk & (np.abs(td_p - np.nan_to_num(mp)[:, None, :]) > s.td_phase_cyc * lam[None, None, :])
+            bad_tp = td_p_chk & (np.abs(td_p - _nz(mp)[:, None, :]) > s.td_phase_cyc * lam[None, None, :])
             reason = np.where((reason == 0) & bad_tc, 4, reason)
             use_c &= ~bad_tc
             slip |= bad_tp
@@ -526,7 +530,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 # antenna-frame elevation once an attitude exists, else the local horizon (ground platforms)
                 el_e = el_ant if R_mask is not None else np.broadcast_to(el_loc, (n_bl, n_sat))
                 e = np.concatenate([el_e[jc, sc], el_e[jp, sp]])
-                var *= np.clip(1.0 / np.sin(np.clip(np.nan_to_num(e, nan=0.5), 0.05, None)) ** 2, 1.0, 16.0)
+                var *= _clip(1.0 / np.sin(_clip(_nz(e, 0.5), 0.05, None)) ** 2, 1.0, 16.0)
             if mp_model:
                 # time-correlated errors (multipath, uncalibrated PCV) growing with the off-boresight angle
                 th_c = np.pi / 2 - el_w[jc, sc]
@@ -539,6 +543,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             hx = np.einsum("mk,mk->m", np.where(cols >= 0, coef, 0.0), st.x[ok_cols])
             innov = z - hx
             x1, P1, S, good = joseph_update_sparse(st.x, st.P, cols, coef, var, innov)
+            if good and adapter is not None and ever_fixed.all() and prev_t is not None:
+                adapter.observe(x1[0:3] - st.x[0:3], st.P[0:3, 0:3], P1[0:3, 0:3], t - prev_t)
             if good:
                 st.x, st.P = x1, P1
             st.amb_last_t[cols[mc_n:, 4] - st.n_fixed_part] = t
@@ -551,11 +557,11 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 if rows.size >= 6:
                     c_r, z_r = ok_cols[rows], cz[rows]
                     hph = np.einsum("mi,mij,mj->m", z_r, st.P[c_r[:, :, None], c_r[:, None, :]], z_r)
-                    one_h = np.clip(1.0 - hph / var[rows], 0.05, 1.0)
+                    one_h = _clip(1.0 - hph / var[rows], 0.05, 1.0)
                     num = np.sum(post[rows] ** 2 / one_h - v_white[rows])
                     den = np.sum(v_mp[rows])
                     a = 1.0 / min(mp_n_ep + 1.0, NOISE_EPOCHS)
-                    mp_scale = float(np.clip(mp_scale + a * (num / den - mp_scale), MP_SCALE_MIN, MP_SCALE_MAX))
+                    mp_scale = float(_clip(mp_scale + a * (num / den - mp_scale), MP_SCALE_MIN, MP_SCALE_MAX))
                     mp_n_ep += 1
         else:
             post = np.zeros(0)
@@ -565,10 +571,16 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         if mp_n:
             used_amb = cols[mc_n:, 4]
             afix = st.amb_fixed[used_amb - st.n_fixed_part]
-            for j in range(n_bl):
-                sel = jp == j
-                n_used[j] = np.unique(sp[sel]).size
-                n_fixed_used[j] = np.unique(sp[sel & afix]).size
+            n_used = _count_pairs(jp, sp, n_bl, n_sat)
+            n_fixed_used = _count_pairs(jp[afix], sp[afix], n_bl, n_sat)
+        joint_ar = {}          # ambiguity_search "constrained": one MC-LAMBDA first fix of all baselines together
+        if s.ambiguity_search == "constrained" and n_bl >= 2 and mp_n and not st.amb_fixed.any():
+            gb = {j: first_fix_groups(cols[mc_n:, 4][jp == j], fp[jp == j], el_loc[sp[jp == j]], n_sig)
+                  for j in range(n_bl) if pa[j] and n_used[j] >= s.ar_min_sats}
+            gb = {j: g for j, g in gb.items() if g and sum(x.size - 1 for x, _ in g) >= s.ar_min_dd}
+            if len(gb) >= 2:
+                joint_ar = {j: o for j, o in resolve_joint_constrained(st.x, st.P, gb, b_idx, body_baselines_m,
+                                                                      s).items() if o.accepted}
         for j in range(n_bl):
             if n_used[j] and first_data[j] < 0:
                 first_data[j] = k
@@ -584,15 +596,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             has_group = [bool(np.any(st.amb_fixed[(st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f)]))
                          for f in range(n_sig)]
             if not any(has_group):
-                groups = []
-                for f in range(n_sig):
-                    g = idx_j[sig_j == f]
-                    if g.size >= 2:
-                        groups.append((g, int(np.argmax(el_j[sig_j == f]))))
+                groups = first_fix_groups(idx_j, sig_j, el_j, n_sig)
                 if not groups or sum(g.size - 1 for g, _ in groups) < s.ar_min_dd:
                     continue
-                outcome = resolve_lambda(st.x, st.P, groups, b_idx[j], lengths[j], s.max_length_error_m,
-                                         s.min_ratio)
+                outcome = joint_ar.get(j) or resolve_first_fix(st.x, st.P, groups, b_idx[j], lengths[j], s)
                 out_ratio[k, j] = outcome.ratio
                 if outcome.accepted and not (outcome.ratio >= s.ar_min_ratio_first_fix):
                     outcome.accepted = False
@@ -624,7 +631,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                     b_before = st.x[b_idx[j]].copy()
                     _pseudo_update(st, outcome.D, outcome.a_fix)
                     b_after = st.x[b_idx[j]]
-                    turn_deg = np.degrees(np.arccos(np.clip(b_before @ b_after / max(
+                    turn_deg = np.degrees(np.arccos(_clip(b_before @ b_after / max(
                         np.linalg.norm(b_before) * np.linalg.norm(b_after), 1e-12), -1.0, 1.0)))
                     if dynamic and turn_deg > OMEGA_RESET_TURN_DEG:
                         # the angular velocity was learnt with a baseline that the fix has just turned: its
@@ -633,7 +640,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                         st.P[:, 0:3] = 0.0
                         st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
                         ev(k, "omega_reset", j, detail=f"the fix turned the baseline by {turn_deg:.2f} deg")
-                    for g, _ in groups:
+                        if adapter is not None:
+                            adapter.reset()
+                    for g, _ in outcome.groups or groups:
                         st.amb_fixed[g - st.n_fixed_part] = True
                     ev(k, "fix", j, detail=f"{outcome.n_dd} DD ambiguities, ratio {outcome.ratio:.2f}, "
                                          f"length {outcome.length_m:.4f} m")
@@ -697,13 +706,12 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             ev(k, "fix_lost", j, detail="no fixed ambiguity left (slips, gaps or setting satellites)")
         if mp_n:
             afix = st.amb_fixed[cols[mc_n:, 4] - st.n_fixed_part]
-            for j in range(n_bl):
-                n_fixed_used[j] = np.unique(sp[(jp == j) & afix]).size
+            n_fixed_used = _count_pairs(jp[afix], sp[afix], n_bl, n_sat)
         # ---------------- outputs ----------------
         okb = pa & (n_used >= 3)
         out_ok[k] = okb
         out_b[k] = st.x[all_b_idx].reshape(n_bl, 3)
-        out_P[k] = st.P[np.ix_(all_b_idx, all_b_idx)]
+        out_P[k] = st.P[ix_b]
         fixed_now = ever_fixed & (n_fixed_used >= s.fixed_min_sats)
         out_fixed[k] = fixed_now & okb
         out_n[k] = n_used
@@ -722,12 +730,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             rsn_c = np.where(use_c[jr, sr, fr_], 0, reason[jr, sr, fr_])
             rsn_p = np.where(use_p[jr, sr, fr_], 0, np.where(reason[jr, sr, fr_] == 0, 5, reason[jr, sr, fr_]))
             keep_p = avail_p[jr, sr, fr_]
-            common = np.stack([np.full(jr.size, k), jr, sr, fr_, np.degrees(el_ant[jr, sr]),
-                               np.degrees(np.mod(az_ant[jr, sr], 2 * np.pi)), cn0[jr, sr, fr_]], 1)
-            blk_c = np.column_stack([common, np.zeros(jr.size), lookup[0, jr, sr, fr_], rsn_c])
-            blk_p = np.column_stack([common, np.ones(jr.size), lookup[1, jr, sr, fr_], rsn_p])[keep_p]
-            res_blocks.append(blk_c)
-            res_blocks.append(blk_p)
+            # code rows of this epoch, then its phase rows (kept per epoch, assembled once after the loop)
+            res_blocks.append((k, jr, sr, fr_, np.degrees(el_ant[jr, sr]),
+                               np.degrees(np.mod(az_ant[jr, sr], 2 * np.pi)), cn0[jr, sr, fr_],
+                               lookup[0, jr, sr, fr_], rsn_c, lookup[1, jr, sr, fr_], rsn_p, keep_p))
         # memory for the triple differences
         prev_t = t
         prev_sdc = np.where(avail_c, sdc_c, np.nan)
@@ -736,12 +742,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         prev_ub = prev_b @ u.T
     if progress is not None:
         progress(1.0)
-    R_all = np.concatenate(res_blocks) if res_blocks else np.zeros((0, 10))
-    residuals = {"epoch": R_all[:, 0].astype(np.int64), "bl": R_all[:, 1].astype(np.int64),
-                 "sat": R_all[:, 2].astype(np.int64), "sig": R_all[:, 3].astype(np.int64),
-                 "el_ant_deg": R_all[:, 4], "az_ant_deg": R_all[:, 5], "cn0_dbhz": R_all[:, 6],
-                 "kind": R_all[:, 7].astype(np.int64), "residual_m": R_all[:, 8],
-                 "reason": R_all[:, 9].astype(np.int64)}
+    residuals = _residual_records(res_blocks)
     arcs = np.array(st.arcs, dtype=np.int64).reshape(-1, 5)
     arcs[arcs[:, 4] < 0, 4] = n_ep - 1
     fl = np.array(fix_rows, dtype=np.float64).reshape(-1, 4)
@@ -769,15 +770,39 @@ def _pcv_epoch(tables, los_b, R_ant_first, n_sig, fixed):
     return np.where(on, np.nan_to_num(corr), 0.0), on & ~np.isfinite(corr)
 
 
+def _residual_records(blocks: list[tuple]) -> dict:
+    """Column arrays of residuals.csv from the per-epoch records of run_filter: per epoch its code rows (kind 0),
+    then its phase rows (kind 1, where a phase exists), epochs in order."""
+    if not blocks:
+        z_i, z_f = np.zeros(0, np.int64), np.zeros(0)
+        return {"epoch": z_i, "bl": z_i, "sat": z_i, "sig": z_i, "el_ant_deg": z_f, "az_ant_deg": z_f,
+                "cn0_dbhz": z_f, "kind": z_i, "residual_m": z_f, "reason": z_i}
+    cat = lambda i: np.concatenate([b[i] for b in blocks])  # noqa: E731
+    n_rows = np.array([b[1].size for b in blocks])
+    ep = np.repeat(np.array([b[0] for b in blocks], dtype=np.int64), n_rows)
+    keep = cat(11)
+    cols = {"epoch": ep, "bl": cat(1).astype(np.int64), "sat": cat(2).astype(np.int64),
+            "sig": cat(3).astype(np.int64), "el_ant_deg": cat(4), "az_ant_deg": cat(5),
+            "cn0_dbhz": cat(6).astype(np.float64)}
+    code = {**cols, "kind": np.zeros(ep.size, np.int64), "residual_m": cat(7), "reason": cat(8).astype(np.int64)}
+    phase = {**{k: v[keep] for k, v in cols.items()}, "kind": np.ones(int(keep.sum()), np.int64),
+             "residual_m": cat(9)[keep], "reason": cat(10).astype(np.int64)[keep]}
+    # epoch-major, code block before phase block; stable, so each block keeps its row order
+    order = np.argsort(2 * np.concatenate([code["epoch"], phase["epoch"]])
+                       + np.concatenate([code["kind"], phase["kind"]]), kind="stable")
+    return {k: np.concatenate([code[k], phase[k]])[order] for k in code}
+
+
 def _pseudo_update(st: _State, D: np.ndarray, a_fix: np.ndarray) -> None:
     """Constrain DD ambiguities D x = a_fix with a (numerically) zero-variance pseudo-measurement (Joseph form)."""
-    nz = [np.flatnonzero(row) for row in D]
-    kmax = max(len(z) for z in nz)
+    r, c = np.nonzero(D)                         # row-major: each row's columns ascending
+    cnt = np.bincount(r, minlength=D.shape[0])
+    kmax = int(cnt.max())
+    pos = np.arange(r.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)   # position of each non-zero in its row
     cols = np.full((D.shape[0], kmax), -1, dtype=np.int64)
     coef = np.zeros((D.shape[0], kmax))
-    for i, z in enumerate(nz):
-        cols[i, :len(z)] = z
-        coef[i, :len(z)] = D[i, z]
+    cols[r, pos] = c
+    coef[r, pos] = D[r, c]
     innov = a_fix - D @ st.x
     # 1e-6 cycles^2 keeps S positive definite in float64 without loosening the constraint noticeably
     x1, P1, _, good = joseph_update_sparse(st.x, st.P, cols, coef, np.full(D.shape[0], 1e-6), innov)

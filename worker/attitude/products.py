@@ -24,7 +24,8 @@ def _time_cols(t) -> tuple[list[str], np.ndarray, np.ndarray]:
 
 
 def _fmt(arr: np.ndarray, fmt: str) -> np.ndarray:
-    return np.char.mod(fmt, arr)
+    """fmt % value for each value, as a str array (Python's %-formatting, as np.char.mod, ~10x faster)."""
+    return np.array(list(map(fmt.__mod__, np.asarray(arr).tolist())), dtype=object)
 
 
 def attitude_csv(sol) -> str | None:
@@ -47,10 +48,8 @@ def attitude_csv(sol) -> str | None:
 def _join(header: str, cols: list[np.ndarray]) -> str:
     if len(cols[0]) == 0:
         return header + "\n"
-    out = cols[0].astype(object)
-    for c in cols[1:]:
-        out = out + "," + c.astype(object)
-    return header + "\n" + "\n".join(out.tolist()) + "\n"
+    rows = map(",".join, zip(*[c.tolist() if isinstance(c, np.ndarray) else list(c) for c in cols]))
+    return header + "\n" + "\n".join(rows) + "\n"
 
 
 def baselines_csv(sol) -> str:
@@ -87,13 +86,17 @@ def residuals_csv(sol) -> str:
     ep = r["epoch"]
 
     def num(a, f):
-        s = _fmt(np.nan_to_num(a, nan=0.0), f)
-        return np.where(np.isfinite(a), s, "")
+        out = np.full(a.shape, "", dtype=object)
+        ok = np.isfinite(a)
+        out[ok] = _fmt(a[ok], f)
+        return out
 
-    cols = [iso_all[ep], _fmt(sow_all[ep], "%.3f"), names[r["bl"]], sats[r["sat"]], sigs[r["sig"]],
-            kinds[r["kind"]], num(r["residual_m"], "%.5f"), num(r["az_ant_deg"], "%.2f"),
-            num(r["el_ant_deg"], "%.2f"), num(r["cn0_dbhz"], "%.1f"), _fmt((r["reason"] == 0).astype(int), "%d"),
-            reasons[r["reason"]]]
+    # per-epoch columns are formatted once per epoch and indexed
+    cols = [iso_all.astype(object)[ep], _fmt(sow_all, "%.3f")[ep], names.astype(object)[r["bl"]],
+            sats.astype(object)[r["sat"]], sigs.astype(object)[r["sig"]], kinds.astype(object)[r["kind"]],
+            num(r["residual_m"], "%.5f"), num(r["az_ant_deg"], "%.2f"), num(r["el_ant_deg"], "%.2f"),
+            num(r["cn0_dbhz"], "%.1f"), np.array(["0", "1"], dtype=object)[(r["reason"] == 0).astype(int)],
+            reasons.astype(object)[r["reason"]]]
     return _join(header, cols)
 
 

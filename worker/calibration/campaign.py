@@ -35,7 +35,7 @@ WINDOW_S = 60.0
 class CampaignOptions:
     extract: ExtractOptions
     grid: Grid2D
-    min_count: int = 30
+    min_count: int = 10
     tolerance_mm: float = 0.1
     max_iterations: int = 10
     batch_s: float = 300.0

@@ -103,7 +103,7 @@ def baseline_length_test(b_fixed_m: np.ndarray, known_length_m: float | np.ndarr
 
 
 def baseline_angle_test(b_fixed_m: np.ndarray, body_baselines_m: np.ndarray, tol_deg: float | None = None,
-                        tol_m: float = LENGTH_TOLERANCE_M_DEFAULT) -> tuple[np.ndarray, np.ndarray]:
+                        tol_m: float | np.ndarray = LENGTH_TOLERANCE_M_DEFAULT) -> tuple[np.ndarray, np.ndarray]:
     """Return ``(angle_error_deg, passed)`` for every pair of baselines: the angle between two fixed baselines
     minus the angle between the same two in the body frame.
 
@@ -111,7 +111,8 @@ def baseline_angle_test(b_fixed_m: np.ndarray, body_baselines_m: np.ndarray, tol
         b_fixed_m: (q, 3) fixed baselines (any one frame), metres, q >= 2.
         body_baselines_m: (q, 3) the same baselines in the body frame, metres.
         tol_deg: acceptance threshold per pair; default: the angle a ``tol_m`` error subtends at the shorter
-            baseline of the pair, ``atan(tol_m / l_min)`` (1.6 deg for 3 cm at 1.05 m).
+            baseline of the pair, ``atan(tol_m / l_min)`` (1.6 deg for 3 cm at 1.05 m); ``tol_m`` may be one
+            value per baseline (q,), a pair then uses the larger of its two.
 
     Returns:
         angle_error_deg: (q*(q-1)/2,) in the pair order (0,1), (0,2), ..., (1,2), ...; passed: same shape.
@@ -123,13 +124,14 @@ def baseline_angle_test(b_fixed_m: np.ndarray, body_baselines_m: np.ndarray, tol
     F = np.asarray(body_baselines_m, float).reshape(-1, 3)
     if B.shape != F.shape or B.shape[0] < 2:
         raise ValueError("need the same q >= 2 baselines in both frames")
+    tols_m = np.broadcast_to(np.asarray(tol_m, float), (B.shape[0],))
     errs, oks = [], []
     for i in range(B.shape[0]):
         for j in range(i + 1, B.shape[0]):
             ang_b = _angle_deg(B[i], B[j])
             ang_f = _angle_deg(F[i], F[j])
             lmin = min(np.linalg.norm(F[i]), np.linalg.norm(F[j]))
-            tol = tol_deg if tol_deg is not None else math.degrees(math.atan(tol_m / lmin))
+            tol = tol_deg if tol_deg is not None else math.degrees(math.atan(max(tols_m[i], tols_m[j]) / lmin))
             errs.append(ang_b - ang_f)
             oks.append(abs(ang_b - ang_f) < tol)
     return np.array(errs), np.array(oks)

@@ -58,7 +58,8 @@ from worker.estimation.lambda_search import (
 __all__ = [
     "DDBlock", "FloatSolution", "ConstrainedResult",
     "dd_geometry", "dd_operator", "single_epoch_float", "float_from_single_differences",
-    "constrained_search", "constrained_search_float", "sphere_fit", "rotation_fit",
+    "constrained_search", "constrained_search_float", "constrained_search_by_baselines", "sphere_fit",
+    "rotation_fit",
 ]
 
 #: Start radius: the chi-square quantile of the full objective's degrees of freedom (n + constraint residual
@@ -625,3 +626,120 @@ def constrained_search_float(sol: FloatSolution, body_baselines_m: np.ndarray, *
     """``constrained_search`` on a ``FloatSolution`` (ambiguities of all its blocks, all its baselines)."""
     return constrained_search(sol.a_float_cyc, sol.Q_a, sol.b_float_m, sol.Q_b, sol.Q_ab, body_baselines_m,
                               **kwargs)
+
+
+def constrained_search_by_baselines(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_float_m: np.ndarray,
+                                    Q_b: np.ndarray, Q_ab: np.ndarray, body_baselines_m: np.ndarray,
+                                    rows_by_baseline: list, m_first: int = 3, ratio_cap: float = RATIO_CAP_DEFAULT,
+                                    max_nodes: int = CONSTRAINED_MAX_NODES_DEFAULT,
+                                    max_candidates: int = 200) -> ConstrainedResult:
+    """Return the two best integer vectors of the MC-LAMBDA problem (q >= 2), exactly, from per-baseline C-LAMBDA
+    candidate lists.
+
+    Args:
+        a_float_cyc .. body_baselines_m: as ``constrained_search``.
+        rows_by_baseline: per baseline i, the indices of ``a_float_cyc`` that belong to it (a partition).
+        m_first: C-LAMBDA candidates per baseline of the first pass.
+        ratio_cap: the second candidate is looked for up to ratio_cap x the best cost (beyond: ``second_bounded``).
+        max_nodes: budget of each C-LAMBDA search. max_candidates: per baseline; more inside the bound ->
+            ``AmbiguitySearchError`` (the minimiser could not be proven).
+
+    Bound (exactness). With x = (a, b) and J(a) = min_{R in SO(3)} ||x_hat - (a, vec(R F))||^2_{Q_x}, the
+    Schur complement gives ||x||^2_{Q_x} >= ||x_i||^2_{Q_{x_i}} for the marginal x_i = (a_i, b_i) of baseline i,
+    and {R f_i} is the sphere |b_i| = l_i, so J(a) >= C_i(a_i), the C-LAMBDA cost of baseline i on its own
+    marginal float. Every joint candidate with J < r therefore has C_i(a_i) < r on every baseline: after a
+    first pass gives the best J_1 and second J_2, each baseline's C-LAMBDA list is completed up to
+    r = min(J_2, ratio_cap J_1) and every combination with max_i C_i < r is evaluated exactly (rotation_fit).
+
+    Implements: MC-LAMBDA (Teunissen 2007; Giorgi, Teunissen, Verhagen & Buist 2010, 2012) by
+    per-baseline C-LAMBDA (Teunissen 2010) with the marginal bound above (own formulation, cf. the
+    "search and shrink" of Giorgi et al. 2010 sec. 4).
+    """
+    import itertools
+
+    a_hat = np.asarray(a_float_cyc, float).reshape(-1)
+    bh = np.asarray(b_float_m, float).reshape(-1)
+    F = np.asarray(body_baselines_m, float).reshape(-1, 3)
+    q, n = F.shape[0], a_hat.size
+    if q < 2 or len(rows_by_baseline) != q:
+        raise ValueError("need q >= 2 baselines and one row set per baseline")
+    Q_a = check_covariance(Q_a, "Q_a")
+    Q_b = check_covariance(Q_b, "Q_b")
+    Q_ab = np.asarray(Q_ab, float)
+    rows = [np.asarray(r, np.int64) for r in rows_by_baseline]
+    C = np.linalg.cholesky(Q_a)
+    K = np.linalg.solve(C.T, np.linalg.solve(C, Q_ab)).T                # Q_ba Q_a^-1 (3q, n)
+    Qc = Q_b - K @ Q_ab
+    W = np.linalg.inv(0.5 * (Qc + Qc.T))
+    W = 0.5 * (W + W.T)
+    nodes = leaves = 0
+    joint: dict = {}
+
+    def marginal(i, m, start_radius=None, cap=ratio_cap):
+        r = rows[i]
+        jb = np.arange(3 * i, 3 * i + 3)
+        return constrained_search(a_hat[r], Q_a[np.ix_(r, r)], bh[jb], Q_b[np.ix_(jb, jb)], Q_ab[np.ix_(r, jb)],
+                                  F[i:i + 1], m=m, start_radius=start_radius, ratio_cap=cap, max_nodes=max_nodes)
+
+    def evaluate(combo):
+        key = tuple(tuple(int(v) for v in c) for c in combo)
+        if key in joint:
+            return
+        a = np.empty(n)
+        for r, vec in zip(rows, combo):
+            a[r] = vec
+        da = a_hat - a
+        y = np.linalg.solve(C, da)
+        b = bh - K @ da
+        c_rot, R = rotation_fit(b, W, F)
+        joint[key] = (float(y @ y) + c_rot, float(y @ y), a, b, R)
+
+    lists = []
+    for i in range(q):
+        res = marginal(i, m_first)
+        nodes += res.n_nodes
+        leaves += res.n_leaves
+        complete = res.radius if res.fixed.shape[0] < m_first else float(res.costs[-1])
+        lists.append([list(zip(res.costs, res.fixed)), complete])
+    for combo in itertools.product(*[[v for _, v in lst] for lst, _ in lists]):
+        evaluate(combo)
+    best = sorted(joint.values(), key=lambda t: t[0])
+    bound = min(best[1][0] if len(best) > 1 else math.inf, ratio_cap * best[0][0])
+    for i in range(q):
+        lst, complete = lists[i]
+        if complete >= bound:
+            continue
+        c0 = float(lst[0][0])
+        cap = max(bound / c0 * (1.0 + 1e-9), 1.0) if c0 > 0 else math.inf
+        m = len(lst)
+        while complete < bound:                  # more candidates until the list is complete up to the bound
+            m = 2 * m
+            if m > max_candidates:
+                raise AmbiguitySearchError(f"more than {max_candidates} C-LAMBDA candidates of baseline {i} below "
+                                           f"the joint bound {bound:.3g}")
+            res = marginal(i, m, cap=cap)
+            nodes += res.n_nodes
+            leaves += res.n_leaves
+            complete = res.radius if res.fixed.shape[0] < m else float(res.costs[-1])
+            if complete < bound and res.fixed.shape[0] < m:
+                raise AmbiguitySearchError(f"C-LAMBDA of baseline {i} ran out of nodes below the joint bound")
+        lists[i] = [list(zip(res.costs, res.fixed)), bound]
+    pruned = [[v for c, v in lst if c < bound] for lst, _ in lists]
+    cost_of = [{tuple(int(x) for x in v): float(c) for c, v in lst} for lst, _ in lists]
+    for combo in itertools.product(*pruned):
+        if max(cost_of[i][tuple(int(x) for x in v)] for i, v in enumerate(combo)) < bound:
+            evaluate(combo)
+    best = sorted(joint.values(), key=lambda t: t[0])
+    cost = best[0][0]
+    if len(best) > 1 and best[1][0] < ratio_cap * cost:
+        second, bounded = best[1][0], False
+    else:
+        second, bounded = ratio_cap * cost, True
+    top = best[:2] if not bounded else best[:1]
+    R = best[0][4]
+    return ConstrainedResult(fixed=np.array([np.rint(t[2]).astype(np.int64) for t in top]),
+                             costs=np.array([t[0] for t in top]), ils_sqnorm=np.array([t[1] for t in top]),
+                             cost=float(cost), second_cost=float(second), second_bounded=bounded,
+                             ratio=float(second / cost) if cost > 0 else math.inf,
+                             b_fixed_m=(F @ R.T).reshape(-1), b_unconstrained_m=best[0][3], R_from_body=R,
+                             n_nodes=nodes, n_leaves=leaves, radius=float(bound))

@@ -15,6 +15,7 @@ from typing import Callable
 
 import numpy as np
 import scipy.linalg as sla
+from scipy.linalg.lapack import dpotrf as _potrf, dpotrs as _potrs
 
 __all__ = ["joseph_update", "joseph_update_sparse", "rk4_step", "rk4_integrate", "rotation_rk4_stm",
            "sparse_rows_to_dense"]
@@ -76,11 +77,14 @@ def joseph_update_sparse(x: np.ndarray, P: np.ndarray, cols: np.ndarray, coef: n
     S = np.einsum("mkj,mk->mj", PHt[c, :], w)
     S = 0.5 * (S + S.T)
     S[np.diag_indices_from(S)] += R
-    try:
-        cf = sla.cho_factor(S, lower=True, check_finite=False)
-    except np.linalg.LinAlgError:
+    # LAPACK potrf/potrs directly: what scipy's cho_factor/cho_solve call, without their per-call wrapper cost
+    L, info = _potrf(S, lower=1, clean=0)
+    if info != 0:
         return x, P, S, False
-    K = sla.cho_solve(cf, PHt.T, check_finite=False).T          # (n, m)
+    Kt, info = _potrs(L, PHt.T, lower=1)
+    if info != 0:
+        return x, P, S, False
+    K = Kt.T                                                     # (n, m)
     AP = P - K @ PHt.T                                           # (I - K H) P
     APHt = np.einsum("nmk,mk->nm", AP[:, c], w)                  # (A P) H^T
     P_new = AP - APHt @ K.T + (K * R) @ K.T                      # A P A^T + K R K^T
@@ -137,7 +141,7 @@ def rotation_rk4_stm(b_m: np.ndarray, omega_rad_s: np.ndarray, dt_s: float, max_
     coef = (1.0, h, h * h / 2.0, h ** 3 / 6.0, h ** 4 / 24.0)
     for _ in range(n):
         yk = y
-        Jk = np.zeros((nb, 3, 3))
+        Jk = _ZEROS33[None].repeat(nb, 0)
         J1 = Phi_bw.copy()                    # d y / d omega accumulated over the previous sub-steps
         acc_J = np.einsum("ij,njk->nik", T, J1)  # d(T y0)/d omega through y0
         for k in range(1, 5):
@@ -150,11 +154,16 @@ def rotation_rk4_stm(b_m: np.ndarray, omega_rad_s: np.ndarray, dt_s: float, max_
     return y, np.broadcast_to(Phi_bb, (nb, 3, 3)).copy(), Phi_bw
 
 
+_ZEROS33 = np.zeros((3, 3))
+
+
 def _skew(v: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 def _skew_batch(v: np.ndarray) -> np.ndarray:
-    z = np.zeros(v.shape[0])
-    return np.stack([np.stack([z, -v[:, 2], v[:, 1]], -1), np.stack([v[:, 2], z, -v[:, 0]], -1),
-                     np.stack([-v[:, 1], v[:, 0], z], -1)], -2)
+    out = np.zeros((v.shape[0], 3, 3))
+    out[:, 0, 1], out[:, 0, 2] = -v[:, 2], v[:, 1]
+    out[:, 1, 0], out[:, 1, 2] = v[:, 2], -v[:, 0]
+    out[:, 2, 0], out[:, 2, 1] = -v[:, 1], v[:, 0]
+    return out

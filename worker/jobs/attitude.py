@@ -24,8 +24,11 @@ class AttitudeConfig(BaseModel):
         description="Preset replacing `signals`: the first two frequencies of each system (GPS/QZSS L1+L2, Galileo "
                     "E1+E5b, BeiDou B1I+B2I), e.g. ['G', 'E', 'C', 'J']. GLONASS is not supported.")
     cn0_mask_dbhz: dict[str, float] = Field(
-        {}, description="C/N0 masks (dB-Hz) of other signals by name (defaults: 35 on the first frequency of a "
-                        "system, 30 on the others).")
+        {}, description="C/N0 masks (dB-Hz) of other signals by name (default: cn0_mask_default_dbhz).")
+    cn0_mask_default_dbhz: float | None = Field(
+        None, ge=0, le=70, description="C/N0 mask of signals not named; null (default): seed 000 Table 2 style, 35 on "
+                                       "the first frequency of a system, 30 on the others; 0: none (the noise model "
+                                       "weights weak signals; 'all phases', docs/attitude.md).")
     sigma_code_m: float = Field(0.30, gt=0, le=100, description="Single-difference code noise (m).")
     sigma_phase_m: float = Field(0.003, gt=0, le=1, description="Single-difference phase noise (m).")
     weighting: Literal["none", "cn0", "elevation"] = Field("none", description="Observation weighting.")
@@ -39,13 +42,22 @@ class AttitudeConfig(BaseModel):
     sigma0_ambiguity_cyc: float = Field(500.0, gt=0, le=1e6)
     sigma_baseline_kinematic_m: float = Field(1.0, gt=0, le=100)
     elevation_mask_local_deg: float = Field(-90.0, ge=-90, le=90)
-    elevation_mask_antenna_deg: float = Field(0.0, ge=-90, le=90)
-    cn0_mask_l1_dbhz: float = Field(35.0, ge=0, le=70)
-    cn0_mask_l2_dbhz: float = Field(30.0, ge=0, le=70)
+    elevation_mask_antenna_deg: float = Field(
+        0.0, ge=-90, le=90, description="Antenna-frame elevation mask once fixed (seed 000 Table 2: 0; -90 keeps "
+                                         "every satellite, the noise model weighting low ones).")
+    cn0_mask_l1_dbhz: float = Field(35.0, ge=0, le=70, description="C/N0 mask of GPS L1 C/A (seed 000 Table 2; 0: none).")
+    cn0_mask_l2_dbhz: float = Field(30.0, ge=0, le=70, description="C/N0 mask of GPS L2 (seed 000 Table 2; 0: none).")
     td_code_m: float = Field(0.5, gt=0, le=1000)
     td_phase_cyc: float = Field(0.25, gt=0, le=100)
     max_length_error_m: float = Field(0.03, gt=0, le=10)
     min_ratio: float = Field(0.0, ge=0, le=1000, description="Also require this ratio (0: ratio only reported).")
+    ambiguity_search: Literal["lambda", "constrained"] = Field(
+        "lambda", description="Integer search of a baseline's first fix: lambda (MLAMBDA + length validation, "
+                              "seed 000) or constrained (C-LAMBDA: the known baseline length inside the search, "
+                              "accepted by the ratio of the constrained objective and the length test; fixes "
+                              "single-frequency starts sooner, docs/ttff.md).")
+    min_ratio_constrained: float = Field(3.0, ge=1, le=1000,
+                                         description="constrained: ratio of the constrained objective to accept.")
     attitude_method: Literal["quest", "triad"] = "quest"
     initial_q_body_from_ecef: list[float] | None = Field(
         None, min_length=4, max_length=4, description="Initial attitude; default Earth pointing (spacecraft) or "
@@ -53,6 +65,9 @@ class AttitudeConfig(BaseModel):
     calibrated_baselines: dict | None = Field(
         None, description="A calibration job's baselines.json object (CONVENTIONS.md) replacing the a priori "
                           "antenna positions.")
+    pcv_empty_bins: Literal["exclude", "keep"] = Field(
+        "exclude", description="A fixed baseline's phase whose map bin is empty: exclude it (seed 000 sec. 3.2) or "
+                               "keep it uncorrected.")
     pcv_map_ids: list[str] = Field(
         [], max_length=32, description="Ids of stored differential PCV maps (/v1/pcv-maps), at most one per "
                                        "baseline and signal, subtracted from the phase single differences of "

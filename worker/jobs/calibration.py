@@ -18,8 +18,10 @@ class CalibrationConfig(BaseModel):
     elevation_step_deg: float = Field(1.0, gt=0.0, le=45.0, description="Elevation bin width.")
     elevation_min_deg: float = Field(0.0, ge=-90.0, lt=90.0, description="Lowest bin edge (antenna frame).")
     elevation_max_deg: float = Field(90.0, gt=-90.0, le=90.0, description="Highest bin edge (antenna frame).")
-    min_count: int = Field(30, ge=1, le=10_000_000,
-                           description="Samples a bin needs for a value; fewer leave it empty (null).")
+    min_count: int = Field(10, ge=1, le=10_000_000,
+                           description="Samples a bin needs for a value; fewer leave it empty (null). 10 with the "
+                                       "smoothing (each value is a fit supported by its neighbours); raise it "
+                                       "(e.g. 30) with smoothing_order 0.")
     max_iterations: int = Field(10, ge=1, le=1000, description="Most PCV iterations.")
     smoothing_order: int = Field(8, ge=0, le=30, description="Radial order of the Zernike fit that smooths each "
                                  "map over the hemisphere (structure finer than ~90/N deg is smoothed away); 0 = "

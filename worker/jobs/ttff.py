@@ -42,9 +42,11 @@ class TtffConfig(BaseModel):
     simulate: TtffSimulation | None = Field(None, description="Simulate the sets instead of (or as well as) using "
                                                               "uploaded ones.")
     configurations: list[Literal["L1+L2", "L1", "L2"]] = Field(["L1+L2", "L1", "L2"], min_length=1)
-    methods: list[Literal["filter", "epoch-lambda", "epoch-constrained"]] = Field(
+    methods: list[Literal["filter", "filter-constrained", "epoch-lambda", "epoch-constrained"]] = Field(
         ["filter", "epoch-lambda", "epoch-constrained"], min_length=1,
-        description="filter: the seed 000 EKF (MLAMBDA + length validation), the paper's method; epoch-lambda: "
+        description="filter: the seed 000 EKF (MLAMBDA + length validation), the paper's method; "
+                    "filter-constrained: the same EKF with the attitude job's ambiguity_search 'constrained' "
+                    "(MC-LAMBDA first fix); epoch-lambda: "
                     "every epoch alone, same search and validation; epoch-constrained: every epoch alone, "
                     "C-/MC-LAMBDA with the body geometry, ratio + length + angle validation.")
     duration_s: float = Field(120.0, ge=5, le=86400, description="Seconds of each set used from its first epoch.")

@@ -582,8 +582,11 @@ def attitude_plots(products: Mapping[str, Any], reference: Any = None,
     reference: the set's reference attitude CSV text (CONVENTIONS.md) or None.
     Returns e.g. {"euler.png", "fix_status.png", "dop.png", "residuals.png", "skyplot.png"}.
     """
-    att, bl = products.get("attitude.csv"), products.get("baselines.csv")
-    res, ev = products.get("residuals.csv"), products.get("events.csv")
+    # each CSV is parsed once here, not once per plot (residuals.csv feeds three plots)
+    tab = {k: (None if v is None else read_csv_table(v)) for k, v in products.items()}
+    att, bl = tab.get("attitude.csv"), tab.get("baselines.csv")
+    res, ev = tab.get("residuals.csv"), tab.get("events.csv")
+    reference = None if reference is None else read_csv_table(reference)
     out: dict[str, bytes] = {}
     if att is not None and len(read_csv_table(att).get("time_gps", [])):
         out["euler.png"] = euler_plot(att, reference, context)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import csv
+import gc
 import io
 from dataclasses import dataclass, field
 from typing import Any, Iterable, Mapping
@@ -93,15 +94,55 @@ def read_csv_table(data: "str | bytes | Table | Iterable[Mapping[str, Any]] | No
     if isinstance(data, bytes):
         data = data.decode("utf-8")
     if isinstance(data, str):
-        reader = csv.DictReader(io.StringIO(data))
-        rows = list(reader)
-        names = [n.strip() for n in (reader.fieldnames or [])]
-        raw = {n: [(r.get(orig) or "").strip() for r in rows] for n, orig in zip(names, reader.fieldnames or [])}
-    else:
-        rows = [dict(r) for r in data]
-        names = list(dict.fromkeys(k for r in rows for k in r))
-        raw = {n: ["" if r.get(n) is None else str(r.get(n)).strip() for r in rows] for n in names}
+        return _table_of_text(data)
+    rows = [dict(r) for r in data]
+    names = list(dict.fromkeys(k for r in rows for k in r))
+    raw = {n: ["" if r.get(n) is None else str(r.get(n)).strip() for r in rows] for n in names}
     return {n: _column_array(v) for n, v in raw.items()}
+
+
+def _table_of_text(text: str) -> Table:
+    """Column arrays of CSV text, as csv.DictReader would read it (blank lines skipped, short rows padded with
+    empty cells, extra cells dropped), but column-wise: without quotes and with every row complete, one split of
+    the whole text sliced per column; numeric columns converted by one numpy cast (residuals.csv, ~6e5 rows, is
+    read in ~1 s instead of ~10 s)."""
+    lines = text.splitlines()
+    if not lines:
+        return {}
+    if '"' not in text and "\r" not in text:
+        lines = [ln for ln in lines if ln] if "" in lines else lines
+        if not lines:
+            return {}
+        fields = lines[0].split(",")
+        n = len(fields)
+        if all(ln.count(",") == n - 1 for ln in lines):
+            flat = ",".join(lines[1:]).split(",") if len(lines) > 1 else []
+            cols = [flat[i::n] for i in range(n)]
+            return _columns(fields, cols)
+    gc_was = gc.isenabled()
+    gc.disable()               # millions of small row lists: the cyclic collector would run over them again and again
+    try:
+        rows = [r for r in csv.reader(io.StringIO(text)) if r]
+        if not rows:
+            return {}
+        fields, body = rows[0], rows[1:]
+        n = len(fields)
+        if any(len(r) != n for r in body):
+            body = [(r + [""] * n)[:n] for r in body]
+        cols = [list(c) for c in zip(*body)] if body else [[] for _ in range(n)]
+    finally:
+        if gc_was:
+            gc.enable()
+    return _columns(fields, cols)
+
+
+def _columns(fields: list[str], cols: list[list[str]]) -> Table:
+    out: Table = {}
+    for name, cells in zip(fields, cols):
+        key = name.strip()
+        out.pop(key, None)        # DictReader keeps the last of duplicate names
+        out[key] = _column_array_fast(np.array(cells, dtype=str))
+    return out
 
 
 def _column_array(cells: list[str]) -> np.ndarray:
@@ -109,6 +150,24 @@ def _column_array(cells: list[str]) -> np.ndarray:
         return np.array([float(c) if c != "" else np.nan for c in cells], dtype=np.float64)
     except ValueError:
         return np.array(cells, dtype=str)
+
+
+def _column_array_fast(cells: np.ndarray) -> np.ndarray:
+    """float64 (NaN for empty cells) if every non-empty cell is a number, else the stripped str array."""
+    stripped = np.strings.strip(cells)
+    empty = stripped == ""
+    out = np.full(stripped.shape, np.nan)
+    first = np.flatnonzero(~empty[:1000])
+    try:
+        if first.size:
+            float(stripped[first[0]])         # a text column (times, names) fails here, before the whole cast
+    except ValueError:
+        return stripped
+    try:
+        out[~empty] = stripped[~empty].astype(np.float64)
+    except ValueError:
+        return stripped
+    return out
 
 
 def column(table: Table, *names: str) -> np.ndarray | None:
@@ -149,6 +208,8 @@ def gps_time(table: Table) -> np.ndarray:
     col = column(table, "time_gps")
     if col is None:
         raise KeyError("the table has no time_gps column")
+    if col.dtype.kind == "U":
+        return col.astype("datetime64[ms]")      # one cast, same parser as per-element np.array(str)
     return np.array([str(c) for c in col], dtype="datetime64[ms]")
 
 

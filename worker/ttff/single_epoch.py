@@ -55,6 +55,13 @@ class SingleEpochOptions:
     constrained_candidates: int = 3        # C-LAMBDA candidates per baseline combined by the MC-LAMBDA objective
     constrained_ratio_cap: float = 4.0    # C-LAMBDA expands its radius up to this x the best cost
     constrained_max_nodes: int = 50_000    # budget of one C-LAMBDA search (~0.5 s); exhausted -> not fixed
+    constrained_joint_ratio_cap: float = 2.0  # MC-LAMBDA: the second joint candidate up to this x the best
+    constrained_max_candidates: int = 200  # per baseline below the joint bound; more -> not fixed
+    phase_sigma_factor: tuple = ()         # per signal, x sigma_phase_m, e.g. (("L2", 1.5),)
+    geometric_tol_sigmas: float = 3.0      # length/angle tolerance max(tol, this x sigma of b_hat(a)); 0: tol only
+    first_signal_fallback: bool = True     # several signals, not accepted: first signal alone, then round the rest
+    max_angle_error_m: float = 0.06        # angle test: atan(this / shorter baseline) (6 cm: 3.3 deg at 1.05 m)
+    other_signal_max_frac_cyc: float = 0.25  # the rest must lie this close to integers given the fixed baselines
 
     def cn0_mask(self, signal: str) -> float:
         return dict(self.cn0_mask_dbhz).get(signal, -math.inf)
@@ -207,7 +214,8 @@ def epoch_problem(ss, k: int, signals: list[str], opts: SingleEpochOptions) -> E
             Dj = np.hstack([np.eye(oj.size), -np.ones((oj.size, 1))])
             blk = Di @ Csd @ Dj.T
             ri_, rj_ = rows[p_i], rows[p_j]
-            Cp[np.ix_(ri_, rj_)] = blk * opts.sigma_phase_m ** 2
+            sfac = dict(opts.phase_sigma_factor).get(signals[sig_k.index(fi)], 1.0)
+            Cp[np.ix_(ri_, rj_)] = blk * (opts.sigma_phase_m * sfac) ** 2
             Cc[np.ix_(ri_, rj_)] = blk * opts.sigma_code_m ** 2
             if p_j != p_i:
                 Cp[np.ix_(rj_, ri_)] = Cp[np.ix_(ri_, rj_)].T
@@ -255,7 +263,9 @@ def _judge(prob: EpochProblem, j: int, fixed_rows: dict, b_fix: np.ndarray):
     """True/False/None: the integers of baseline j against the truth integers, else the direction vs truth."""
     truths = [(i, t) for i, (blk, t) in enumerate(zip(prob.sol.blocks, prob.truth_dd)) if blk.baseline == j]
     if truths and all(t is not None for _, t in truths):
-        return all(np.array_equal(fixed_rows[i], t) for i, t in truths)
+        # NaN: an ambiguity left float (partial fixing); every fixed one must equal the truth
+        return all(np.array_equal(np.asarray(fixed_rows[i], float)[np.isfinite(fixed_rows[i])],
+                                  np.asarray(t, float)[np.isfinite(fixed_rows[i])]) for i, t in truths)
     if prob.b_true_ecef_m is not None and np.all(np.isfinite(b_fix)):
         return _angle_deg(b_fix, prob.b_true_ecef_m[j]) < WRONG_FIX_DEG
     return None
@@ -305,6 +315,24 @@ def solve_lambda(prob: EpochProblem, body_baselines_m: np.ndarray, opts: SingleE
     return EpochOutcome("lambda", acc, correct, best_ok, ratio, bfix, nodes, detail)
 
 
+def geometric_tolerance_m(sol: FloatSolution, tol_m: float, n_sigma: float) -> np.ndarray:
+    """Per baseline (q,): ``max(tol_m, n_sigma sqrt(lambda_max(Q_b|a)))``, the length/angle test tolerance.
+
+    ``Q_b|a = Q_b - Q_ba Q_a^-1 Q_ab`` (Teunissen 1995 eq. 4) is the covariance of the integer-conditioned baseline:
+    a fixed test tolerance below its spread rejects right integers for nothing (10 cm CubeSat baselines with a
+    weak single-epoch geometry have sigma of several cm), while above it the test keeps its meaning.
+    """
+    q = sol.n_baselines
+    if n_sigma <= 0.0:
+        return np.full(q, float(tol_m))
+    C = np.linalg.cholesky(sol.Q_a)
+    K = np.linalg.solve(C.T, np.linalg.solve(C, sol.Q_ab)).T
+    Qc = sol.Q_b - K @ sol.Q_ab
+    lam = np.array([np.linalg.eigvalsh(0.5 * (Qc[3 * j:3 * j + 3, 3 * j:3 * j + 3]
+                                              + Qc[3 * j:3 * j + 3, 3 * j:3 * j + 3].T))[-1] for j in range(q)])
+    return np.maximum(float(tol_m), n_sigma * np.sqrt(np.maximum(lam, 0.0)))
+
+
 def _pair_search(sol: FloatSolution, rows_by_bl: list, cands: list, body_baselines_m: np.ndarray):
     """Best two joint candidates over the product of the per-baseline candidate lists: (costs (k,), a (k, n)).
 
@@ -330,8 +358,8 @@ def _pair_search(sol: FloatSolution, rows_by_bl: list, cands: list, body_baselin
         y = np.linalg.solve(C, da)
         ils = float(y @ y)
         b = sol.b_float_m - K @ da
-        cR, _ = rotation_fit(b, W, body_baselines_m)
-        out.append((ils + cR, a, b))
+        cR, R = rotation_fit(b, W, body_baselines_m)
+        out.append((ils + cR, a, b, body_baselines_m @ R.T))
     out.sort(key=lambda t: t[0])
     return out
 
@@ -346,8 +374,6 @@ def solve_constrained(prob: EpochProblem, body_baselines_m: np.ndarray, opts: Si
     candidates would be missed; the candidates are the baseline's best under its own length constraint, which
     the right integers nearly always are (measured in bench/bench_ttff.py: "best right").
     """
-    from worker.estimation.ar_validation import baseline_angle_test, baseline_length_test
-    from worker.estimation.constrained_search import constrained_search
     from worker.estimation.lambda_search import AmbiguitySearchError
 
     q = body_baselines_m.shape[0]
@@ -366,58 +392,131 @@ def solve_constrained(prob: EpochProblem, body_baselines_m: np.ndarray, opts: Si
     ib = np.concatenate([np.arange(3 * j, 3 * j + 3) for j in use])
     sub = FloatSolution(sol.a_float_cyc[ia], sol.b_float_m[ib], sol.Q_a[np.ix_(ia, ia)], sol.Q_b[np.ix_(ib, ib)],
                         sol.Q_ab[np.ix_(ia, ib)], tuple(sol.blocks[i] for i in blk_keep))
-    # rows of each used baseline inside `sub`
-    rows_by_bl, off = [], 0
     pos_of = {}
+    off = 0
     for i in blk_keep:
         pos_of[i] = np.arange(off, off + sol.blocks[i].n_dd)
         off += sol.blocks[i].n_dd
-    for j in use:
-        rows_by_bl.append(np.concatenate([pos_of[i] for i in blk_keep if sol.blocks[i].baseline == j]))
     F = body_baselines_m[use]
     nodes = 0
     try:
-        if len(use) == 1:
-            res = constrained_search(sub.a_float_cyc, sub.Q_a, sub.b_float_m, sub.Q_b, sub.Q_ab, F, m=2,
-                                     ratio_cap=opts.constrained_ratio_cap, max_nodes=opts.constrained_max_nodes)
-            nodes = res.n_nodes
-            a_best = res.fixed[0]
-            B = res.b_unconstrained_m.reshape(-1, 3)
-            rt = res.ratio
-        else:
-            cands = []
-            for pos, j in enumerate(use):
-                r = rows_by_bl[pos]
-                jb = np.arange(3 * pos, 3 * pos + 3)
-                res = constrained_search(sub.a_float_cyc[r], sub.Q_a[np.ix_(r, r)], sub.b_float_m[jb],
-                                         sub.Q_b[np.ix_(jb, jb)], sub.Q_ab[np.ix_(r, jb)], F[pos:pos + 1],
-                                         m=opts.constrained_candidates, ratio_cap=opts.constrained_ratio_cap,
-                                         max_nodes=opts.constrained_max_nodes)
-                nodes += res.n_nodes
-                cands.append(list(res.fixed))
-            found = _pair_search(sub, rows_by_bl, cands, F)
-            a_best = found[0][1]
-            B = found[0][2].reshape(-1, 3)
-            rt = found[1][0] / found[0][0] if len(found) > 1 and found[0][0] > 0 else math.inf
+        try:
+            att = _attempt(sub, use, F, opts)
+            nodes = att.nodes
+        except (AmbiguitySearchError, ValueError, OverflowError, np.linalg.LinAlgError) as exc:
+            att = _Attempt(np.full(sub.a_float_cyc.size, np.nan), np.full((len(use), 3), np.nan),
+                           np.full((len(use), 3), np.nan), math.nan, False, 0, f"search failed: {str(exc)[:80]}")
+        signals = list(dict.fromkeys(blk.signal for blk in sub.blocks))
+        if not att.passed and len(signals) > 1 and opts.first_signal_fallback:
+            # the first signal alone, the others' integers then from the fixed baselines (see module docstring)
+            first = np.array([blk.signal == signals[0] for blk in sub.blocks])
+            if all(any(f and blk.baseline == j for f, blk in zip(first, sub.blocks)) for j in use):
+                ra = np.concatenate([np.arange(s.start, s.stop) for s, f in zip(sub.ambiguity_slices(), first) if f])
+                sub1 = FloatSolution(sub.a_float_cyc[ra], sub.b_float_m, sub.Q_a[np.ix_(ra, ra)], sub.Q_b,
+                                     sub.Q_ab[ra], tuple(b for b, f in zip(sub.blocks, first) if f))
+                att1 = _attempt(sub1, use, F, opts)
+                nodes += att1.nodes
+                if att1.passed:
+                    a_all, why = _complete_other_signals(sub, ra, att1.a_best, att1.b_constrained.reshape(-1),
+                                                         opts.other_signal_max_frac_cyc)
+                    att1.passed = a_all is not None
+                    att1.why = why
+                    if a_all is not None:
+                        att1.a_best = a_all
+                        att = att1
     except (AmbiguitySearchError, ValueError, OverflowError, np.linalg.LinAlgError) as exc:
         for j in use:
             detail[j] = f"search failed: {str(exc)[:80]}"
         return EpochOutcome("constrained", acc, correct, best_ok, ratio, bfix, nodes, detail)
+    for pos, j in enumerate(use):
+        bfix[j] = att.B[pos]
+        ratio[j] = att.ratio
+        rows_j = {i: att.a_best[pos_of[i]] for i in blk_keep if sol.blocks[i].baseline == j}
+        ok = _judge(prob, j, rows_j, att.B[pos]) if np.all(np.isfinite(att.B[pos])) else None
+        best_ok[j] = ok
+        acc[j] = att.passed
+        correct[j] = ok if att.passed else None
+        if not att.passed:
+            detail[j] = att.why
+    return EpochOutcome("constrained", acc, correct, best_ok, ratio, bfix, nodes, detail)
+
+
+@dataclass
+class _Attempt:
+    a_best: np.ndarray          # (n,) best integers of the FloatSolution searched
+    B: np.ndarray               # (q, 3) integer-conditioned (unconstrained) baselines b_hat(a)
+    b_constrained: np.ndarray   # (q, 3) constrained baselines of the best candidate (R F, or on the sphere)
+    ratio: float
+    passed: bool
+    nodes: int
+    why: str
+
+
+def _attempt(sub: FloatSolution, use: list, F: np.ndarray, opts: SingleEpochOptions) -> _Attempt:
+    """The constrained search on ``sub`` (baselines ``use``, body vectors F) and its validation: ratio of the
+    constrained objective, length and angle tests on b_hat(a) with ``geometric_tolerance_m``."""
+    from worker.estimation.ar_validation import baseline_angle_test, baseline_length_test
+    from worker.estimation.constrained_search import constrained_search, constrained_search_by_baselines
+
+    rows_by_bl = []
+    for pos in range(len(use)):
+        rows_by_bl.append(np.concatenate([np.arange(s.start, s.stop) for s, blk in
+                                          zip(sub.ambiguity_slices(), sub.blocks) if blk.baseline == use[pos]]))
+    nodes = 0
+    if len(use) == 1:
+        res = constrained_search(sub.a_float_cyc, sub.Q_a, sub.b_float_m, sub.Q_b, sub.Q_ab, F, m=2,
+                                 ratio_cap=opts.constrained_ratio_cap, max_nodes=opts.constrained_max_nodes)
+        nodes = res.n_nodes
+        a_best = res.fixed[0]
+        B = res.b_unconstrained_m.reshape(-1, 3)
+        Bc = res.b_fixed_m.reshape(-1, 3)
+        rt = res.ratio
+    else:
+        res = constrained_search_by_baselines(sub.a_float_cyc, sub.Q_a, sub.b_float_m, sub.Q_b, sub.Q_ab, F,
+                                              rows_by_bl, m_first=opts.constrained_candidates,
+                                              ratio_cap=opts.constrained_joint_ratio_cap,
+                                              max_nodes=opts.constrained_max_nodes,
+                                              max_candidates=opts.constrained_max_candidates)
+        nodes = res.n_nodes
+        a_best = res.fixed[0]
+        B = res.b_unconstrained_m.reshape(-1, 3)
+        Bc = res.b_fixed_m.reshape(-1, 3)
+        rt = res.ratio
     lengths = np.linalg.norm(F, axis=1)
-    _, len_ok = baseline_length_test(B, lengths, opts.max_length_error_m)
+    tol = geometric_tolerance_m(sub, opts.max_length_error_m, opts.geometric_tol_sigmas)
+    _, len_ok = baseline_length_test(B, lengths, tol)
     ang_ok = True
     if len(use) >= 2:
-        _, ao = baseline_angle_test(B, F, tol_m=opts.max_length_error_m)
+        tol_a = tol * (opts.max_angle_error_m / opts.max_length_error_m)
+        _, ao = baseline_angle_test(B, F, tol_m=tol_a)
         ang_ok = bool(np.all(ao))
     passed = bool(rt >= opts.min_ratio_constrained and ang_ok and np.all(len_ok))
-    for pos, j in enumerate(use):
-        bfix[j] = B[pos]
-        ratio[j] = rt
-        rows_j = {i: a_best[pos_of[i]].astype(np.int64) for i in blk_keep if sol.blocks[i].baseline == j}
-        ok = _judge(prob, j, rows_j, B[pos])
-        best_ok[j] = ok
-        acc[j] = passed
-        correct[j] = ok if passed else None
-        if not passed:
-            detail[j] = f"ratio {rt:.2f}" + ("" if np.all(len_ok) else ", length") + ("" if ang_ok else ", angle")
-    return EpochOutcome("constrained", acc, correct, best_ok, ratio, bfix, nodes, detail)
+    why = "" if passed else (f"ratio {rt:.2f}" + ("" if np.all(len_ok) else ", length") + ("" if ang_ok else ", angle"))
+    return _Attempt(np.asarray(a_best, float), B, np.asarray(Bc, float).reshape(-1, 3), float(rt), passed, nodes, why)
+
+
+def _complete_other_signals(sol: FloatSolution, fixed_rows: np.ndarray, a_fixed: np.ndarray, b_fixed_m: np.ndarray,
+                            max_frac_cyc: float) -> tuple[np.ndarray | None, str]:
+    """All integers of ``sol`` from those of ``fixed_rows`` and the fixed baselines: the other ambiguities
+    conditioned on (a_fixed, b_fixed) and rounded; NaN (left float) where one lies ``max_frac_cyc`` or further
+    from its integer (partial fixing: the baselines are fixed by the first signal already).
+
+    Implements: the conditional mean of a Gaussian vector, a_o|c = a_o - Q_oc Q_cc^-1 (c_hat - c) with
+    c = (a_fixed, b) (Teunissen 1995 eq. 4 with the baseline added to the conditioning set); with the baseline
+    known to mm the other frequency's DD ambiguities are determined to a fraction of a cycle.
+    """
+    n = sol.a_float_cyc.size
+    other = np.setdiff1d(np.arange(n), fixed_rows)
+    x_hat = np.concatenate([sol.a_float_cyc, sol.b_float_m])
+    Q = np.block([[sol.Q_a, sol.Q_ab], [sol.Q_ab.T, sol.Q_b]])
+    c_idx = np.concatenate([fixed_rows, n + np.arange(sol.b_float_m.size)])
+    c_fix = np.concatenate([a_fixed, b_fixed_m])
+    Qcc = Q[np.ix_(c_idx, c_idx)]
+    Qoc = Q[np.ix_(other, c_idx)]
+    a_o = x_hat[other] - Qoc @ np.linalg.solve(Qcc, x_hat[c_idx] - c_fix)
+    r = np.round(a_o)
+    keep = np.abs(a_o - r) < max_frac_cyc
+    out = np.empty(n)
+    out[fixed_rows] = a_fixed
+    out[other] = np.where(keep, r, np.nan)
+    return out, ""

@@ -102,11 +102,12 @@ def filter_integer_errors(ss: StudySet, fix_log: dict, signals: list[str]) -> np
 
 def _filter_runs(ss: StudySet, cfg: str, method: str, opts: StudyOptions) -> list[dict]:
     from worker.attitude.filter import run_filter
-    from worker.attitude.settings import AttitudeSettings
+    from worker.attitude.settings import TABLE2_MASKS, AttitudeSettings
 
     t0 = time.process_time()
     sigs = list(CONFIGURATIONS[cfg])
-    kw = dict(opts.filter_settings)
+    kw = dict(TABLE2_MASKS)          # the paper's method: seed 000 Table 2 editing masks, explicitly
+    kw.update(opts.filter_settings)
     kw.update(opts.filter_settings_by_configuration.get(cfg, {}))
     if method == "filter-constrained":
         kw["ambiguity_search"] = "constrained"

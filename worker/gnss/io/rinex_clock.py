@@ -176,8 +176,11 @@ def _to_matrix(name, t: GpsTime, names, v1, v2, line_nos, lines_all):
 
 
 def _norm_sat(s: str) -> str:
-    if len(s) >= 2 and s[0].isalpha() and s[1:].strip().isdigit():
-        return f"{s[0]}{int(s[1:]):02d}"
+    """'G 1' -> 'G01'; anything else unchanged (only ASCII digits count: str.strip() also eats control characters
+    such as \\x1c and str.isdigit() accepts '²', neither of which int() takes)."""
+    rest = s[1:].strip(" ")
+    if len(s) >= 2 and s[0].isalpha() and rest.isascii() and rest.isdigit():
+        return f"{s[0]}{int(rest):02d}"
     return s
 
 

@@ -630,8 +630,9 @@ def read_rinex_nav(source, *, name: str | None = None) -> NavData:
 
 def _sat_norm(text: str) -> str:
     t = text.strip()
-    if len(t) >= 2 and t[1:].strip().isdigit():
-        return f"{t[0]}{int(t[1:]):02d}"
+    rest = t[1:].strip(" ")
+    if len(t) >= 2 and rest.isascii() and rest.isdigit():   # ASCII only: int() refuses '²' and control chars
+        return f"{t[0]}{int(rest):02d}"
     return t
 
 

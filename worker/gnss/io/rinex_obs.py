@@ -516,8 +516,10 @@ def _parse_header(lines: list[bytes], name: str) -> ObsHeader:
                     sat = line[4 + 7 * k:7 + 7 * k]
                     if sat.strip():
                         fcn = line[8 + 7 * k:10 + 7 * k].strip()
-                        if sat[0] == "R" and sat[1:].strip().isdigit() and fcn.lstrip("-").isdigit():
-                            hdr.glonass_slots[f"R{int(sat[1:]):02d}"] = int(fcn)
+                        slot = sat[1:].strip(" ")
+                        if (sat[0] == "R" and slot.isascii() and slot.isdigit() and fcn.isascii()
+                                and fcn.lstrip("-").isdigit()):   # ASCII only: int() refuses '²' and control chars
+                            hdr.glonass_slots[f"R{int(slot):02d}"] = int(fcn)
             elif label == "GLONASS COD/PHS/BIS":
                 if not line[:60].strip():
                     warn.append(ParseWarning("empty-glonass-cod-phs-bis", "GLONASS COD/PHS/BIS is blank: "

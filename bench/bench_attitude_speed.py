@@ -1,0 +1,157 @@
+"""Attitude job speed (issue 6): filter epochs/s and the whole job, upload to products, next to RTKLIB postpos on
+the same files, measured in the same run.
+
+Passes: the 106-minute CASSIOPE-like pass of seed 000 sec. 4.1 (simulator preset `earth-pointing`, seed 0, three
+antennas, L1 C/A + L2 P(Y), 1 Hz), clean ({"pcv": false, "pco": false, "multipath": false,
+"noise_grows_with_cn0": false}) and realistic (preset as it is), each in kinematic and dynamic mode.
+
+- filter: CPU time (time.process_time) of worker.attitude.filter.run_filter, epochs / s; median of --runs runs;
+- job: the attitude pipeline itself (worker.pipelines.attitude.run on a JobContext like the runner builds: parse
+  the uploaded files, geometry, filter, attitude, every product text, PNG plots, report.html, each product
+  hashed as the blob store does), CPU and wall time, median of --runs runs. Not included: the HTTP upload and
+  the queue hand-over of the service (tens of ms, see docs/BENCHMARKS.md "API"), so the job figure is the
+  worker's part of "upload to products";
+- RTKLIB: pyrtklib postpos, moving-base L1+L2 (bench_attitude_rtklib.rtklib_movingbase_options), one run per
+  baseline (GPS-2>GPS-0, GPS-2>GPS-1) on the same RINEX files, CPU and wall, median of --runs runs.
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_speed.py [--runs 3] [--minutes 106] [--write]
+"""
+from __future__ import annotations
+
+import argparse
+import hashlib
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+
+from bench._report import machine_line, replace_section  # noqa: E402
+
+SEED = 0
+CLEAN = {"pcv": False, "pco": False, "multipath": False, "noise_grows_with_cn0": False}
+PASSES = {"clean": CLEAN, "realistic": {}}
+MODES = ("kinematic", "dynamic")
+
+
+def files_of(d: Path) -> list[tuple[str, str, Path]]:
+    files = [(f"obs/{p.name}", "rinex_obs", p) for p in sorted((d / "obs").glob("*.rnx"))]
+    return files + [("nav/brdc.rnx", "rinex_nav", d / "nav/brdc.rnx"), ("platform.json", "platform",
+                                                                      d / "platform.json"),
+                    ("platform.sp3", "sp3", d / "platform.sp3"),
+                    ("reference_attitude.csv", "reference_attitude", d / "reference_attitude.csv")]
+
+
+def run_job(d: Path, mode: str, work: Path) -> dict:
+    """One attitude job through its pipeline; CPU/wall of the whole job and of run_filter."""
+    import worker.attitude.process as P
+    from worker.context import InputFile, InputSet, JobContext
+    from worker.jobs.attitude import AttitudeConfig
+    from worker.pipelines.attitude import run
+
+    def store(path):
+        data = path.read_bytes()
+        return hashlib.sha256(data).hexdigest(), len(data)
+
+    s = InputSet(id="set-1", name=d.name, files=[InputFile(n, k, p, {}) for n, k, p in files_of(d)], summary={})
+    work.mkdir(parents=True, exist_ok=True)
+    ctx = JobContext(job_id="bench-speed", attempt=1, sets=[s], workdir=work, _store_blob=store)
+    filt = {}
+    orig = P.run_filter
+
+    def timed(pobs, *a, **k):
+        c0 = time.process_time()
+        r = orig(pobs, *a, **k)
+        filt["cpu_s"], filt["epochs"] = time.process_time() - c0, len(pobs.time)
+        return r
+
+    P.run_filter = timed
+    try:
+        t0, c0 = time.perf_counter(), time.process_time()
+        run(ctx, AttitudeConfig(mode=mode))
+        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    finally:
+        P.run_filter = orig
+    return {"job_wall_s": wall, "job_cpu_s": cpu, "filter_cpu_s": filt["cpu_s"], "epochs": filt["epochs"],
+            "products": sorted(ctx.products)}
+
+
+def run_rtklib(d: Path, work: Path) -> dict:
+    """RTKLIB postpos of both baselines (moving base, L1+L2) on the same files: summed CPU / wall."""
+    from bench.bench_attitude_rtklib import BASELINES, load_truth, rtklib_movingbase_options
+    from bench.rtklib_runner import run_postpos
+
+    truth = load_truth(d)
+    out = {"cpu_s": 0.0, "wall_s": 0.0}
+    for a, b in BASELINES:
+        L = float(np.linalg.norm(truth["body"][f"{a}>{b}"]))
+        sol = run_postpos(d / "obs" / f"{b}.rnx", d / "obs" / f"{a}.rnx", d / "nav" / "brdc.rnx",
+                          rtklib_movingbase_options(L), work / f"{b}.pos")
+        out["cpu_s"] += sol.cpu_s
+        out["wall_s"] += sol.elapsed_s
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--minutes", type=float, default=106.0)
+    ap.add_argument("--passes", default=",".join(PASSES))
+    ap.add_argument("--no-rtklib", action="store_true")
+    ap.add_argument("--write", action="store_true")
+    args = ap.parse_args()
+    from worker.sim import simulate_scenario
+
+    med = lambda rows, key: float(np.median([r[key] for r in rows]))  # noqa: E731
+    table, rtk = [], {}
+    load = os.getloadavg()
+    with tempfile.TemporaryDirectory() as tmp:
+        for label in args.passes.split(","):
+            d = Path(tmp) / label
+            simulate_scenario("earth-pointing", d, seed=SEED,
+                              overrides={"duration_s": args.minutes * 60.0, **PASSES[label]})
+            for mode in MODES:
+                rows = [run_job(d, mode, Path(tmp) / f"work_{label}_{mode}_{i}") for i in range(args.runs)]
+                r = {"pass": label, "mode": mode, "epochs": rows[0]["epochs"],
+                     **{k: med(rows, k) for k in ("filter_cpu_s", "job_cpu_s", "job_wall_s")},
+                     "products": rows[0]["products"]}
+                r["filter_eps"] = r["epochs"] / r["filter_cpu_s"]
+                table.append(r)
+                print({k: (round(v, 3) if isinstance(v, float) else v) for k, v in r.items()}, flush=True)
+            if not args.no_rtklib:
+                rows = [run_rtklib(d, Path(tmp) / f"rtk_{label}_{i}") for i in range(args.runs)]
+                rtk[label] = {k: med(rows, k) for k in ("cpu_s", "wall_s")}
+                print(label, "rtklib", rtk[label], flush=True)
+    load_after = os.getloadavg()
+    lines = [f"Machine: {machine_line()}. One BLAS thread. Load average {load[0]:.1f} at the start, "
+             f"{load_after[0]:.1f} at the end (2 cores shared with other work: wall times are inflated by the "
+             "load, CPU times much less). Simulator seed 0, preset `earth-pointing`, "
+             f"{args.minutes:.0f} min at 1 Hz, three antennas (two baselines), L1 C/A + L2 P(Y). "
+             f"Median of {args.runs} runs.", "",
+             "| pass | mode | epochs | filter CPU s | filter epochs/s (CPU) | job CPU s | job wall s | "
+             "RTKLIB postpos, 2 baselines, CPU / wall s | job CPU / RTKLIB CPU |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in table:
+        p = rtk.get(r["pass"])
+        peer = f"{p['cpu_s']:.1f} / {p['wall_s']:.1f}" if p else "-"
+        ratio = f"{r['job_cpu_s'] / p['cpu_s']:.2f}" if p else "-"
+        lines.append(f"| {r['pass']} | {r['mode']} | {r['epochs']} | {r['filter_cpu_s']:.2f} | "
+                     f"{r['filter_eps']:.0f} | {r['job_cpu_s']:.1f} | {r['job_wall_s']:.1f} | {peer} | {ratio} |")
+    lines += ["", "Job = worker.pipelines.attitude.run on a JobContext (as the runner builds it): parsing, geometry, "
+              "filter, attitude, products " + ", ".join(table[0]["products"]) + " (each hashed as stored). "
+              "The HTTP upload and queue hand-over are not in these figures.", "",
+              f"Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_speed.py --runs {args.runs} "
+              "--write`."]
+    text = "\n".join(lines)
+    print(text)
+    if args.write:
+        replace_section(ROOT / "docs" / "BENCHMARKS.md", "Attitude job speed", text)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,46 @@
+"""read_csv_table reads CSV text column-wise; it must give what csv.DictReader row by row gives (the plots of the
+products depend on it): quoted cells with commas, blank lines, short and long rows, blanks around cells."""
+import csv
+import io
+
+import numpy as np
+import pytest
+
+from worker.plots.common import read_csv_table
+
+
+def _reference(text: str) -> dict:
+    reader = csv.DictReader(io.StringIO(text))
+    rows = list(reader)
+    out = {}
+    for name in reader.fieldnames or []:
+        cells = [(r.get(name) or "").strip() for r in rows]
+        try:
+            out[name.strip()] = np.array([float(c) if c != "" else np.nan for c in cells], dtype=np.float64)
+        except ValueError:
+            out[name.strip()] = np.array(cells, dtype=str)
+    return out
+
+
+TEXTS = {
+    "plain": "t,a,b,name\n2018-06-06T12:20:07.000,1.5,,G01\n2018-06-06T12:20:08.000,-0.00000,2e3,G02\n",
+    "quoted": 'time_gps,event,detail\n2018-01-01T00:00:00.000,fix,"3 DD, ratio 4.1"\n'
+              '2018-01-01T00:00:01.000,slip,"x"\n',
+    "blank_lines_and_spaces": "a, b ,c\n\n 1 , x ,3\n2,y,\n\n",
+    "short_and_long_rows": "a,b,c\n1,2\n3,4,5,6\n7,8,9\n",
+    "numeric_then_text": "a,b\n1,2\n3,abc\n",
+    "header_only": "a,b\n",
+    "only_blank_lines": "\n\n",
+}
+
+
+@pytest.mark.parametrize("name", sorted(TEXTS))
+def test_same_table_as_dictreader(name):
+    got, ref = read_csv_table(TEXTS[name]), _reference(TEXTS[name])
+    assert list(got) == list(ref)
+    for k in ref:
+        assert got[k].dtype.kind == ref[k].dtype.kind, k
+        if ref[k].dtype.kind == "f":
+            assert np.array_equal(got[k], ref[k], equal_nan=True), k
+        else:
+            assert got[k].tolist() == ref[k].tolist(), k
