@@ -173,7 +173,7 @@ def resolve_joint_constrained(x: np.ndarray, P: np.ndarray, groups_by_baseline: 
     baselines together when the ratio of the constrained objective reaches ``settings.min_ratio_constrained_joint``,
     every integer-conditioned baseline b_hat(a) passes the length test and every pair the angle test
     (``settings.max_length_error_m`` / ``settings.max_angle_error_m``, widened to 3 sigma of b_hat(a) where that
-    is larger: worker.ttff.single_epoch.geometric_tolerance_m). The same search and validation as the epoch-wise
+    is larger: worker.estimation.ar_validation.geometric_tolerance_m). The same search and validation as the epoch-wise
     ``epoch-constrained`` method of the ttff study (docs/ttff.md). With several signals and no acceptance, the
     first signal's groups alone are tried (the outcome's ``groups`` then names them).
     """
@@ -197,7 +197,7 @@ def _joint_constrained(x, P, groups_by_baseline, b_idx, body_baselines_m, settin
         DDBlock, constrained_search_by_baselines, float_from_single_differences,
     )
     from worker.estimation.lambda_search import AmbiguitySearchError
-    from worker.ttff.single_epoch import geometric_tolerance_m
+    from worker.estimation.ar_validation import geometric_tolerance_m
 
     use = sorted(groups_by_baseline)
     Ds, blocks, sd_idx, refs, rows, off = {}, [], [], [], [], 0

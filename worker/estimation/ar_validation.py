@@ -202,3 +202,23 @@ def partial_fix(a_float_cyc: np.ndarray, Q_aa: np.ndarray, min_success_rate: flo
     Q_z = dec.L[k:, k:].T @ np.diag(dec.d[k:]) @ dec.L[k:, k:]
     return PartialFix(Z_sub=Z_sub, z_fixed=z_fixed, z_float=z_float, Q_z=Q_z, sqnorm=sqnorm, ratio=ratio,
                       success_rate=float(tail[k]), n_total=n)
+
+
+def geometric_tolerance_m(sol, tol_m: float, n_sigma: float) -> np.ndarray:
+    """Per baseline (q,): ``max(tol_m, n_sigma sqrt(lambda_max(Q_b|a)))``, the length/angle test tolerance.
+
+    ``sol``: a ``constrained_search.FloatSolution`` (``n_baselines``, ``Q_a``, ``Q_ab``, ``Q_b``).
+
+    ``Q_b|a = Q_b - Q_ba Q_a^-1 Q_ab`` (Teunissen 1995 eq. 4) is the covariance of the integer-conditioned baseline:
+    a fixed test tolerance below its spread rejects right integers for nothing (10 cm CubeSat baselines with a
+    weak single-epoch geometry have sigma of several cm), while above it the test keeps its meaning.
+    """
+    q = sol.n_baselines
+    if n_sigma <= 0.0:
+        return np.full(q, float(tol_m))
+    C = np.linalg.cholesky(sol.Q_a)
+    K = np.linalg.solve(C.T, np.linalg.solve(C, sol.Q_ab)).T
+    Qc = sol.Q_b - K @ sol.Q_ab
+    lam = np.array([np.linalg.eigvalsh(0.5 * (Qc[3 * j:3 * j + 3, 3 * j:3 * j + 3]
+                                              + Qc[3 * j:3 * j + 3, 3 * j:3 * j + 3].T))[-1] for j in range(q)])
+    return np.maximum(float(tol_m), n_sigma * np.sqrt(np.maximum(lam, 0.0)))

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from worker.estimation.ar_validation import geometric_tolerance_m
 from worker.estimation.constrained_search import DDBlock, FloatSolution
 from worker.gnss.constants import C_M_S
 
@@ -313,24 +314,6 @@ def solve_lambda(prob: EpochProblem, body_baselines_m: np.ndarray, opts: SingleE
         if not acc[j]:
             detail[j] = f"length {np.linalg.norm(b):.4f} m"
     return EpochOutcome("lambda", acc, correct, best_ok, ratio, bfix, nodes, detail)
-
-
-def geometric_tolerance_m(sol: FloatSolution, tol_m: float, n_sigma: float) -> np.ndarray:
-    """Per baseline (q,): ``max(tol_m, n_sigma sqrt(lambda_max(Q_b|a)))``, the length/angle test tolerance.
-
-    ``Q_b|a = Q_b - Q_ba Q_a^-1 Q_ab`` (Teunissen 1995 eq. 4) is the covariance of the integer-conditioned baseline:
-    a fixed test tolerance below its spread rejects right integers for nothing (10 cm CubeSat baselines with a
-    weak single-epoch geometry have sigma of several cm), while above it the test keeps its meaning.
-    """
-    q = sol.n_baselines
-    if n_sigma <= 0.0:
-        return np.full(q, float(tol_m))
-    C = np.linalg.cholesky(sol.Q_a)
-    K = np.linalg.solve(C.T, np.linalg.solve(C, sol.Q_ab)).T
-    Qc = sol.Q_b - K @ sol.Q_ab
-    lam = np.array([np.linalg.eigvalsh(0.5 * (Qc[3 * j:3 * j + 3, 3 * j:3 * j + 3]
-                                              + Qc[3 * j:3 * j + 3, 3 * j:3 * j + 3].T))[-1] for j in range(q)])
-    return np.maximum(float(tol_m), n_sigma * np.sqrt(np.maximum(lam, 0.0)))
 
 
 def _pair_search(sol: FloatSolution, rows_by_bl: list, cands: list, body_baselines_m: np.ndarray):
