@@ -13,7 +13,7 @@ from sqlalchemy import func, select, update
 from starlette.concurrency import run_in_threadpool
 
 from app.deps import SessionDep, TeamDep
-from app.models import Job, JobSet, ObservationSet, Product, utcnow
+from app.models import Job, JobSet, ObservationSet, PcvMap, Product, utcnow
 from app.problems import Problem, ProblemError, not_found
 from app.schemas.common import Page
 from app.schemas.jobs import JobCreate, JobPublic, JobState, ProductPublic
@@ -74,6 +74,15 @@ def submit_job(body: JobCreate, request: Request, response: Response, team: Team
             raise ProblemError(422, "unknown-observation-set", "Unknown observation set",
                                f"No observation set {missing[0]!r} is visible to your team.",
                                field="observation_set_ids")
+    map_ids = list(getattr(config, "pcv_map_ids", None) or [])
+    if map_ids:   # maps a job applies are checked now, not when a worker runs it
+        owned_maps = set(session.execute(select(PcvMap.id).where(PcvMap.id.in_(map_ids),
+                                                                  PcvMap.team_id == team.id)).scalars())
+        for i, map_id in enumerate(map_ids):
+            if map_id not in owned_maps:
+                raise ProblemError(422, "unknown-pcv-map", "Unknown PCV map",
+                                   f"No PCV map {map_id!r} is visible to your team; GET /v1/pcv-maps lists them.",
+                                   field=f"config.pcv_map_ids.{i}")
     now = utcnow()
     settings = request.app.state.settings
     job = Job(team_id=team.id, type=spec.name, config=config.model_dump(mode="json"), set_ids=ids,

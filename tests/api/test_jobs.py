@@ -229,3 +229,22 @@ def test_successive_fan_outs_of_one_job_never_mix(api):
     assert api.get(f"/v1/jobs/{job_id}").json()["state"] == "succeeded"
     passes = api.get(f"/v1/jobs/{job_id}/products/selftest.json").json()["passes"]
     assert [[t["power"] for t in p] for p in passes] == [[n ** k for n in range(4)] for k in (2, 3, 4)]
+
+
+def test_attitude_job_with_unknown_pcv_map_is_422_at_submit(api):
+    """A map id that is not the team's is refused when the job is submitted (field names the list entry), a known
+    one is accepted; nothing is queued for the refused job."""
+    from tests.gnss.test_pcv_map import make_map
+
+    set_id = _set(api)
+    known = api.post("/v1/pcv-maps", json={"name": "m", "map": make_map(seed=2).to_json()}).json()["id"]
+    before = api.get("/v1/jobs").json()["total"]
+    resp = api.post("/v1/jobs", json={"type": "attitude", "observation_set_ids": [set_id],
+                                      "config": {"pcv_map_ids": [known, "f" * 32]}})
+    assert resp.status_code == 422, resp.text
+    doc = resp.json()
+    assert doc["field"] == "config.pcv_map_ids.1" and "f" * 32 in doc["detail"]
+    assert api.get("/v1/jobs").json()["total"] == before
+    resp = api.post("/v1/jobs", json={"type": "attitude", "observation_set_ids": [set_id],
+                                      "config": {"pcv_map_ids": [known]}})
+    assert resp.status_code == 202, resp.text
