@@ -9,7 +9,7 @@ from worker.errors import JobInputError
 
 def run(ctx: JobContext, config) -> None:
     from worker.attitude.process import InputProblem, load_inputs, process
-    from worker.attitude.products import all_products
+    from worker.attitude.products import all_products, product_tables
 
     obs_set = ctx.require_one()
     ctx.progress(0.0, "reading files")
@@ -45,13 +45,14 @@ def run(ctx: JobContext, config) -> None:
     products = all_products(sol)
     for name, content in products.items():
         ctx.write_product(name, content)
-    _write_plots_and_report(ctx, config, obs_set, products, sol.summary)
+    _write_plots_and_report(ctx, config, obs_set, products, product_tables(sol), sol.summary)
     ctx.progress(1.0, "done")
 
 
-def _write_plots_and_report(ctx: JobContext, config, obs_set, products: dict, summary: dict) -> None:
+def _write_plots_and_report(ctx: JobContext, config, obs_set, products: dict, tables: dict, summary: dict) -> None:
     """PNG plots (seed 000 Figs. 5-7 style Euler errors, fix status, DOP, residuals, sky plot) and one
-    self-contained report.html; see docs/pages.md."""
+    self-contained report.html; see docs/pages.md. The plots take the CSV products' column arrays (`tables`,
+    worker.attitude.products.product_tables) where there are some, not the texts parsed back."""
     from worker.plots import PlotContext
     from worker.plots.attitude import attitude_plots
     from worker.report import html_report
@@ -59,6 +60,7 @@ def _write_plots_and_report(ctx: JobContext, config, obs_set, products: dict, su
     ctx.progress(0.95, "plotting")
     texts = {name: (content.decode() if isinstance(content, bytes) else content)
              for name, content in products.items() if name.endswith(".csv")}
+    texts.update({name: table for name, table in tables.items() if name in texts})
     refs = obs_set.of_kind("reference_attitude")
     reference = refs[0].path.read_text() if refs else None
     context = PlotContext(set_name=obs_set.name or obs_set.id, job_id=ctx.job_id, config=config.model_dump())
