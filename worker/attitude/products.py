@@ -29,6 +29,15 @@ def _fmt(arr: np.ndarray, fmt: str) -> np.ndarray:
     return np.array(list(map(fmt.__mod__, np.asarray(arr).tolist())), dtype=object)
 
 
+def _fmt_repeated(arr: np.ndarray, fmt: str) -> np.ndarray:
+    """Like _fmt for a column with few distinct values (angles per satellite and epoch repeated over signals and
+    observables, C/N0 in 0.25 dB-Hz steps): each distinct value (bitwise, so -0.0 stays apart from 0.0) is
+    formatted once. Same text as _fmt."""
+    arr = np.ascontiguousarray(arr, dtype=np.float64)
+    bits, inverse = np.unique(arr.view(np.int64), return_inverse=True)
+    return _fmt(bits.view(np.float64), fmt)[inverse.ravel()]
+
+
 def attitude_csv(sol) -> str | None:
     """attitude.csv text (CONVENTIONS.md columns + gps_time flags); None with fewer than two baselines."""
     if sol.att_epochs is None:
@@ -86,17 +95,17 @@ def residuals_csv(sol) -> str:
     kinds = np.array(["code", "phase"])
     ep = r["epoch"]
 
-    def num(a, f):
+    def num(a, f, repeated=False):
         out = np.full(a.shape, "", dtype=object)
         ok = np.isfinite(a)
-        out[ok] = _fmt(a[ok], f)
+        out[ok] = (_fmt_repeated if repeated else _fmt)(a[ok], f)
         return out
 
     # per-epoch columns are formatted once per epoch and indexed
     cols = [iso_all.astype(object)[ep], _fmt(sow_all, "%.3f")[ep], names.astype(object)[r["bl"]],
             sats.astype(object)[r["sat"]], sigs.astype(object)[r["sig"]], kinds.astype(object)[r["kind"]],
-            num(r["residual_m"], "%.5f"), num(r["az_ant_deg"], "%.2f"), num(r["el_ant_deg"], "%.2f"),
-            num(r["cn0_dbhz"], "%.1f"), np.array(["0", "1"], dtype=object)[(r["reason"] == 0).astype(int)],
+            num(r["residual_m"], "%.5f"), num(r["az_ant_deg"], "%.2f", True), num(r["el_ant_deg"], "%.2f", True),
+            num(r["cn0_dbhz"], "%.1f", True), np.array(["0", "1"], dtype=object)[(r["reason"] == 0).astype(int)],
             reasons.astype(object)[r["reason"]]]
     return _join(header, cols)
 
