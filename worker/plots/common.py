@@ -245,9 +245,11 @@ def gps_time(table: Table) -> np.ndarray:
     return np.array([str(c) for c in col], dtype="datetime64[ms]")
 
 
-def time_axis(ax, t: np.ndarray, label: bool = True) -> None:
-    """Format an x axis holding GPS datetimes: HH:MM:SS ticks, label naming GPS time and the date."""
-    locator = mdates.AutoDateLocator(minticks=4, maxticks=9)
+def time_axis(ax, t: np.ndarray, label: bool = True, maxticks: int = 9) -> None:
+    """Format an x axis holding GPS datetimes: HH:MM:SS ticks (at most `maxticks`: fewer on narrow axes, so the
+    labels do not run into each other), label naming GPS time and the date."""
+    locator = mdates.AutoDateLocator(minticks=3, maxticks=maxticks) if maxticks < 9 else \
+        mdates.AutoDateLocator(minticks=4, maxticks=maxticks)
     ax.xaxis.set_major_locator(locator)
     ax.xaxis.set_major_formatter(mdates.DateFormatter("%H:%M:%S"))
     if label:
