@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from worker.gnss.rotations import dcm_to_euler321, euler321_to_dcm, quat_to_dcm
-from worker.plots.common import (EULER_COLOURS, PlotContext, Table, categories, column, figure_png,
+from worker.plots.common import (EULER_COLOURS, PlotContext, Table, categories, category_memo, column, figure_png,
                                  first_per_epoch_and_key, gps_time, new_figure, no_data, numeric, read_csv_table,
                                  set_title, time_axis, truthy, wrap_deg)
 
@@ -550,8 +550,8 @@ def skyplot_figure(residuals_csv: Any, context: PlotContext | Mapping | None = N
     t = gps_time(res)
     if base_code is None:
         base_code = np.zeros(len(t), dtype=np.int64)
+    _, sat_code = categories(_residual(res, "satellite"))
     sats = _residual(res, "satellite").astype(str)
-    _, sat_code = categories(sats)
     az, el = _residual_num(res, "azimuth_deg"), _residual_num(res, "elevation_deg")
     cn0 = _residual_num(res, "cn0_dbhz")
     if cn0 is None:
@@ -615,7 +615,8 @@ def attitude_plots(products: Mapping[str, Any], reference: Any = None,
     if att is not None or bl is not None:
         out["fix_status.png"] = fix_status_plot(att, bl, ev, context)
     if res is not None:
-        out["dop.png"] = dop_plot(res, att, context)
-        out["residuals.png"] = residuals_plot(res, context)
-        out["skyplot.png"] = skyplot_plot(res, context)
+        with category_memo():
+            out["dop.png"] = dop_plot(res, att, context)
+            out["residuals.png"] = residuals_plot(res, context)
+            out["skyplot.png"] = skyplot_plot(res, context)
     return out
