@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from worker.attitude.fastops import median1d, nanmedian1, nz
-from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, masked_median_axis1, np_sum,
-                                     white_noise_update)
+from worker.attitude.fastops import count_pairs, median1d, nanmedian1, nz
+from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, count_pairs_masked,
+                                     masked_median_axis1, np_sum, white_noise_update)
 
 NOISE_EPOCHS, MIN_EPOCHS = 300.0, 10
 
@@ -35,6 +35,24 @@ def test_masked_median_equals_nanmedian_of_where():
         td_c, _, ok_c, _ = _tds(rng, n_sat=int(rng.integers(1, 15)))
         ref = nanmedian1(np.where(ok_c, td_c, np.nan))
         assert np.array_equal(masked_median_axis1(td_c, ok_c), ref, equal_nan=True)
+
+
+def test_masked_median_2d_and_nan_values():
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        a = rng.normal(size=(3, int(rng.integers(1, 12))))
+        a[rng.random(a.shape) < 0.1] = np.nan                    # NaN values count as missing even where ok
+        ok = rng.random(a.shape + (2,)) < 0.7
+        ref = nanmedian1(np.where(ok[:, :, 0], a, np.nan))
+        assert np.array_equal(masked_median_axis1(a[:, :, None], ok[:, :, :1])[:, 0], ref, equal_nan=True)
+
+
+def test_count_pairs_masked_equals_count_pairs():
+    rng = np.random.default_rng(8)
+    for n in range(0, 60):
+        first, second, mask = rng.integers(0, 3, n), rng.integers(0, 9, n), rng.random(n) < 0.6
+        assert np.array_equal(count_pairs_masked(first, second, mask, 3, 9),
+                              count_pairs(first[mask], second[mask], 3, 9))
 
 
 def _numpy_noise(td_c, td_p, ok_c, ok_p, mc, mp, lw, lam, mom, gam_n, gamma, est_var_c, est_var_p, est_n):
