@@ -114,3 +114,25 @@ def test_noise_estimators_equal_numpy_over_many_epochs():
             assert np.array_equal(a, b)
     assert np.all(st_k[1] > MIN_EPOCHS) and not np.all(st_k[2] == 1.0)    # gamma was estimated
     assert 0.3 < st_k[2][0, 0] < 1.5          # code noise grows with the factor^1 put in (slope of ln|e|)
+
+
+def test_round_newcomers_equals_the_dense_dd_products():
+    """worker.attitude.ambiguity.round_newcomers takes D x and diag(D P D^T) from the two non-zeros of each DD row:
+    the same bits as the dense products (which only add exact zeros), on random states."""
+    from worker.attitude.ambiguity import round_newcomers
+
+    rng = np.random.default_rng(9)
+    for _ in range(500):
+        n = int(rng.integers(10, 70))
+        A = rng.normal(size=(n, n)) * 10.0 ** rng.uniform(-3, 1)
+        P, x = A @ A.T, rng.normal(size=n) * 10.0 ** rng.uniform(-1, 4)
+        k = int(rng.integers(1, 8))
+        idx = rng.choice(n, size=k + 1, replace=False)
+        D = np.zeros((k, n))
+        D[np.arange(k), idx[1:]] = 1.0
+        D[:, idx[0]] -= 1.0
+        d, var = D @ x, np.einsum("ij,ij->i", D @ P, D)
+        r = np.round(d)
+        ok = (np.sqrt(np.maximum(var, 0.0)) < 0.3) & (np.abs(d - r) < 0.35)
+        D1, v1, ok1 = round_newcomers(x, P, idx[1:], int(idx[0]), 0.3, 0.35)
+        assert np.array_equal(ok1, ok) and np.array_equal(D1, D[ok]) and np.array_equal(v1, r[ok])
