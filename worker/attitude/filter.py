@@ -32,8 +32,10 @@ from worker.attitude.ambiguity import (
     first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
 )
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
-from worker.attitude.fastops import clip as _clip, count_pairs as _count_pairs, median1d as _median1d
+from worker.attitude.fastops import clip as _clip, count_pairs as _count_pairs
 from worker.attitude.fastops import nanmedian1 as _nanmedian1, nz as _nz
+from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, masked_median_axis1,
+                                     white_noise_update)
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from worker.attitude.settings import AttitudeSettings, cn0_mask_of
 from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
@@ -192,7 +194,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     n_bl = len(baselines)
     dynamic = s.mode == "dynamic"
     st = _State(n_bl, n_sat, n_sig, dynamic, s.separate_phase_clock)
-    lam = pobs.wavelength_m
+    lam = np.ascontiguousarray(pobs.wavelength_m, dtype=np.float64)
     t_s = (pobs.time - pobs.time[0]) if n_ep else np.zeros(0)
     t_s = np.asarray(t_s, dtype=np.float64)
     lengths = np.linalg.norm(body_baselines_m, axis=1)
@@ -404,8 +406,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             td_p = sdp_c - prev_sdp - dgeo[:, :, None]
             td_c_ok = np.isfinite(td_c) & use_c
             td_p_ok = np.isfinite(td_p) & use_p
-            mc = _nanmedian1(np.where(td_c_ok, td_c, np.nan))                 # (n_bl, n_sig)
-            mp = _nanmedian1(np.where(td_p_ok, td_p, np.nan))
+            mc = masked_median_axis1(td_c, td_c_ok)                           # (n_bl, n_sig)
+            mp = masked_median_axis1(td_p, td_p_ok)
             # a common phase jump without a code jump: a receiver clock jump not applied to phase -> integer shift
             common = _nz(mp - mc)
             for j, f in zip(*np.nonzero(np.abs(common) > 1000.0)):
@@ -421,38 +423,15 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                     # exponent gamma of the C/N0 growth (variance ~ factor^gamma) per observable and signal: slope
                     # of ln|TD| against ln(factor) / 2 (E ln|x| = ln sigma + const for Gaussian x), pooled
                     # moments over NOISE_EPOCHS; a receiver whose noise does not grow as C/N0 falls gets gamma ~ 0
-                    for f in range(n_sig):
-                        for kk, td, okk, mref, big in ((0, td_c, td_c_ok, mc, 5.0), (1, td_p, td_p_ok, mp, lam[f])):
-                            sel = okk[..., f]
-                            r = np.abs((td[..., f] - _nz(mref[:, f])[:, None])[sel])
-                            x = lw[..., f][sel]
-                            keep = (r < big) & (r > 0)
-                            if keep.sum() >= 3:
-                                x, y = x[keep], np.log(r[keep])
-                                a = 1.0 / min(gam_n[kk, f] + 1.0, NOISE_EPOCHS)
-                                nx = x.size            # means as sum / size (what ndarray.mean computes)
-                                mom[kk, f] += a * (np.array([x.sum() / nx, y.sum() / nx, (x * x).sum() / nx,
-                                                             (x * y).sum() / nx]) - mom[kk, f])
-                                gam_n[kk, f] += 1
-                                vx = mom[kk, f, 2] - mom[kk, f, 0] ** 2
-                                if gam_n[kk, f] >= NOISE_MIN_EPOCHS and vx > 0.05:
-                                    gamma[kk, f] = _clip(2.0 * (mom[kk, f, 3] - mom[kk, f, 0] * mom[kk, f, 1]) / vx,
-                                                           0.0, 1.5)
+                    # (worker.attitude.kernels: the samples, then the moments and gamma, in place)
+                    xs, rs, g_off = cn0_growth_samples(td_c, td_p, td_c_ok, td_p_ok, mc, mp, lw, lam)
+                    cn0_growth_update(xs, np.log(rs), g_off, mom, gam_n, gamma, NOISE_EPOCHS, NOISE_MIN_EPOCHS,
+                                      0.05, POW2)
                 wfac_c = np.exp(gamma[0][None, None, :] * lw)
                 wfac_p = np.exp(gamma[1][None, None, :] * lw)
-                dc_all = (td_c - _nz(mc)[:, None, :]) / np.sqrt(wfac_c)
-                dp_all = (td_p - _nz(mp)[:, None, :]) / np.sqrt(wfac_p)
-                for f in range(n_sig):
-                    dc = dc_all[..., f][td_c_ok[..., f]]
-                    dp = dp_all[..., f][td_p_ok[..., f]]
-                    if dp.size >= 3 and dc.size >= 3:
-                        a = 1.0 / min(est_n[f] + 1.0, NOISE_EPOCHS)
-                        # MAD -> sigma of a TD = sqrt(2) sigma of one SD (white noise)
-                        vp = (_median1d(np.abs(dp)) / 0.6745) ** 2 / 2.0
-                        vc = (_median1d(np.abs(dc)) / 0.6745) ** 2 / 2.0
-                        est_var_p[f] += a * (vp - est_var_p[f])
-                        est_var_c[f] += a * (vc - est_var_c[f])
-                        est_n[f] += 1
+                # MAD of the normalised TDs -> sigma of a TD = sqrt(2) sigma of one SD (white noise), in place
+                white_noise_update(td_c, td_p, td_c_ok, td_p_ok, mc, mp, wfac_c, wfac_p, est_var_c, est_var_p, est_n,
+                                   NOISE_EPOCHS, POW2)
             bad_tc = td_c_ok & (np.abs(td_c - _nz(mc)[:, None, :]) > s.td_code_m)
             # every phase with a state is checked, used or not: a slip while rejected (C/N0, mask) must not
             # survive into the epochs where it is used again
