@@ -84,6 +84,10 @@ class FilterResult:
     # the noise model as estimated at the end: white sigma per signal (at 45 dB-Hz), C/N0 growth exponents, the
     # adaptive multipath scale (summary.json "noise_model")
     noise: dict = None
+    # dynamic mode with settings.smoother: per epoch the (omega, baselines) sub-state after propagation (prior) and
+    # at the output (posterior), the transition matrix from the previous epoch and the segment starts (resets),
+    # for the fixed-interval smoother (worker.attitude.smoother)
+    smoother_data: dict = None
 
 
 class _State:
@@ -228,6 +232,13 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     out_n = np.zeros((n_ep, n_bl), np.int64)
     out_ratio = np.full((n_ep, n_bl), np.nan)
     out_w = np.full((n_ep, 3), np.nan)
+    n_sub = 3 + 3 * n_bl
+    record = dynamic and s.smoother
+    if record:
+        sm_xp, sm_xf = np.full((n_ep, n_sub), np.nan), np.full((n_ep, n_sub), np.nan)
+        sm_Pp, sm_Pf = np.full((n_ep, n_sub, n_sub), np.nan), np.full((n_ep, n_sub, n_sub), np.nan)
+        sm_Phi = np.full((n_ep, n_sub, n_sub), np.nan)
+        sm_start = np.ones(n_ep, bool)
     res_blocks: list[tuple] = []          # per epoch: see _residual_records
     events: list[dict] = []
     first_fix = np.full(n_bl, -1)
@@ -283,6 +294,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         if adapter is not None:
             adapter.reset()
         ev(k, "fix_reset", j, detail=f"{why}: ambiguities restart")
+        if record:
+            sm_start[k] = True
 
     def ev(k, kind, j=None, sat=None, sig=None, detail=""):
         events.append({"epoch": k, "event": kind, "baseline": j, "sat": sat, "signal": sig, "detail": detail})
@@ -290,6 +303,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     blk = None                                              # SdBlock of the current epochs
     w_idx3 = np.arange(3)
     ix_b = np.ix_(all_b_idx, all_b_idx)
+    sub_w_b = np.concatenate([w_idx3, all_b_idx])            # omega and baselines (the smoother's sub-state)
+    ix_sub = np.ix_(sub_w_b, sub_w_b)
     for k in range(n_ep):
         st.epoch = k
         if progress is not None and k % 100 == 0:
@@ -307,6 +322,12 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 Qw = adapter.q_rate() if adapter is not None else np.eye(3) * q_w       # (3, 3) rad^2/s^3
                 propagate_rotation_cov(st.P, w_idx3, b_idx, Pbb, Pbw, np.ascontiguousarray(Qw, np.float64), b1,
                                        float(dt))
+                if record:
+                    sm_Phi[k] = np.eye(n_sub)
+                    for j in range(n_bl):
+                        sm_Phi[k, 3 + 3 * j:6 + 3 * j, 3 + 3 * j:6 + 3 * j] = Pbb
+                        sm_Phi[k, 3 + 3 * j:6 + 3 * j, 0:3] = Pbw[j]
+                    sm_xp[k], sm_Pp[k], sm_start[k] = st.x[sub_w_b], st.P[ix_sub], False
             else:
                 st.P[all_b_idx, all_b_idx] += q_b * dt
         # white-noise clocks: reset every epoch
@@ -600,6 +621,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                         st.P[:, 0:3] = 0.0
                         st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
                         ev(k, "omega_reset", j, detail=f"the fix turned the baseline by {turn_deg:.2f} deg")
+                        if record:
+                            sm_start[k] = True
                         if adapter is not None:
                             adapter.reset()
                     for g, _ in outcome.groups or groups:
@@ -678,6 +701,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         out_n[k] = n_used
         if dynamic:
             out_w[k] = st.x[0:3]
+        if record:
+            sm_xf[k], sm_Pf[k] = st.x[sub_w_b], st.P[ix_sub]
         if attitude_fn is not None and np.all(fixed_now) and k % (1 if pcv_tables else 10) == 0:
             R_mask = attitude_fn(out_b[k], fixed_now)
             R_mask_t = t
@@ -719,8 +744,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
              "cn0_gamma_phase": {sg: float(gamma[1, f]) for f, sg in enumerate(pobs.signals)},
              "multipath_scale": float(mp_scale) if mp_model else None,
              "multipath_correlation_factor": float(mp_infl)}
+    smoother_data = {"x_prior": sm_xp, "P_prior": sm_Pp, "x_post": sm_xf, "P_post": sm_Pf, "Phi": sm_Phi,
+                     "start": sm_start} if record else None
     return FilterResult(out_ok, out_b, out_P, out_fixed, out_n, out_ratio, out_w, residuals, events,
-                        first_fix, first_data, fix_log, noise)
+                        first_fix, first_data, fix_log, noise, smoother_data)
 
 
 def _pcv_epoch(tables, los_b, R_ant_first, n_sig, fixed):
