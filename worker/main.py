@@ -63,9 +63,11 @@ def _warm_up_kernels() -> None:
     """Load (or compile, the first time on this machine) the attitude filter's numba kernels before taking jobs,
     so the first job does not pay it (docs/attitude.md "Speed")."""
     try:
-        from worker.estimation.ekf_kernels import warm_up
+        from worker.attitude.kernels import warm_up as warm_up_attitude
+        from worker.estimation.ekf_kernels import warm_up as warm_up_ekf
 
-        warm_up()
+        warm_up_ekf()
+        warm_up_attitude()
     except Exception:                       # a job would report the same error; the worker still serves others
         log.exception("numba kernels failed to compile at start")
 
