@@ -240,6 +240,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         sm_Pp, sm_Pf = np.full((n_ep, n_sub, n_sub), np.nan), np.full((n_ep, n_sub, n_sub), np.nan)
         sm_Phi = np.full((n_ep, n_sub, n_sub), np.nan)
         sm_start = np.ones(n_ep, bool)
+        sm_corr = np.zeros(n_ep)          # information-weighted share of time-correlated variance in the phases
     res_blocks: list[tuple] = []          # per epoch: see _residual_records
     events: list[dict] = []
     first_fix = np.full(n_bl, -1)
@@ -520,6 +521,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                                        _mp_var(th_p, *s.sigma_multipath_phase_m)])
                 v_white = var.copy()
                 var += v_mp * (mp_infl * mp_scale)
+                if record and mp_n:
+                    w_p = 1.0 / var[mc_n:]
+                    sm_corr[k] = float(np.sum(v_mp[mc_n:] * (mp_infl * mp_scale) * w_p * w_p) / np.sum(w_p))
             ok_cols = np.where(cols >= 0, cols, 0)
             hx = np.einsum("mk,mk->m", np.where(cols >= 0, coef, 0.0), st.x[ok_cols])
             innov = z - hx
@@ -744,7 +748,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
              "multipath_scale": float(mp_scale) if mp_model else None,
              "multipath_correlation_factor": float(mp_infl)}
     smoother_data = {"x_prior": sm_xp, "P_prior": sm_Pp, "x_post": sm_xf, "P_post": sm_Pf, "Phi": sm_Phi,
-                     "start": sm_start} if record else None
+                     "start": sm_start, "corr_share": sm_corr} if record else None
     return FilterResult(out_ok, out_b, out_P, out_fixed, out_n, out_ratio, out_w, residuals, events,
                         first_fix, first_data, fix_log, noise, smoother_data)
 
