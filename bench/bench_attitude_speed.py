@@ -98,6 +98,101 @@ def run_rtklib(d: Path, work: Path) -> dict:
     return out
 
 
+def _proc_cpu_s(pid: int) -> float:
+    """utime + stime of a process (its threads included) from /proc, in seconds."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _iso_s(text: str) -> float:
+    from datetime import datetime
+
+    return datetime.fromisoformat(text.replace("Z", "+00:00")).timestamp()
+
+
+class AttitudeService:
+    """The real service as `make demo` runs it: API + one worker on the embedded default (SQLite + Huey), default
+    lease/heartbeat settings, fresh data directory; the worker's consumer is up before anything is timed."""
+
+    def __init__(self, work: Path):
+        import shutil
+
+        from tests.e2e.conftest import Service
+
+        shutil.rmtree(work, ignore_errors=True)
+        work.mkdir(parents=True)
+        self.svc = Service(work, "sqlite", None, None)
+        for k in ("GNSSATT_LEASE_SECONDS", "GNSSATT_HEARTBEAT_SECONDS", "GNSSATT_REQUEUE_AFTER_SECONDS"):
+            self.svc.env.pop(k, None)           # the service's defaults, not the e2e tests' short leases
+        self.svc.env["OPENBLAS_NUM_THREADS"] = "1"
+        self.svc.start_api()
+        self.key = self.svc.create_key("bench")
+        self.worker = self.svc.start_worker()
+        self.worker_log = self.svc.logs[-1]
+        deadline = time.monotonic() + 120
+        while "consumer started" not in (self.worker_log.read_text(errors="replace")
+                                         if self.worker_log.exists() else ""):
+            if time.monotonic() > deadline or self.worker.poll() is not None:
+                raise RuntimeError(f"worker did not start:\n{self.svc.logs_text()}")
+            time.sleep(0.2)
+
+    def run(self, d: Path, mode: str, poll_s: float = 0.1) -> dict:
+        """Upload the set over HTTP, submit the attitude job, poll to `succeeded`, list the products: wall time of
+        each part (client clock; queue pick-up and run from the job's created/started/finished times) and CPU
+        of the API and worker processes; the job's own stage timings from the worker's log."""
+        import httpx
+
+        files = [("files", (p.name, p.read_bytes(), "application/octet-stream")) for _, _, p in files_of(d)]
+        with self.svc.client(self.key) as c:
+            c.timeout = httpx.Timeout(600)
+            cpu_api0, cpu_w0 = _proc_cpu_s(self.svc.api.pid), _proc_cpu_s(self.worker.pid)
+            t0 = time.perf_counter()
+            r = c.post("/v1/observation-sets", files=files, data={"name": d.name})
+            r.raise_for_status()
+            t_up = time.perf_counter()
+            cpu_api_up = _proc_cpu_s(self.svc.api.pid) - cpu_api0
+            job = c.post("/v1/jobs", json={"type": "attitude", "observation_set_ids": [r.json()["id"]],
+                                           "config": {"mode": mode}})
+            job.raise_for_status()
+            jid = job.json()["id"]
+            t_sub = time.perf_counter()
+            polls = 0
+            while True:
+                j = c.get(f"/v1/jobs/{jid}").json()
+                polls += 1
+                if j["state"] in ("succeeded", "failed", "cancelled"):
+                    break
+                time.sleep(poll_s)
+            t_done = time.perf_counter()
+            if j["state"] != "succeeded":
+                raise RuntimeError(f"service run failed: {j}\n{self.svc.logs_text()}")
+            listing = c.get(f"/v1/jobs/{jid}/products").json()
+            t_list = time.perf_counter()
+            cpu_api, cpu_w = _proc_cpu_s(self.svc.api.pid) - cpu_api0, _proc_cpu_s(self.worker.pid) - cpu_w0
+        created, started, finished = (_iso_s(j[k]) for k in ("created_at", "started_at", "finished_at"))
+        stages = [ln.split(" stages (wall s / CPU s): ", 1)[1] for ln in
+                  self.worker_log.read_text(errors="replace").splitlines() if f"attitude job {jid} stages" in ln]
+        items = listing["items"] if isinstance(listing, dict) else listing
+        return {"upload_s": t_up - t0, "submit_s": t_sub - t_up, "pickup_s": started - created,
+                "run_s": finished - started, "seen_s": t_done - t_sub, "list_s": t_list - t_done,
+                "total_s": t_list - t0, "api_cpu_upload_s": cpu_api_up, "api_cpu_s": cpu_api,
+                "worker_cpu_s": cpu_w, "polls": polls, "stages": stages[-1] if stages else "",
+                "products": len(items), "upload_mb": sum(len(f[1][1]) for f in files) / 1e6}
+
+    def shutdown(self) -> None:
+        self.svc.shutdown()
+
+
+def run_service_jobs(d: Path, mode: str, runs: int, work: Path) -> list[dict]:
+    """`runs` uploads + jobs of the pass through one service (a fresh set each time; the first job also pays
+    the worker's imports of the science and plotting modules)."""
+    svc = AttitudeService(work)
+    try:
+        return [svc.run(d, mode) for _ in range(runs)]
+    finally:
+        svc.shutdown()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=3)

@@ -42,11 +42,23 @@ class Reaper(threading.Thread):
                 return
 
 
+def _warm_up_kernels() -> None:
+    """Load (or compile, the first time on this machine) the attitude filter's numba kernels before taking jobs,
+    so the first job does not pay it (docs/attitude.md "Speed")."""
+    try:
+        from worker.estimation.ekf_kernels import warm_up
+
+        warm_up()
+    except Exception:                       # a job would report the same error; the worker still serves others
+        log.exception("numba kernels failed to compile at start")
+
+
 def run_worker(settings: Settings, concurrency: int | None = None) -> None:
     """Run a worker until SIGINT/SIGTERM (the Huey consumer handles both)."""
     logging.basicConfig(level=settings.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     rt = build_runtime(settings)
     runner.cleanup_stale_workdirs(settings)
+    _warm_up_kernels()
     reaper = Reaper(rt)
     reaper.start()
     workers = concurrency or settings.worker_concurrency

@@ -37,7 +37,8 @@ from worker.attitude.fastops import nanmedian1 as _nanmedian1, nz as _nz
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from worker.attitude.settings import AttitudeSettings, cn0_mask_of
 from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
-from worker.estimation.ekf import joseph_update_sparse, rotation_rk4_stm
+from worker.estimation.ekf import joseph_update_sparse
+from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 from worker.gnss.constants import C_M_S
 
 __all__ = ["FilterResult", "run_filter", "REASONS"]
@@ -286,9 +287,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         events.append({"epoch": k, "event": kind, "baseline": j, "sat": sat, "signal": sig, "detail": detail})
 
     blk = None                                              # SdBlock of the current epochs
-    sub_w_b = np.concatenate([np.arange(3), all_b_idx])      # omega and baselines (dynamic propagation)
-    eye_sub = np.eye(sub_w_b.size)
-    ix_sub = np.ix_(sub_w_b, sub_w_b)
+    w_idx3 = np.arange(3)
     ix_b = np.ix_(all_b_idx, all_b_idx)
     for k in range(n_ep):
         st.epoch = k
@@ -301,30 +300,12 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             if dynamic:
                 w = st.x[0:3]
                 bb = st.x[all_b_idx].reshape(n_bl, 3)
-                b1, Pbb, Pbw = rotation_rk4_stm(bb, w, dt, s.rk4_step_s)
+                b1, Pbb, Pbw = rotation_rk4_stm_kernel(bb, w, dt, s.rk4_step_s)
                 st.x[all_b_idx] = b1.ravel()
-                sub = sub_w_b
-                Phi = eye_sub.copy()
-                for j in range(n_bl):
-                    r = 3 + 3 * j
-                    Phi[r:r + 3, r:r + 3] = Pbb[j]
-                    Phi[r:r + 3, 0:3] = Pbw[j]
-                st.P[sub, :] = Phi @ st.P[sub, :]
-                st.P[:, sub] = st.P[:, sub] @ Phi.T
-                # discrete process noise of the omega random walk and its effect on b (integrated over dt)
+                # P <- Phi P Phi^T + Q: the omega random walk's discrete noise and its effect on b over dt
                 Qw = adapter.q_rate() if adapter is not None else np.eye(3) * q_w       # (3, 3) rad^2/s^3
-                Q = np.zeros((sub.size, sub.size))
-                Q[0:3, 0:3] = Qw * dt
-                Bxs = [-_skew(b1[j]) for j in range(n_bl)]
-                for j in range(n_bl):
-                    r = 3 + 3 * j
-                    Bx = Bxs[j]
-                    Q[r:r + 3, 0:3] = Bx @ Qw * dt ** 2 / 2
-                    Q[0:3, r:r + 3] = Q[r:r + 3, 0:3].T
-                    for i in range(n_bl):
-                        ri = 3 + 3 * i
-                        Q[r:r + 3, ri:ri + 3] = Bx @ Qw @ Bxs[i].T * dt ** 3 / 3
-                st.P[ix_sub] += Q
+                propagate_rotation_cov(st.P, w_idx3, b_idx, Pbb, Pbw, np.ascontiguousarray(Qw, np.float64), b1,
+                                       float(dt))
             else:
                 st.P[all_b_idx, all_b_idx] += q_b * dt
         # white-noise clocks: reset every epoch
@@ -809,6 +790,3 @@ def _pseudo_update(st: _State, D: np.ndarray, a_fix: np.ndarray) -> None:
     if good:
         st.x, st.P = x1, P1
 
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])

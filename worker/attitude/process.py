@@ -81,19 +81,21 @@ def load_inputs(files: list[tuple[str, str, Path]]) -> AttitudeInputs:
         raise InputProblem("Too few antennas", f"{name}: attitude needs at least two antennas (one baseline)",
                            file=name)
     obs_files = {f[0]: f[2] for f in files if f[1] == "rinex_obs"}
-    from worker.gnss.io.rinex_obs import summarize_rinex_obs
-    markers = {}
-    for fname, fpath in obs_files.items():
+    parsed, failed, markers = {}, {}, {}
+    for fname, fpath in obs_files.items():      # each file parsed once: the marker names come from the headers
         try:
-            markers[fname] = summarize_rinex_obs(fpath, name=fname).get("marker_name")
-        except Exception:  # noqa: BLE001 - a bad file is reported by the full read below
-            markers[fname] = None
+            parsed[fname] = read_rinex_obs(fpath, name=fname)
+            markers[fname] = parsed[fname].header.marker_name
+        except Exception as exc:  # noqa: BLE001 - a bad file is reported when an antenna needs it, below
+            failed[fname], markers[fname] = exc, None
     mapping = match_observation_files(platform, markers, name=name)
     needed = {a for bl in platform.baselines for a in bl}
     obs = {}
     for ant in platform.antennas:
         if ant in needed:
-            obs[ant] = read_rinex_obs(obs_files[mapping[ant]], name=mapping[ant])
+            if mapping[ant] in failed:
+                raise failed[mapping[ant]]
+            obs[ant] = parsed[mapping[ant]]
     inputs = AttitudeInputs(platform, obs, {a: mapping[a] for a in obs})
     for fname, kind, fpath in files:
         if kind == "rinex_nav" and inputs.nav is None:
