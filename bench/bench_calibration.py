@@ -322,7 +322,7 @@ def scale_markdown(res: dict, command: str) -> str:
         lines.append(f"| {w} | {res['median_wall_s'][w]:.1f} | {walls} | "
                      f"{res['speedup'][w]:.2f}x | {stages} | {per_w} |")
     lines += ["", f"Per-set cost (CPU, median over all runs): pass 1 {np.median(cpu1):.2f} s, pass 2 "
-              f"{np.median(cpu2):.2f} s, held-out set (pass 2, three extractions) "
+              f"{np.median(cpu2):.2f} s, held-out set (pass 2, three extractions + two filter runs) "
               f"{np.median(held) if held else float('nan'):.2f} s. Maps and baselines byte-identical (sha256) "
               f"over all {len(runs)} runs: {'yes' if res['identical'] else 'NO'}. The fan-out of every job is its "
               "`tasks.csv` product (pass, queue position, set, worker, start/end s); the held-out task is first "

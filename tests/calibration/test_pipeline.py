@@ -203,3 +203,16 @@ def test_held_out_comparison_is_the_attitude_filter_with_the_published_calibrati
     for a in ("yaw", "pitch", "roll"):
         assert job[a]["bias_deg"] == w1[a]["bias_deg"] and job[a]["std_deg"] == w1[a]["std_deg"], (a, job, w1)
     assert job["fixed_epochs"] == w1["fixed_epochs"]
+
+
+def test_held_out_attitude_config_is_an_attitude_job_config():
+    """held_out_attitude_config is validated as an attitude job config; the calibration's own baselines and maps
+    cannot be overridden there."""
+    from pydantic import ValidationError
+
+    assert CalibrationConfig(held_out_attitude_config={"mode": "kinematic"}).held_out_attitude_config["mode"] == \
+        "kinematic"
+    for bad in ({"calibrated_baselines": {}}, {"pcv_map_ids": ["x"]}, {"no_such_setting": 1}, {"mode": "other"}):
+        with pytest.raises(ValidationError) as exc:
+            CalibrationConfig(held_out_attitude_config=bad)
+        assert "held_out_attitude_config" in str(exc.value), bad
