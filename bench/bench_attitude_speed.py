@@ -8,13 +8,17 @@ antennas, L1 C/A + L2 P(Y), 1 Hz), clean ({"pcv": false, "pco": false, "multipat
 - filter: CPU time (time.process_time) of worker.attitude.filter.run_filter, epochs / s; median of --runs runs;
 - job: the attitude pipeline itself (worker.pipelines.attitude.run on a JobContext like the runner builds: parse
   the uploaded files, geometry, filter, attitude, every product text, PNG plots, report.html, each product
-  hashed as the blob store does), CPU and wall time, median of --runs runs. Not included: the HTTP upload and
-  the queue hand-over of the service (tens of ms, see docs/BENCHMARKS.md "API"), so the job figure is the
-  worker's part of "upload to products";
+  hashed as the blob store does), CPU and wall time, median of --runs runs, and CPU per stage (the pipeline's
+  StageClock line of the job log);
+- service (realistic pass, both modes): upload to products through the real service as `make demo` runs it (API +
+  one worker, embedded SQLite + Huey, default settings): HTTP upload of the set, job submitted, polled to
+  `succeeded`, products listed; wall time split into upload, submit, queue pick-up, run, seen-succeeded, CPU of
+  the API and worker processes, and the job's stage line from the worker log (--no-service skips it);
 - RTKLIB: pyrtklib postpos, moving-base L1+L2 (bench_attitude_rtklib.rtklib_movingbase_options), one run per
   baseline (GPS-2>GPS-0, GPS-2>GPS-1) on the same RINEX files, CPU and wall, median of --runs runs.
 
-    OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_speed.py [--runs 3] [--minutes 106] [--write]
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_speed.py [--runs 3] [--minutes 106]
+        [--no-rtklib] [--no-service] [--write]
 """
 from __future__ import annotations
 
@@ -79,7 +83,17 @@ def run_job(d: Path, mode: str, work: Path) -> dict:
     finally:
         P.run_filter = orig
     return {"job_wall_s": wall, "job_cpu_s": cpu, "filter_cpu_s": filt["cpu_s"], "epochs": filt["epochs"],
-            "products": sorted(ctx.products)}
+            "products": sorted(ctx.products), "stages_cpu_s": parse_stages(ctx.log_lines[-1])}
+
+
+def parse_stages(line: str) -> dict[str, float]:
+    """Stage -> CPU s of the pipeline's 'stages (wall s / CPU s): name w/c; ...' log line (StageClock)."""
+    body = line.split("stages (wall s / CPU s): ", 1)[1]
+    out = {}
+    for part in body.split("; "):
+        name, _, wc = part.rpartition(" ")
+        out[name] = float(wc.split("/")[1])
+    return out
 
 
 def run_rtklib(d: Path, work: Path) -> dict:
@@ -199,12 +213,13 @@ def main() -> None:
     ap.add_argument("--minutes", type=float, default=106.0)
     ap.add_argument("--passes", default=",".join(PASSES))
     ap.add_argument("--no-rtklib", action="store_true")
+    ap.add_argument("--no-service", action="store_true", help="skip the upload-to-products runs through the service")
     ap.add_argument("--write", action="store_true")
     args = ap.parse_args()
     from worker.sim import simulate_scenario
 
     med = lambda rows, key: float(np.median([r[key] for r in rows]))  # noqa: E731
-    table, rtk = [], {}
+    table, rtk, service = [], {}, []
     load = os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp:
         for label in args.passes.split(","):
@@ -215,7 +230,9 @@ def main() -> None:
                 rows = [run_job(d, mode, Path(tmp) / f"work_{label}_{mode}_{i}") for i in range(args.runs)]
                 r = {"pass": label, "mode": mode, "epochs": rows[0]["epochs"],
                      **{k: med(rows, k) for k in ("filter_cpu_s", "job_cpu_s", "job_wall_s")},
-                     "products": rows[0]["products"]}
+                     "products": rows[0]["products"],
+                     "stages_cpu_s": {st: float(np.median([x["stages_cpu_s"][st] for x in rows]))
+                                      for st in rows[0]["stages_cpu_s"]}}
                 r["filter_eps"] = r["epochs"] / r["filter_cpu_s"]
                 table.append(r)
                 print({k: (round(v, 3) if isinstance(v, float) else v) for k, v in r.items()}, flush=True)
@@ -223,6 +240,15 @@ def main() -> None:
                 rows = [run_rtklib(d, Path(tmp) / f"rtk_{label}_{i}") for i in range(args.runs)]
                 rtk[label] = {k: med(rows, k) for k in ("cpu_s", "wall_s")}
                 print(label, "rtklib", rtk[label], flush=True)
+            if not args.no_service and label == "realistic":
+                for mode in MODES:
+                    rows = run_service_jobs(d, mode, args.runs + 1, Path(tmp) / f"svc_{mode}")
+                    rows = rows[1:]          # the first upload + job warms the API and the worker up
+                    keys = [k for k, v in rows[0].items() if isinstance(v, float)]
+                    r = {"pass": label, "mode": mode, **{k: med(rows, k) for k in keys},
+                         "stages": rows[len(rows) // 2]["stages"]}
+                    service.append(r)
+                    print({k: (round(v, 3) if isinstance(v, float) else v) for k, v in r.items()}, flush=True)
     load_after = os.getloadavg()
     lines = [f"Machine: {machine_line()}. One BLAS thread. Load average {load[0]:.1f} at the start, "
              f"{load_after[0]:.1f} at the end (2 cores shared with other work: wall times are inflated by the "
@@ -238,9 +264,34 @@ def main() -> None:
         lines.append(f"| {r['pass']} | {r['mode']} | {r['epochs']} | {r['filter_cpu_s']:.2f} | "
                      f"{r['filter_eps']:.0f} | {r['job_cpu_s']:.1f} | {r['job_wall_s']:.1f} | {peer} | {ratio} |")
     lines += ["", "Job = worker.pipelines.attitude.run on a JobContext (as the runner builds it): parsing, geometry, "
-              "filter, attitude, products " + ", ".join(table[0]["products"]) + " (each hashed as stored). "
-              "The HTTP upload and queue hand-over are not in these figures.", "",
-              f"Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_speed.py --runs {args.runs} "
+              "filter, attitude, products " + ", ".join(table[0]["products"]) + " (each hashed as stored).", "",
+              "CPU s per stage of the job (the pipeline's own stage clock, worker.pipelines.attitude.StageClock, "
+              "as logged by the worker):", "",
+              "| stage | " + " | ".join(f"{r['pass']} {r['mode']}" for r in table) + " |",
+              "|---|" + "---|" * len(table)]
+    stages = list(table[0]["stages_cpu_s"])
+    for st in stages:
+        lines.append(f"| {st} | " + " | ".join(f"{r['stages_cpu_s'].get(st, float('nan')):.2f}" for r in table)
+                     + " |")
+    outside = [sum(v for k, v in r["stages_cpu_s"].items() if k not in ("filtering", "total")) for r in table]
+    lines.append("| all but filtering | " + " | ".join(f"{x:.2f}" for x in outside) + " |")
+    if service:
+        lines += ["", "Upload to products through the real service (`make demo`'s setup: API + one worker, embedded "
+                  "SQLite + Huey, default settings; bench.bench_attitude_speed.AttitudeService): the set "
+                  f"({service[0]['upload_mb']:.1f} MB) uploaded over HTTP, the attitude job submitted, polled every "
+                  "0.1 s to `succeeded`, the product list fetched. Wall s (client clock; pick-up and run from the "
+                  "job's created/started/finished times) and CPU s of the API and worker processes. Median of "
+                  f"{args.runs} runs after one warm-up upload + job.", "",
+                  "| pass | mode | upload s | submit s | queue pick-up s | run s | submit to seen `succeeded` s | "
+                  "upload to product list s | API CPU s (upload) | worker CPU s |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
+        for r in service:
+            lines.append(f"| {r['pass']} | {r['mode']} | {r['upload_s']:.2f} | {r['submit_s']:.2f} | "
+                         f"{r['pickup_s']:.2f} | {r['run_s']:.1f} | {r['seen_s']:.1f} | {r['total_s']:.1f} | "
+                         f"{r['api_cpu_s']:.2f} ({r['api_cpu_upload_s']:.2f}) | {r['worker_cpu_s']:.1f} |")
+        lines += ["", "Stages of the middle run as the worker logged them (wall s / CPU s): "
+                  + "; ".join(f"{r['mode']}: {r['stages']}" for r in service) + "."]
+    lines += ["", f"Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_speed.py --runs {args.runs} "
               "--write`."]
     text = "\n".join(lines)
     print(text)

@@ -64,3 +64,14 @@ def test_first_per_epoch_and_key_keeps_the_first_row_of_each_pair():
     codes = np.array([0, 1, 0, 1, 1, 2])
     assert first_per_epoch_and_key(t, codes, np.arange(6)).tolist() == [0, 1, 3, 5]
     assert first_per_epoch_and_key(t, codes, np.array([2, 3, 4])).tolist() == [2, 3]
+
+
+def test_category_memo_reuses_the_codes_of_the_same_array_only_inside_the_block():
+    from worker.plots.common import categories, category_memo
+
+    a, b = np.array(["x", "y", "x"]), np.array(["x", "y", "x"])
+    with category_memo():
+        first = categories(a)
+        assert categories(a) is first                      # same array object: computed once
+        assert categories(b) is not first and categories(b)[0] == first[0]
+    assert categories(a) is not first and categories(a)[1].tolist() == [0, 1, 0]

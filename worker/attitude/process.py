@@ -248,6 +248,9 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     prog(0.15, "filtering")
     fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
                     progress=lambda f: prog(0.15 + 0.75 * f))
+    if fr.smoother_data is not None:
+        from worker.attitude.smoother import smooth_filter_result
+        smooth_filter_result(fr)
     prog(0.92, "attitude")
     sol = AttitudeSolution(settings, inputs, pobs, geom, fr, baselines, body)
     # ---- baselines table ----

@@ -101,12 +101,17 @@ def residuals_csv(sol) -> str:
         out[ok] = (_fmt_repeated if repeated else _fmt)(a[ok], f)
         return out
 
-    # per-epoch columns are formatted once per epoch and indexed
-    cols = [iso_all.astype(object)[ep], _fmt(sow_all, "%.3f")[ep], names.astype(object)[r["bl"]],
-            sats.astype(object)[r["sat"]], sigs.astype(object)[r["sig"]], kinds.astype(object)[r["kind"]],
+    def pairs(a, b):
+        """'a,b' for every pair of two small label lists, flat index i * len(b) + j."""
+        return np.array([f"{x},{y}" for x in a.tolist() for y in b.tolist()], dtype=object)
+
+    # columns that come from a few labels (epoch times, baseline + satellite, signal + observable,
+    # used + reason) are joined once per combination and indexed: fewer cells to join per row
+    used_reason = np.array([f"{int(i == 0)},{reasons[i]}" for i in range(len(reasons))], dtype=object)
+    cols = [(iso_all.astype(object) + "," + _fmt(sow_all, "%.3f"))[ep],
+            pairs(names, sats)[r["bl"] * len(sats) + r["sat"]], pairs(sigs, kinds)[r["sig"] * 2 + r["kind"]],
             num(r["residual_m"], "%.5f"), num(r["az_ant_deg"], "%.2f", True), num(r["el_ant_deg"], "%.2f", True),
-            num(r["cn0_dbhz"], "%.1f", True), np.array(["0", "1"], dtype=object)[(r["reason"] == 0).astype(int)],
-            reasons.astype(object)[r["reason"]]]
+            num(r["cn0_dbhz"], "%.1f", True), used_reason[r["reason"]]]
     return _join(header, cols)
 
 

@@ -8,6 +8,9 @@ from worker.context import JobContext
 from worker.errors import JobInputError
 
 log = logging.getLogger("gnssatt.attitude")
+#: imported by the worker at start (worker.main.preload_pipelines), not by the first job
+PRELOAD = ("worker.attitude.process", "worker.attitude.products", "worker.attitude.statistics",
+           "worker.plots.attitude", "worker.report", "matplotlib.backends.backend_agg")
 
 
 class StageClock:

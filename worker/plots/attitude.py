@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from worker.gnss.rotations import dcm_to_euler321, euler321_to_dcm, quat_to_dcm
-from worker.plots.common import (EULER_COLOURS, PlotContext, Table, categories, column, figure_png,
+from worker.plots.common import (EULER_COLOURS, PlotContext, Table, categories, category_memo, column, figure_png,
                                  first_per_epoch_and_key, gps_time, new_figure, no_data, numeric, read_csv_table,
                                  set_title, time_axis, truthy, wrap_deg)
 
@@ -28,7 +28,8 @@ ERROR_OFFSETS_DEG = {"yaw": 0.0, "pitch": -1.5, "roll": 1.5}
 #: A reference sample farther than this from both neighbours of an epoch is not interpolated across [s]
 #: (star trackers drop out; bridging a gap would invent a reference).
 MAX_REFERENCE_GAP_S = 60.0
-#: Sky plots and residual scatters draw at most this many points (evenly thinned beyond; all stats use all).
+#: Sky plots and residual scatters draw at most this many points (evenly thinned beyond, as the panel titles say;
+#: all statistics use all rows, and residuals.csv holds them all).
 MAX_POINTS = 20000
 
 RESIDUAL_COLUMNS = {
@@ -497,21 +498,24 @@ def residuals_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
                 continue
             sel = base_code == row
             n_rejected = int((sel & ~used & np.isfinite(values)).sum())
+            n_used = n_drawn = 0
             for s in sorted(sig_names[j] for j in np.unique(sig_code[sel])):
                 m = np.flatnonzero(sel & used & (sig_code == sig_names.index(s)) & np.isfinite(values))
                 if not len(m):
                     continue
                 rms = float(np.sqrt(np.mean(values[m] ** 2)))
                 k = _thin(m)
+                n_used, n_drawn = n_used + len(m), n_drawn + len(k)
                 ax.plot(t[k], values[k], ".", ms=1.5, label=f"{s}: RMS {rms:.3g} {unit} (n={len(m)})")
             ax.set_ylabel(f"{what} residual [{unit}]")
-            ax.set_title(f"{name} · {what}" + (f" · {n_rejected} rejected not shown" if n_rejected else ""),
-                         fontsize=8)
+            ax.set_title(f"{name} · {what}" + (f" · {n_rejected} rejected not shown" if n_rejected else "")
+                         + (f" · {n_drawn} of {n_used} drawn (evenly thinned; RMS of all)"
+                            if n_drawn < n_used else ""), fontsize=8)
             ax.grid(color="0.88", lw=0.5)
             if ax.get_legend_handles_labels()[0]:
                 ax.legend(fontsize=7, markerscale=4, loc="upper right")
     for a in axes[-1]:
-        time_axis(a, t)
+        time_axis(a, t, maxticks=5)       # two panels side by side: ~5 HH:MM:SS labels fit each
     set_title(fig, "Single-difference residuals per baseline and signal", context)
     return fig
 
@@ -546,8 +550,8 @@ def skyplot_figure(residuals_csv: Any, context: PlotContext | Mapping | None = N
     t = gps_time(res)
     if base_code is None:
         base_code = np.zeros(len(t), dtype=np.int64)
+    _, sat_code = categories(_residual(res, "satellite"))
     sats = _residual(res, "satellite").astype(str)
-    _, sat_code = categories(sats)
     az, el = _residual_num(res, "azimuth_deg"), _residual_num(res, "elevation_deg")
     cn0 = _residual_num(res, "cn0_dbhz")
     if cn0 is None:
@@ -558,7 +562,8 @@ def skyplot_figure(residuals_csv: Any, context: PlotContext | Mapping | None = N
     scatter = None
     for j, (ax, name) in enumerate(zip(axes, names)):
         m = (base_code == j) & np.isfinite(az) & np.isfinite(el)
-        rows = _thin(first_per_epoch_and_key(t, sat_code, np.flatnonzero(m)))
+        rows_all = first_per_epoch_and_key(t, sat_code, np.flatnonzero(m))
+        rows = _thin(rows_all)
         ax.set_theta_zero_location("N")
         ax.set_theta_direction(-1)
         r_max = max(90.0, 90.0 - float(np.min(el[rows])) + 2.0) if len(rows) else 90.0
@@ -576,7 +581,9 @@ def skyplot_figure(residuals_csv: Any, context: PlotContext | Mapping | None = N
             last = rows[sats[rows] == s][-1]
             ax.annotate(s, (np.radians(az[last]), 90.0 - el[last]), fontsize=6, color="0.25")
         first_ant = name.split(">")[0] if ">" in name else name
-        ax.set_title(f"{name}\nantenna frame of {first_ant} (elevation on radius)", fontsize=8)
+        thinned = (f"\n{len(rows)} of {len(rows_all)} epoch-satellite points drawn (evenly thinned)"
+                   if len(rows) < len(rows_all) else "")
+        ax.set_title(f"{name}\nantenna frame of {first_ant} (elevation on radius){thinned}", fontsize=8)
     if scatter is not None:
         fig.colorbar(scatter, ax=axes, label="C/N0 [dB-Hz]", shrink=0.8)
     set_title(fig, "Sky plot in the antenna frame, coloured by C/N0", context)
@@ -608,7 +615,8 @@ def attitude_plots(products: Mapping[str, Any], reference: Any = None,
     if att is not None or bl is not None:
         out["fix_status.png"] = fix_status_plot(att, bl, ev, context)
     if res is not None:
-        out["dop.png"] = dop_plot(res, att, context)
-        out["residuals.png"] = residuals_plot(res, context)
-        out["skyplot.png"] = skyplot_plot(res, context)
+        with category_memo():
+            out["dop.png"] = dop_plot(res, att, context)
+            out["residuals.png"] = residuals_plot(res, context)
+            out["skyplot.png"] = skyplot_plot(res, context)
     return out
