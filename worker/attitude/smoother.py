@@ -54,7 +54,14 @@ def smooth_filter_result(fr) -> int:
     """Replace the baselines, their covariance and omega of a dynamic-mode FilterResult (run with
     settings.smoother) by the smoothed ones over the runs of epochs where every baseline is fixed (a run starts at
     a fix, a reset or an epoch after a float one: float ambiguities are correlated with the baselines and are not in
-    the smoothed sub-state). Returns the number of epochs smoothed."""
+    the smoothed sub-state). Returns the number of epochs smoothed.
+
+    Covariance: the recursion treats every phase error as white, but multipath and uncalibrated PCV are correlated
+    over minutes; the forward filter already counts them at their full (inflated) variance
+    (multipath_correlation_factor) and averaging over the later epochs too does not shrink them further. With f the
+    information-weighted share of that correlated variance in the epoch's phase variances (recorded by the filter),
+    the reported covariance is P_k|N + f (P_k|k - P_k|N): white errors shrink as smoothed, correlated ones stay as
+    filtered (f = 0 on white-noise data)."""
     sd = fr.smoother_data
     if sd is None:
         return 0
@@ -70,5 +77,7 @@ def smooth_filter_result(fr) -> int:
     ep = np.flatnonzero(linked & np.isfinite(xs).all(1))
     fr.omega_ecef_rad_s[ep] = xs[ep, 0:3]
     fr.b_ecef_m[ep] = xs[ep, 3:].reshape(ep.size, n_bl, 3)
-    fr.P_b_m2[ep] = Ps[ep, 3:, 3:]
+    f = np.clip(sd.get("corr_share", np.zeros(n_ep)), 0.0, 1.0)[ep, None, None]
+    P_post = sd["P_post"][ep, 3:, 3:]
+    fr.P_b_m2[ep] = Ps[ep, 3:, 3:] + f * (P_post - Ps[ep, 3:, 3:])
     return int(ep.size)
