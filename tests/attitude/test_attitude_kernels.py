@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from worker.attitude.fastops import median1d, nanmedian1, nz
-from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, masked_median_axis1, np_sum,
-                                     white_noise_update)
+from worker.attitude.fastops import count_pairs, median1d, nanmedian1, nz
+from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, count_pairs_masked,
+                                     masked_median_axis1, np_sum, white_noise_update)
 
 NOISE_EPOCHS, MIN_EPOCHS = 300.0, 10
 
@@ -35,6 +35,24 @@ def test_masked_median_equals_nanmedian_of_where():
         td_c, _, ok_c, _ = _tds(rng, n_sat=int(rng.integers(1, 15)))
         ref = nanmedian1(np.where(ok_c, td_c, np.nan))
         assert np.array_equal(masked_median_axis1(td_c, ok_c), ref, equal_nan=True)
+
+
+def test_masked_median_2d_and_nan_values():
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        a = rng.normal(size=(3, int(rng.integers(1, 12))))
+        a[rng.random(a.shape) < 0.1] = np.nan                    # NaN values count as missing even where ok
+        ok = rng.random(a.shape + (2,)) < 0.7
+        ref = nanmedian1(np.where(ok[:, :, 0], a, np.nan))
+        assert np.array_equal(masked_median_axis1(a[:, :, None], ok[:, :, :1])[:, 0], ref, equal_nan=True)
+
+
+def test_count_pairs_masked_equals_count_pairs():
+    rng = np.random.default_rng(8)
+    for n in range(0, 60):
+        first, second, mask = rng.integers(0, 3, n), rng.integers(0, 9, n), rng.random(n) < 0.6
+        assert np.array_equal(count_pairs_masked(first, second, mask, 3, 9),
+                              count_pairs(first[mask], second[mask], 3, 9))
 
 
 def _numpy_noise(td_c, td_p, ok_c, ok_p, mc, mp, lw, lam, mom, gam_n, gamma, est_var_c, est_var_p, est_n):
@@ -96,3 +114,25 @@ def test_noise_estimators_equal_numpy_over_many_epochs():
             assert np.array_equal(a, b)
     assert np.all(st_k[1] > MIN_EPOCHS) and not np.all(st_k[2] == 1.0)    # gamma was estimated
     assert 0.3 < st_k[2][0, 0] < 1.5          # code noise grows with the factor^1 put in (slope of ln|e|)
+
+
+def test_round_newcomers_equals_the_dense_dd_products():
+    """worker.attitude.ambiguity.round_newcomers takes D x and diag(D P D^T) from the two non-zeros of each DD row:
+    the same bits as the dense products (which only add exact zeros), on random states."""
+    from worker.attitude.ambiguity import round_newcomers
+
+    rng = np.random.default_rng(9)
+    for _ in range(500):
+        n = int(rng.integers(10, 70))
+        A = rng.normal(size=(n, n)) * 10.0 ** rng.uniform(-3, 1)
+        P, x = A @ A.T, rng.normal(size=n) * 10.0 ** rng.uniform(-1, 4)
+        k = int(rng.integers(1, 8))
+        idx = rng.choice(n, size=k + 1, replace=False)
+        D = np.zeros((k, n))
+        D[np.arange(k), idx[1:]] = 1.0
+        D[:, idx[0]] -= 1.0
+        d, var = D @ x, np.einsum("ij,ij->i", D @ P, D)
+        r = np.round(d)
+        ok = (np.sqrt(np.maximum(var, 0.0)) < 0.3) & (np.abs(d - r) < 0.35)
+        D1, v1, ok1 = round_newcomers(x, P, idx[1:], int(idx[0]), 0.3, 0.35)
+        assert np.array_equal(ok1, ok) and np.array_equal(D1, D[ok]) and np.array_equal(v1, r[ok])

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from worker.estimation.ekf import _skew, rotation_rk4_stm
-from worker.estimation.ekf_kernels import (gather_AHt, gather_HA, propagate_rotation_cov, rotation_rk4_stm_kernel,
-                                          warm_up)
+from worker.estimation.ekf_kernels import (gather_AHt, gather_HA, joseph_combine, propagate_rotation_cov,
+                                          rotation_rk4_stm_kernel, symmetric_plus_diag, warm_up)
 
 
 def _rows(rng, n, m, k):
@@ -36,6 +36,19 @@ def test_gathers_equal_numpy_einsum_bit_for_bit():
         ref2 = np.einsum("mkj,mk->mj", B[c, :], w)             # H B
         assert np.array_equal(gather_HA(B, cols, coef), ref2)
         assert np.allclose(gather_HA(B, cols, coef), H @ B, rtol=1e-12, atol=1e-12)
+
+
+def test_symmetrising_kernels_equal_numpy():
+    rng = np.random.default_rng(6)
+    for n in (1, 5, 57):
+        S, R = rng.normal(size=(n, n)), rng.uniform(size=n)
+        ref = 0.5 * (S + S.T)
+        ref[np.diag_indices_from(ref)] += R
+        assert np.array_equal(symmetric_plus_diag(S, R), ref)
+        AP, X, Y = rng.normal(size=(3, n, n))
+        Q = AP - X + Y
+        out = joseph_combine(AP, X, Y)
+        assert np.array_equal(out, 0.5 * (Q + Q.T)) and out.flags.c_contiguous
 
 
 def test_rotation_kernel_equals_numpy_version():

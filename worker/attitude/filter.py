@@ -32,10 +32,9 @@ from worker.attitude.ambiguity import (
     first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
 )
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
-from worker.attitude.fastops import clip as _clip, count_pairs as _count_pairs
-from worker.attitude.fastops import nanmedian1 as _nanmedian1, nz as _nz
-from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, masked_median_axis1,
-                                     white_noise_update)
+from worker.attitude.fastops import clip as _clip, nz as _nz
+from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, count_pairs_masked,
+                                     masked_median_axis1, white_noise_update)
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from worker.attitude.settings import AttitudeSettings, cn0_mask_of
 from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
@@ -372,8 +371,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # epoch clock estimate from code (first signal): c dt0 = median(SD_code + u.b) / (1 - rdot/c)
         b_pred = st.x[all_b_idx].reshape(n_bl, 3)
         ub = b_pred @ u.T                                                   # (n_bl, n_sat)
-        c0 = np.where(use_c[:, :, 0], (sdc[:, :, 0] + ub) / cfac[None, :], np.nan)
-        clk0_raw = _nanmedian1(c0) if n_sat else np.full(n_bl, np.nan)
+        c0 = (sdc[:, :, 0] + ub) / cfac[None, :]
+        clk0_raw = masked_median_axis1(c0[:, :, None], use_c[:, :, :1])[:, 0] if n_sat else np.full(n_bl, np.nan)
         have0 = np.isfinite(clk0_raw)
         # no code this epoch: the last estimate (the phase clocks absorb the drift since)
         # predicted from the last estimate and the differential drift: free-running clocks drift by up to ~10 us/s
@@ -556,8 +555,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         if mp_n:
             used_amb = cols[mc_n:, 4]
             afix = st.amb_fixed[used_amb - st.n_fixed_part]
-            n_used = _count_pairs(jp, sp, n_bl, n_sat)
-            n_fixed_used = _count_pairs(jp[afix], sp[afix], n_bl, n_sat)
+            n_used = count_pairs_masked(jp, sp, np.ones(jp.size, bool), n_bl, n_sat)
+            n_fixed_used = count_pairs_masked(jp, sp, afix, n_bl, n_sat)
         joint_ar = {}          # ambiguity_search "constrained": one MC-LAMBDA first fix of all baselines together
         if s.ambiguity_search == "constrained" and n_bl >= 2 and mp_n and not st.amb_fixed.any():
             gb = {j: first_fix_groups(cols[mc_n:, 4][jp == j], fp[jp == j], el_loc[sp[jp == j]], n_sig)
@@ -578,8 +577,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 continue
             el_j = el_loc[sp[sel_j]]
             sig_j = fp[sel_j]
-            has_group = [bool(np.any(st.amb_fixed[(st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f)]))
-                         for f in range(n_sig)]
+            has_group = np.zeros((n_bl, n_sig), bool)              # signals of baseline j with a fixed ambiguity
+            has_group[st.amb_key[st.amb_fixed, 0], st.amb_key[st.amb_fixed, 2]] = True
+            has_group = has_group[j].tolist()
             if not any(has_group):
                 groups = first_fix_groups(idx_j, sig_j, el_j, n_sig)
                 if not groups or sum(g.size - 1 for g, _ in groups) < s.ar_min_dd:
@@ -688,12 +688,13 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         pending_reset.clear()
         # recount fixed after AR
         had_fix = ever_fixed
-        ever_fixed = np.array([bool(np.any(st.amb_fixed[st.amb_key[:, 0] == j])) for j in range(n_bl)])
+        ever_fixed = np.zeros(n_bl, bool)
+        ever_fixed[st.amb_key[st.amb_fixed, 0]] = True
         for j in np.flatnonzero(had_fix & ~ever_fixed):
             ev(k, "fix_lost", j, detail="no fixed ambiguity left (slips, gaps or setting satellites)")
         if mp_n:
             afix = st.amb_fixed[cols[mc_n:, 4] - st.n_fixed_part]
-            n_fixed_used = _count_pairs(jp[afix], sp[afix], n_bl, n_sat)
+            n_fixed_used = count_pairs_masked(jp, sp, afix, n_bl, n_sat)
         # ---------------- outputs ----------------
         okb = pa & (n_used >= 3)
         out_ok[k] = okb

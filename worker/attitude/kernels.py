@@ -19,7 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["POW2", "np_sum", "masked_median_axis1", "cn0_growth_samples", "cn0_growth_update", "white_noise_update",
+__all__ = ["POW2", "np_sum", "count_pairs_masked", "masked_median_axis1", "cn0_growth_samples", "cn0_growth_update", "white_noise_update",
            "warm_up"]
 
 #: the exponent of the squares below, passed to the kernels at run time (a compile-time 2.0 would let LLVM turn
@@ -112,8 +112,9 @@ def _median_sorted(srt, n):
 
 @njit(cache=True, nogil=True)
 def masked_median_axis1(a, ok):
-    """(n0, n2) median over axis 1 of a (n0, n1, n2) where ok, NaN where none: worker.attitude.fastops.nanmedian1
-    of np.where(ok, a, nan) (= np.nanmedian(axis=1); 0.5 * (lo + hi) of the sorted values, as there)."""
+    """(n0, n2) median over axis 1 of a (n0, n1, n2) where ok and not NaN, NaN where none:
+    worker.attitude.fastops.nanmedian1 of np.where(ok, a, nan) (= np.nanmedian(axis=1); 0.5 * (lo + hi) of the
+    sorted values, as there)."""
     n0, n1, n2 = a.shape
     out = np.empty((n0, n2))
     buf = np.empty(n1)
@@ -121,7 +122,7 @@ def masked_median_axis1(a, ok):
         for f in range(n2):
             n = 0
             for s in range(n1):
-                if ok[i, s, f]:
+                if ok[i, s, f] and not np.isnan(a[i, s, f]):
                     buf[n] = a[i, s, f]
                     n += 1
             if n == 0:
@@ -240,11 +241,26 @@ def white_noise_update(td_c, td_p, ok_c, ok_p, mc, mp, wfac_c, wfac_p, est_var_c
             est_n[f] += 1
 
 
+@njit(cache=True, nogil=True)
+def count_pairs_masked(first, second, mask, n_first, n_second):
+    """(n_first,) number of distinct `second` values paired with each `first` value among the rows where mask:
+    worker.attitude.fastops.count_pairs(first[mask], second[mask], n_first, n_second) (satellites per baseline)."""
+    occ = np.zeros((n_first, n_second), np.bool_)
+    out = np.zeros(n_first, np.int64)
+    for i in range(first.size):
+        if mask[i] and not occ[first[i], second[i]]:
+            occ[first[i], second[i]] = True
+            out[first[i]] += 1
+    return out
+
+
 def warm_up() -> None:
     """Compile (or load from the cache) every kernel once on tiny inputs."""
     td = np.zeros((1, 3, 2))
     ok = np.ones((1, 3, 2), bool)
     m = masked_median_axis1(td, ok)
+    masked_median_axis1(np.zeros((1, 3))[:, :, None], ok[:, :, :1])       # the epoch clock's call
+    count_pairs_masked(np.zeros(2, np.int64), np.ones(2, np.int64), np.ones(2, np.bool_), 1, 2)
     xs, rs, off = cn0_growth_samples(td, td, ok, ok, m, m, td, np.ones(2))
     cn0_growth_update(xs, rs, off, np.zeros((2, 2, 4)), np.zeros((2, 2)), np.ones((2, 2)), 300.0, 10, 0.05, POW2)
     white_noise_update(td, td, ok, ok, m, m, np.ones_like(td), np.ones_like(td), np.ones(2), np.ones(2),

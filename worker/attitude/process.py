@@ -14,7 +14,7 @@ from worker.attitude.filter import FilterResult, run_filter
 from worker.attitude.geometry import EpochGeometry, compute_geometry, platform_state_from_sp3
 from worker.attitude.observations import PlatformObs, build_platform_obs
 from worker.attitude.settings import AttitudeSettings, effective_signals, signal_system
-from worker.attitude.solution import attitude_from_baselines, baseline_az_el, euler_and_sigma
+from worker.attitude.solution import attitude_from_baselines, attitude_quaternion, baseline_az_el, euler_and_sigma
 from worker.gnss import rotations as rot
 from worker.gnss.frames import (R_enu_from_ecef, R_gcrf_from_ecef, R_ned_from_ecef, R_orbital_from_ecef,
                                 ecef_to_geodetic)
@@ -242,8 +242,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     attitude_fn = None
     if len(baselines) >= 2:
         def attitude_fn(b, fixed):
-            q, _ = attitude_from_baselines(b[None], np.zeros((1, 3 * len(b), 3 * len(b))), body,
-                                           settings.attitude_method)
+            q, _ = attitude_quaternion(b[None], body, settings.attitude_method)
             return rot.quat_to_dcm(q[0])
     prog(0.15, "filtering")
     fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,

@@ -17,7 +17,7 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import dpotrf as _potrf, dpotrs as _potrs
 
-from worker.estimation.ekf_kernels import gather_AHt, gather_HA
+from worker.estimation.ekf_kernels import gather_AHt, gather_HA, joseph_combine, symmetric_plus_diag
 
 __all__ = ["joseph_update", "joseph_update_sparse", "rk4_step", "rk4_integrate", "rotation_rk4_stm",
            "sparse_rows_to_dense"]
@@ -76,9 +76,8 @@ def joseph_update_sparse(x: np.ndarray, P: np.ndarray, cols: np.ndarray, coef: n
     coef = np.ascontiguousarray(coef, dtype=np.float64)
     # P H^T (n, m) and S = H P H^T + R (m, m) by compiled gathers (worker.estimation.ekf_kernels)
     PHt = gather_AHt(P, cols, coef)
-    S = gather_HA(PHt, cols, coef)
-    S = 0.5 * (S + S.T)
-    S[_diag(S.shape[0])] += R
+    R = np.broadcast_to(np.asarray(R, dtype=np.float64), (cols.shape[0],))
+    S = symmetric_plus_diag(gather_HA(PHt, cols, coef), R)
     # LAPACK potrf/potrs directly: what scipy's cho_factor/cho_solve call, without their per-call wrapper cost
     L, info = _potrf(S, lower=1, clean=0)
     if info != 0:
@@ -89,8 +88,7 @@ def joseph_update_sparse(x: np.ndarray, P: np.ndarray, cols: np.ndarray, coef: n
     K = Kt.T                                                     # (n, m)
     AP = P - K @ PHt.T                                           # (I - K H) P
     APHt = gather_AHt(AP, cols, coef)                            # (A P) H^T
-    P_new = AP - APHt @ K.T + (K * R) @ K.T                      # A P A^T + K R K^T
-    P_new = 0.5 * (P_new + P_new.T)
+    P_new = joseph_combine(AP, APHt @ K.T, (K * R) @ K.T)        # A P A^T + K R K^T, symmetrised
     return x + K @ innovation, P_new, S, True
 
 
@@ -158,16 +156,6 @@ def rotation_rk4_stm(b_m: np.ndarray, omega_rad_s: np.ndarray, dt_s: float, max_
 
 _ZEROS33 = np.zeros((3, 3))
 
-
-def _diag(m: int):
-    """Index arrays of the diagonal of an (m, m) array (np.diag_indices_from without its per-call checks)."""
-    d = _DIAG.get(m)
-    if d is None:
-        d = _DIAG[m] = (np.arange(m), np.arange(m))
-    return d
-
-
-_DIAG: dict = {}
 
 
 def _skew(v: np.ndarray) -> np.ndarray:

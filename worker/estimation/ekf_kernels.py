@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["gather_AHt", "gather_HA", "propagate_rotation_cov", "rotation_rk4_stm_kernel", "warm_up"]
+__all__ = ["gather_AHt", "gather_HA", "joseph_combine", "symmetric_plus_diag", "propagate_rotation_cov", "rotation_rk4_stm_kernel", "warm_up"]
 
 
 @njit(cache=True, nogil=True)
@@ -54,6 +54,33 @@ def gather_HA(A, cols, coef):
                 w = coef[r, j]
                 for i in range(n):
                     out[r, i] += w * A[c, i]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def symmetric_plus_diag(S, R):
+    """0.5 (S + S^T) + diag(R) (m, m): joseph_update_sparse's `S = 0.5 * (S + S.T); S[diag] += R`."""
+    m = S.shape[0]
+    out = np.empty((m, m))
+    for i in range(m):
+        for j in range(m):
+            out[i, j] = 0.5 * (S[i, j] + S[j, i])
+    for i in range(m):
+        out[i, i] += R[i]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def joseph_combine(AP, X, Y):
+    """0.5 (Q + Q^T) with Q = AP - X + Y (n, n): the last step of the Joseph form in joseph_update_sparse,
+    P+ = (A P) - (A P H^T) K^T + K R K^T, symmetrised (Gelb 1974 eq. 4.2-21)."""
+    n = AP.shape[0]
+    out = np.empty((n, n))
+    for i in range(n):
+        for j in range(i + 1):
+            v = 0.5 * ((AP[i, j] - X[i, j] + Y[i, j]) + (AP[j, i] - X[j, i] + Y[j, i]))
+            out[i, j] = v
+            out[j, i] = v                      # the same sum: IEEE addition is commutative
     return out
 
 
@@ -176,6 +203,8 @@ def warm_up() -> None:
     job does not pay the compilation."""
     P = np.eye(9)
     cols = np.array([[0, 1, -1]], dtype=np.int64)
-    gather_HA(gather_AHt(P, cols, np.ones((1, 3))), cols, np.ones((1, 3)))
+    S = gather_HA(gather_AHt(P, cols, np.ones((1, 3))), cols, np.ones((1, 3)))
+    symmetric_plus_diag(S, np.ones(1))
+    joseph_combine(P, P, P)
     y, pbb, pbw = rotation_rk4_stm_kernel(np.ones((2, 3)), np.full(3, 1e-3), 1.0, 1.0)
     propagate_rotation_cov(P, np.arange(3), np.arange(3, 9).reshape(2, 3), pbb, pbw, np.eye(3), y, 1.0)
