@@ -131,6 +131,9 @@ def test_smoother_changes_nothing_but_the_baselines_omega_and_their_covariance(p
     _, sols = pitch_up
     a, b = sols[False].fr, sols[True].fr
     assert AttitudeSettings().smoother is False and a.smoother_data is None
+    assert "smoother" not in sols[False].summary
+    assert sols[True].summary["smoother"]["epochs_smoothed"] == int((np.linalg.norm(
+        a.b_ecef_m - b.b_ecef_m, axis=-1).max(axis=1) > 0).sum())
     assert np.array_equal(a.fixed, b.fixed) and np.array_equal(a.ok, b.ok) and a.events == b.events
     f = a.fixed.all(axis=1)
     moved = np.linalg.norm(a.b_ecef_m - b.b_ecef_m, axis=-1).max(axis=1)
