@@ -140,3 +140,10 @@ def test_smoother_changes_nothing_but_the_baselines_omega_and_their_covariance(p
     assert np.all(moved[~f] == 0.0) and moved[f].max() > 1e-4      # float epochs as filtered
     last = int(np.flatnonzero(f)[-1])
     assert moved[last] == 0.0                                       # the last epoch: nothing later to use
+
+
+def test_job_config_passes_the_smoother_setting():
+    from worker.jobs.attitude import AttitudeConfig
+
+    assert AttitudeConfig.model_validate({"smoother": True}).to_settings().smoother is True
+    assert AttitudeConfig.model_validate({}).to_settings().smoother is False
