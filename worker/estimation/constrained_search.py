@@ -60,6 +60,7 @@ __all__ = [
     "dd_geometry", "dd_operator", "single_epoch_float", "float_from_single_differences",
     "constrained_search", "constrained_search_float", "constrained_search_by_baselines", "sphere_fit",
     "rotation_fit",
+    "rotation_starts",
 ]
 
 #: Start radius: the chi-square quantile of the full objective's degrees of freedom (n + constraint residual
@@ -312,6 +313,84 @@ def _procrustes(B: np.ndarray, F: np.ndarray, weights: np.ndarray) -> np.ndarray
     return U @ np.diag([1.0, 1.0, s]) @ Vt
 
 
+def _exp_so3(theta: np.ndarray) -> np.ndarray:
+    ang = float(np.linalg.norm(theta))
+    if ang == 0.0:
+        return np.eye(3)
+    K = _skew(theta / ang)
+    return np.eye(3) + math.sin(ang) * K + (1.0 - math.cos(ang)) * (K @ K)
+
+
+def _gauss_newton_rotation(bh: np.ndarray, W: np.ndarray, F: np.ndarray, R: np.ndarray,
+                           iterations: int) -> tuple[float, np.ndarray]:
+    """Damped Newton on SO(3) from R for min r^T W r, r = bh - vec(R F) (left perturbation exp([theta x]) R;
+    Gauss-Newton where the Newton matrix is not positive definite): a step is halved until the cost does not
+    increase (plain Gauss-Newton oscillated and converged slowly on large-residual problems: short baselines
+    against their errors)."""
+    def cost(Rm):
+        r = bh - (F @ Rm.T).reshape(-1)
+        return float(r @ W @ r)
+    c = cost(R)
+    for _ in range(iterations):
+        RF = F @ R.T                                     # (q, 3) rows R f_i
+        r = bh - RF.reshape(-1)
+        J = np.vstack([_skew(v) for v in RF])            # d r / d theta = [R f_i x]
+        H = J.T @ W @ J
+        g = J.T @ W @ r
+        # Newton: the residual's curvature, r' = r + J theta - theta x (theta x R f_i) / 2 + ..., adds -M to
+        # the Gauss-Newton matrix, M = sum_i sym(w_i v_i^T) - (w_i . v_i) I, w = W r, v_i = R f_i
+        w = (W @ r).reshape(-1, 3)
+        M = sum(0.5 * (np.outer(wi, vi) + np.outer(vi, wi)) - float(wi @ vi) * np.eye(3) for wi, vi in zip(w, RF))
+        try:
+            Hn = H - M
+            theta = -np.linalg.solve(Hn, g) if np.linalg.eigvalsh(Hn)[0] > 0.0 else -np.linalg.solve(H, g)
+        except np.linalg.LinAlgError:
+            break
+        if float(np.linalg.norm(theta)) < 1e-12:
+            break
+        for _ in range(12):
+            R_new = _exp_so3(theta) @ R
+            c_new = cost(R_new)
+            if c_new <= c:
+                break
+            theta = 0.5 * theta
+        else:
+            break
+        done = c - c_new <= 1e-14 * max(c, 1e-300) and float(np.linalg.norm(theta)) < 1e-9
+        R, c = R_new, c_new
+        if done:
+            break
+    return c, R
+
+
+def rotation_starts(b_hat_m: np.ndarray, W: np.ndarray, body_baselines_m: np.ndarray) -> list[np.ndarray]:
+    """Start rotations of ``rotation_fit``: the weighted Wahba / SVD solution R0, and, when the body baselines
+    are coplanar (always for two), its mirror images across the planes normal to the eigenvectors e of the
+    summed weight blocks: R = H_e R0 D, H_e = I - 2 e e^T (frame of b_hat), D = I - 2 n n^T (n normal to the
+    baselines' plane in the body frame), a proper rotation with R f_i = H_e R0 f_i.
+
+    Why: with an anisotropic W (baselines short against their errors, e.g. 10 cm CubeSat baselines with a
+    poorly determined boresight component) the cost has a second basin at the configuration mirrored across
+    the weak plane, which Gauss-Newton from R0 alone does not leave (a right integer vector then got 72
+    instead of its 26 and lost to a wrong one: docs/ttff.md "Fewer satellites").
+    """
+    F = np.asarray(body_baselines_m, float).reshape(-1, 3)
+    q = F.shape[0]
+    B = np.asarray(b_hat_m, float).reshape(q, 3)
+    wts = np.array([np.trace(W[3 * i:3 * i + 3, 3 * i:3 * i + 3]) for i in range(q)])
+    R0 = _procrustes(B, F, wts)
+    starts = [R0]
+    _, sv, vt = np.linalg.svd(F)
+    if q == 2 or (sv.size == 3 and sv[2] <= 1e-9 * sv[0]):
+        n_body = vt[-1]
+        D = np.eye(3) - 2.0 * np.outer(n_body, n_body)
+        Wsum = sum(W[3 * i:3 * i + 3, 3 * i:3 * i + 3] for i in range(q))
+        _, E = np.linalg.eigh(0.5 * (Wsum + Wsum.T))
+        for e in E.T:
+            starts.append((np.eye(3) - 2.0 * np.outer(e, e)) @ R0 @ D)
+    return starts
+
+
 def rotation_fit(b_hat_m: np.ndarray, W: np.ndarray, body_baselines_m: np.ndarray,
                  iterations: int = 8) -> tuple[float, np.ndarray]:
     """Return ``(cost, R)``: ``min_{R in SO(3)} r^T W r``, ``r = b_hat - vec(R F)``, and the minimising R.
@@ -319,36 +398,24 @@ def rotation_fit(b_hat_m: np.ndarray, W: np.ndarray, body_baselines_m: np.ndarra
     Args:
         b_hat_m: (3q,) stacked baselines (frame A), metres. W: (3q, 3q) weight, 1/m^2.
         body_baselines_m: (q, 3) the same baselines in the body frame, metres.
-        iterations: Gauss-Newton iterations after the start.
+        iterations: Gauss-Newton iterations after each start.
 
     Returns:
         cost, R_a_from_body (3, 3) with b_i = R f_i.
 
     Implements: the weighted orthogonal Procrustes problem of MC-LAMBDA (Teunissen 2007; Giorgi et al. 2010
-    eq. 9): start from the Wahba / SVD solution weighted per baseline by the trace of its W block, then
-    Gauss-Newton with the left perturbation R <- exp([theta x]) R, d(R f)/d theta = -[R f x].
+    eq. 9): Gauss-Newton with the left perturbation R <- exp([theta x]) R, d(R f)/d theta = -[R f x], from
+    each of ``rotation_starts`` (the Wahba / SVD solution weighted per baseline by the trace of its W block and,
+    for coplanar baselines, its mirror images across the weak planes); the lowest cost is returned.
     """
     F = np.asarray(body_baselines_m, float).reshape(-1, 3)
-    q = F.shape[0]
     bh = np.asarray(b_hat_m, float)
-    B = bh.reshape(q, 3)
-    wts = np.array([np.trace(W[3 * i:3 * i + 3, 3 * i:3 * i + 3]) for i in range(q)])
-    R = _procrustes(B, F, wts)
-    for _ in range(iterations):
-        RF = F @ R.T                                     # (q, 3) rows R f_i
-        r = bh - RF.reshape(-1)
-        J = np.vstack([_skew(v) for v in RF])            # d r / d theta = [R f_i x]
-        H = J.T @ W @ J
-        g = J.T @ W @ r
-        theta = -np.linalg.solve(H, g)
-        ang = float(np.linalg.norm(theta))
-        if ang > 0.0:
-            K = _skew(theta / ang)
-            R = (np.eye(3) + math.sin(ang) * K + (1.0 - math.cos(ang)) * (K @ K)) @ R
-        if ang < 1e-12:
-            break
-    r = bh - (F @ R.T).reshape(-1)
-    return float(r @ W @ r), R
+    best = None
+    for R in rotation_starts(bh, W, F):
+        c, R = _gauss_newton_rotation(bh, W, F, R, iterations)
+        if best is None or c < best[0]:
+            best = (c, R)
+    return best
 
 
 # -------------------------------------------------------------------------------------------- search ---
