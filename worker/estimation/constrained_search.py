@@ -269,7 +269,12 @@ def sphere_fit(b_hat_m: np.ndarray, W: np.ndarray, length_m: float) -> tuple[flo
     unique root mu > -w_min of |y(mu)| = l, found by Newton on 1/|y(mu)| - 1/l safeguarded by bisection.
     """
     w, V = np.linalg.eigh(W)
-    c = V.T @ np.asarray(b_hat_m, float)
+    return _sphere_fit_eig(np.asarray(b_hat_m, float), w, V, length_m)
+
+
+def _sphere_fit_eig(b_hat_m: np.ndarray, w: np.ndarray, V: np.ndarray, length_m: float) -> tuple[float, np.ndarray]:
+    """``sphere_fit`` with W = V diag(w) V^T given (w ascending)."""
+    c = V.T @ b_hat_m
     wc = w * c
     lo = -w[0]
     # |y(mu)| <= |w c| / (w_min + mu): an upper bracket where |y| <= l
@@ -297,8 +302,8 @@ def sphere_fit(b_hat_m: np.ndarray, W: np.ndarray, length_m: float) -> tuple[flo
     y = wc / (w + mu)
     y *= length_m / np.linalg.norm(y)
     b = V @ y
-    r = np.asarray(b_hat_m, float) - b
-    return float(r @ W @ r), b
+    cr = c - y                                           # b_hat - b in the eigenbasis of W
+    return float(np.sum(w * cr * cr)), b
 
 
 def _skew(v: np.ndarray) -> np.ndarray:
@@ -525,11 +530,15 @@ def constrained_search(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_float_m: np.n
     Linv = np.linalg.inv(dec.L)
     G = (Q_bz @ Linv) / dec.d                             # G = Q_bz L^-1 D^-1, columns g_k
     lam_max = [0.0] * (n + 1)
+    eig_k: list = [None] * (n + 1)                        # q = 1: eigen-decomposition of W_k = (Q_b|z_{k:})^-1
     Qk = Q_b.copy()
     lam_max[n] = float(np.linalg.eigvalsh(Qk)[-1])
     for k in range(n - 1, -1, -1):
         Qk = Qk - dec.d[k] * np.outer(G[:, k], G[:, k])  # Q_b|z_{k:} = Q_b|z_{k+1:} - d_k g_k g_k^T
-        lam_max[k] = max(float(np.linalg.eigvalsh(0.5 * (Qk + Qk.T))[-1]), 1e-300)
+        lq, Vq = np.linalg.eigh(0.5 * (Qk + Qk.T))
+        lam_max[k] = max(float(lq[-1]), 1e-300)
+        if q == 1 and lq[0] > 0.0:
+            eig_k[k] = (1.0 / lq[::-1], Vq[:, ::-1])       # W_k eigenvalues ascending
     # the fully conditioned covariance of the leaf, directly (better conditioned than the recursion)
     Ca = np.linalg.cholesky(Q_a)
     K = np.linalg.solve(Ca.T, np.linalg.solve(Ca, Q_ab)).T     # Q_ba Q_a^-1
@@ -538,11 +547,18 @@ def constrained_search(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_float_m: np.n
     W_leaf = np.linalg.inv(Q_cond)
     W_leaf = 0.5 * (W_leaf + W_leaf.T)
 
+    tight_fn = None
     if q == 1:
         bound_fn = _bound_sphere(float(lengths[0]))
 
         def leaf_fn(b):
             return sphere_fit(np.array(b), W_leaf, float(lengths[0]))
+
+        def tight_fn(k, b):
+            # the exact cost-to-go lower bound min_{|b| = l} ||b_hat(z_{k:}) - b||^2_{Q_b|z_{k:}} (module docstring)
+            if eig_k[k] is None:
+                return 0.0
+            return _sphere_fit_eig(np.array(b), eig_k[k][0], eig_k[k][1], float(lengths[0]))[0]
         dof = n + 1
     else:
         bound_fn = _bound_two_baselines(F) if q == 2 else _bound_lengths(lengths)
@@ -558,7 +574,7 @@ def constrained_search(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_float_m: np.n
     while True:
         try:
             found_r, nodes, leaves = _constrained_dfs(zs, dec.L, dec.d, G, lam_max, bh, bound_fn, leaf_fn, radius,
-                                                      m, max_nodes - total_nodes)
+                                                      m, max_nodes - total_nodes, tight_fn)
         except _BudgetExhausted as exc:
             total_nodes += exc.nodes
             if not found:
@@ -612,12 +628,14 @@ class _BudgetExhausted(Exception):
         self.nodes = nodes
 
 
-def _constrained_dfs(zs, L, d, G, lam_max, b_hat, bound_fn, leaf_fn, radius, m, max_nodes):
+def _constrained_dfs(zs, L, d, G, lam_max, b_hat, bound_fn, leaf_fn, radius, m, max_nodes, tight_fn=None):
     """Depth-first MLAMBDA enumeration with the constrained node bound; returns the m best inside ``radius``.
 
     Each found entry is (cost, ils_sqnorm, z list, b_hat(z) list, leaf fit). Levels as in
     ``lambda_search.search``; at each node the conditional baseline b_k = b_{k+1} - g_k u_k is updated and the
-    node is skipped (its siblings still visited) when dist + c(b_k)/lambda_max_k >= the radius.
+    node is skipped (its siblings still visited) when dist + c(b_k)/lambda_max_k >= the radius, or, with
+    ``tight_fn(k, b_k)`` (C-LAMBDA: the exact distance to the sphere in the metric of Q_b|z_{k:}, a lower bound
+    of every completion by the chain rule), when dist + tight_fn >= the radius (inner levels only).
     """
     n = len(zs)
     zs = [float(v) for v in zs]
@@ -657,7 +675,8 @@ def _constrained_dfs(zs, L, d, G, lam_max, b_hat, bound_fn, leaf_fn, radius, m, 
         g = Gt[k]
         bp = bv[k + 1]
         b = [bp[i] - g[i] * y for i in range(p)]           # b_hat(z_{k:}) = b_hat(z_{k+1:}) - g_k u_k
-        if new_dist + bound_fn(b) * inv_lam[k] < max_dist:
+        if new_dist + bound_fn(b) * inv_lam[k] < max_dist and (
+                tight_fn is None or k == 0 or new_dist + tight_fn(k, b) < max_dist):
             if k != 0:
                 dist[k] = new_dist
                 bv[k] = b
