@@ -306,6 +306,42 @@ def _sphere_fit_eig(b_hat_m: np.ndarray, w: np.ndarray, V: np.ndarray, length_m:
     return float(np.sum(w * cr * cr)), b
 
 
+def _sphere_dual_bound(b: list, w: list, Vt: list, length_m: float, iterations: int = 10) -> float:
+    """A lower bound of ``min_{|x| = l} (b - x)^T W (b - x)``, W = V diag(w) V^T (w ascending, > 0), in plain
+    floats (the C-LAMBDA node bound; numpy's per-call overhead dominates at 3 elements).
+
+    Implements: the Lagrangian dual of the trust-region problem, g(mu) = sum_i mu w_i c_i^2 / (w_i + mu) - mu l^2
+    for mu > -w_min, c = V^T b: every such mu gives g(mu) <= the minimum (weak duality; equal at the root of the
+    secular equation, strong duality of the trust-region problem, More & Sorensen 1983). A few safeguarded
+    Newton steps on 1/|y(mu)| - 1/l towards the root, then g at the last feasible mu.
+    """
+    c = [Vt[i][0] * b[0] + Vt[i][1] * b[1] + Vt[i][2] * b[2] for i in range(3)]
+    wc = [w[i] * c[i] for i in range(3)]
+    lo = -w[0]
+    hi = -w[0] + math.sqrt(wc[0] * wc[0] + wc[1] * wc[1] + wc[2] * wc[2]) / length_m + 1e-300
+    mu = 0.0 if lo < 0.0 < hi else 0.5 * (lo + hi)
+    for _ in range(iterations):
+        den = [w[i] + mu for i in range(3)]
+        if den[0] <= 0.0:
+            mu = 0.5 * (lo + hi)
+            continue
+        y = [wc[i] / den[i] for i in range(3)]
+        ny = math.sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2])
+        if ny > length_m:
+            lo = mu
+        else:
+            hi = mu
+        if ny == 0.0:
+            break
+        dphi = (y[0] * y[0] / den[0] + y[1] * y[1] / den[1] + y[2] * y[2] / den[2]) / ny ** 3
+        mu_new = mu + (1.0 / ny - 1.0 / length_m) / dphi
+        mu = mu_new if lo < mu_new < hi else 0.5 * (lo + hi)
+    if w[0] + mu <= 0.0:
+        return 0.0
+    g = sum(mu * w[i] * c[i] * c[i] / (w[i] + mu) for i in range(3)) - mu * length_m * length_m
+    return max(g, 0.0)
+
+
 def _skew(v: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
@@ -554,11 +590,14 @@ def constrained_search(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_float_m: np.n
         def leaf_fn(b):
             return sphere_fit(np.array(b), W_leaf, float(lengths[0]))
 
+        eig_py = [None if e is None else ([float(v) for v in e[0]], [[float(v) for v in row] for row in e[1].T])
+                  for e in eig_k]
+        l0 = float(lengths[0])
+
         def tight_fn(k, b):
-            # the exact cost-to-go lower bound min_{|b| = l} ||b_hat(z_{k:}) - b||^2_{Q_b|z_{k:}} (module docstring)
-            if eig_k[k] is None:
-                return 0.0
-            return _sphere_fit_eig(np.array(b), eig_k[k][0], eig_k[k][1], float(lengths[0]))[0]
+            # a lower bound of min_{|b| = l} ||b_hat(z_{k:}) - b||^2_{Q_b|z_{k:}} (module docstring)
+            e = eig_py[k]
+            return 0.0 if e is None else _sphere_dual_bound(b, e[0], e[1], l0)
         dof = n + 1
     else:
         bound_fn = _bound_two_baselines(F) if q == 2 else _bound_lengths(lengths)
