@@ -29,11 +29,13 @@ By the chain rule for the joint quadratic form of (z, b), every completion of a 
 with ``dist_k`` the MLAMBDA partial squared norm and ``c_k`` a closed-form Euclidean distance to Omega
 (sphere: (|b| - l)^2; two baselines: min over O(3) of ||B - R F||_F^2 = ||B||^2 + ||F||^2 - 2 ||B F^T||_*;
 more: the sum of the per-baseline length terms). A node is pruned when this bound reaches the current radius
-(the m-th best full cost found, or the start radius), a leaf's exact cost is evaluated (sphere: the
-trust-region secular equation; rotation: Gauss-Newton on SO(3) from the orthogonal Procrustes / Wahba SVD
-solution), and the radius is expanded x4 (search and expand, Teunissen 2010 sec. 5) until the best and the
-second-best candidates (or a ratio cap) are inside. The result is the exact minimiser for C-LAMBDA and, for
-MC-LAMBDA, exact up to the Gauss-Newton solution of the weighted rotation fit being the global one.
+(the m-th best full cost found, or the start radius); for one baseline a node passing it is also checked against
+a lower bound of the exact cost-to-go min_{|b| = l} ||b_hat(z_{k:}) - b||^2_{Q_b|z_{k:}} (the Lagrangian dual of the
+trust-region problem, ``_sphere_dual_bound``). A leaf's exact cost is evaluated (sphere: the trust-region secular
+equation; rotation: damped Newton on SO(3) from the orthogonal Procrustes / Wahba SVD solution and, for coplanar
+baselines, its mirror images, ``rotation_starts``), and the radius is expanded x4 (search and expand, Teunissen
+2010 sec. 5) until the best and the second-best candidates (or a ratio cap) are inside. The result is the exact
+minimiser for C-LAMBDA and, for MC-LAMBDA, exact up to the rotation fit being the global one.
 
 Input layout (what a single-difference attitude EKF hands over; see docs/design/ambiguity_resolution.md):
 ambiguities are double differences ordered by blocks, one block per (baseline, signal), each block ordered by
@@ -404,6 +406,75 @@ def _gauss_newton_rotation(bh: np.ndarray, W: np.ndarray, F: np.ndarray, R: np.n
     return c, R
 
 
+def _skew_batch(v: np.ndarray) -> np.ndarray:
+    """(..., 3) -> (..., 3, 3) cross-product matrices."""
+    S = np.zeros(v.shape + (3,))
+    S[..., 0, 1], S[..., 0, 2], S[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    S[..., 1, 0], S[..., 2, 0], S[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
+    return S
+
+
+def _exp_so3_batch(theta: np.ndarray) -> np.ndarray:
+    """(k, 3) rotation vectors -> (k, 3, 3) rotation matrices (Rodrigues)."""
+    ang = np.linalg.norm(theta, axis=1)
+    safe = np.where(ang > 0.0, ang, 1.0)
+    K = _skew_batch(theta / safe[:, None])
+    s, c = np.sin(ang)[:, None, None], (1.0 - np.cos(ang))[:, None, None]
+    return np.eye(3) + s * K + c * (K @ K)
+
+
+def _newton_rotation_batch(bh: np.ndarray, W: np.ndarray, F: np.ndarray, Rs: np.ndarray,
+                           iterations: int) -> tuple[np.ndarray, np.ndarray]:
+    """``_gauss_newton_rotation`` from k starts at once (numpy over the starts): (costs (k,), R (k, 3, 3))."""
+    q = F.shape[0]
+    I3 = np.eye(3)
+
+    def cost(Rm):
+        r = bh - np.einsum("kij,qj->kqi", Rm, F).reshape(len(Rm), 3 * q)
+        return np.einsum("ki,ij,kj->k", r, W, r), r
+
+    c, r = cost(Rs)
+    active = np.ones(len(Rs), bool)
+    for _ in range(iterations):
+        RF = np.einsum("kij,qj->kqi", Rs, F)                         # (k, q, 3)
+        J = _skew_batch(RF).reshape(len(Rs), 3 * q, 3)               # d r / d theta = [R f_i x]
+        WJ = W @ J                                                    # (k, 3q, 3)
+        H = np.einsum("kai,kaj->kij", J, WJ)
+        g = np.einsum("kai,ka->ki", WJ, r)
+        w = (r @ W).reshape(len(Rs), q, 3)
+        wv = np.einsum("kqi,kqj->kij", w, RF)
+        M = 0.5 * (wv + np.swapaxes(wv, 1, 2)) - np.einsum("kqi,kqi->k", w, RF)[:, None, None] * I3
+        Hn = H - M
+        pd = np.linalg.eigvalsh(Hn)[:, 0] > 0.0
+        Hs = np.where(pd[:, None, None], Hn, H)
+        try:
+            theta = -np.linalg.solve(Hs, g[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            break
+        theta[~active] = 0.0
+        moved = np.zeros(len(Rs), bool)
+        R_new, c_new, r_new = Rs, c, r
+        todo = active & (np.linalg.norm(theta, axis=1) >= 1e-12)
+        for _ in range(12):
+            if not todo.any():
+                break
+            Rt = _exp_so3_batch(theta) @ Rs
+            ct, rt = cost(Rt)
+            ok = todo & (ct <= c)
+            R_new = np.where(ok[:, None, None], Rt, R_new)
+            c_new = np.where(ok, ct, c_new)
+            r_new = np.where(ok[:, None], rt, r_new)
+            moved |= ok
+            todo &= ~ok
+            theta[todo] *= 0.5
+        done = ~moved | ((c - c_new <= 1e-14 * np.maximum(c, 1e-300)) & (np.linalg.norm(theta, axis=1) < 1e-9))
+        Rs, c, r = R_new, c_new, r_new
+        active &= ~done
+        if not active.any():
+            break
+    return c, Rs
+
+
 def rotation_starts(b_hat_m: np.ndarray, W: np.ndarray, body_baselines_m: np.ndarray) -> list[np.ndarray]:
     """Start rotations of ``rotation_fit``: the weighted Wahba / SVD solution R0, and, when the body baselines
     are coplanar (always for two), its mirror images across the planes normal to the eigenvectors e of the
@@ -451,12 +522,10 @@ def rotation_fit(b_hat_m: np.ndarray, W: np.ndarray, body_baselines_m: np.ndarra
     """
     F = np.asarray(body_baselines_m, float).reshape(-1, 3)
     bh = np.asarray(b_hat_m, float)
-    best = None
-    for R in rotation_starts(bh, W, F):
-        c, R = _gauss_newton_rotation(bh, W, F, R, iterations)
-        if best is None or c < best[0]:
-            best = (c, R)
-    return best
+    W = np.asarray(W, float)
+    c, R = _newton_rotation_batch(bh, W, F, np.array(rotation_starts(bh, W, F)), iterations)
+    i = int(np.argmin(c))
+    return float(c[i]), R[i]
 
 
 # -------------------------------------------------------------------------------------------- search ---
@@ -806,7 +875,7 @@ def constrained_search_by_baselines(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_
         return constrained_search(a_hat[r], Q_a[np.ix_(r, r)], bh[jb], Q_b[np.ix_(jb, jb)], Q_ab[np.ix_(r, jb)],
                                   F[i:i + 1], m=m, start_radius=start_radius, ratio_cap=cap, max_nodes=max_nodes)
 
-    def evaluate(combo):
+    def evaluate(combo, bound=math.inf):
         key = tuple(tuple(int(v) for v in c) for c in combo)
         if key in joint:
             return
@@ -815,6 +884,8 @@ def constrained_search_by_baselines(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_
             a[r] = vec
         da = a_hat - a
         y = np.linalg.solve(C, da)
+        if float(y @ y) >= bound:              # J >= its ILS part >= bound: neither best nor second below bound
+            return
         b = bh - K @ da
         c_rot, R = rotation_fit(b, W, F)
         joint[key] = (float(y @ y) + c_rot, float(y @ y), a, b, R)
@@ -853,7 +924,7 @@ def constrained_search_by_baselines(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_
     cost_of = [{tuple(int(x) for x in v): float(c) for c, v in lst} for lst, _ in lists]
     for combo in itertools.product(*pruned):
         if max(cost_of[i][tuple(int(x) for x in v)] for i, v in enumerate(combo)) < bound:
-            evaluate(combo)
+            evaluate(combo, bound)
     best = sorted(joint.values(), key=lambda t: t[0])
     cost = best[0][0]
     if len(best) > 1 and best[1][0] < ratio_cap * cost:
