@@ -8,13 +8,17 @@ antennas, L1 C/A + L2 P(Y), 1 Hz), clean ({"pcv": false, "pco": false, "multipat
 - filter: CPU time (time.process_time) of worker.attitude.filter.run_filter, epochs / s; median of --runs runs;
 - job: the attitude pipeline itself (worker.pipelines.attitude.run on a JobContext like the runner builds: parse
   the uploaded files, geometry, filter, attitude, every product text, PNG plots, report.html, each product
-  hashed as the blob store does), CPU and wall time, median of --runs runs. Not included: the HTTP upload and
-  the queue hand-over of the service (tens of ms, see docs/BENCHMARKS.md "API"), so the job figure is the
-  worker's part of "upload to products";
+  hashed as the blob store does), CPU and wall time, median of --runs runs, and CPU per stage (the pipeline's
+  StageClock line of the job log);
+- service (realistic pass, both modes): upload to products through the real service as `make demo` runs it (API +
+  one worker, embedded SQLite + Huey, default settings): HTTP upload of the set, job submitted, polled to
+  `succeeded`, products listed; wall time split into upload, submit, queue pick-up, run, seen-succeeded, CPU of
+  the API and worker processes, and the job's stage line from the worker log (--no-service skips it);
 - RTKLIB: pyrtklib postpos, moving-base L1+L2 (bench_attitude_rtklib.rtklib_movingbase_options), one run per
   baseline (GPS-2>GPS-0, GPS-2>GPS-1) on the same RINEX files, CPU and wall, median of --runs runs.
 
-    OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_speed.py [--runs 3] [--minutes 106] [--write]
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_speed.py [--runs 3] [--minutes 106]
+        [--no-rtklib] [--no-service] [--write]
 """
 from __future__ import annotations
 
@@ -79,7 +83,17 @@ def run_job(d: Path, mode: str, work: Path) -> dict:
     finally:
         P.run_filter = orig
     return {"job_wall_s": wall, "job_cpu_s": cpu, "filter_cpu_s": filt["cpu_s"], "epochs": filt["epochs"],
-            "products": sorted(ctx.products)}
+            "products": sorted(ctx.products), "stages_cpu_s": parse_stages(ctx.log_lines[-1])}
+
+
+def parse_stages(line: str) -> dict[str, float]:
+    """Stage -> CPU s of the pipeline's 'stages (wall s / CPU s): name w/c; ...' log line (StageClock)."""
+    body = line.split("stages (wall s / CPU s): ", 1)[1]
+    out = {}
+    for part in body.split("; "):
+        name, _, wc = part.rpartition(" ")
+        out[name] = float(wc.split("/")[1])
+    return out
 
 
 def run_rtklib(d: Path, work: Path) -> dict:
@@ -98,18 +112,114 @@ def run_rtklib(d: Path, work: Path) -> dict:
     return out
 
 
+def _proc_cpu_s(pid: int) -> float:
+    """utime + stime of a process (its threads included) from /proc, in seconds."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _iso_s(text: str) -> float:
+    from datetime import datetime
+
+    return datetime.fromisoformat(text.replace("Z", "+00:00")).timestamp()
+
+
+class AttitudeService:
+    """The real service as `make demo` runs it: API + one worker on the embedded default (SQLite + Huey), default
+    lease/heartbeat settings, fresh data directory; the worker's consumer is up before anything is timed."""
+
+    def __init__(self, work: Path):
+        import shutil
+
+        from tests.e2e.conftest import Service
+
+        shutil.rmtree(work, ignore_errors=True)
+        work.mkdir(parents=True)
+        self.svc = Service(work, "sqlite", None, None)
+        for k in ("GNSSATT_LEASE_SECONDS", "GNSSATT_HEARTBEAT_SECONDS", "GNSSATT_REQUEUE_AFTER_SECONDS"):
+            self.svc.env.pop(k, None)           # the service's defaults, not the e2e tests' short leases
+        self.svc.env["OPENBLAS_NUM_THREADS"] = "1"
+        self.svc.start_api()
+        self.key = self.svc.create_key("bench")
+        self.worker = self.svc.start_worker()
+        self.worker_log = self.svc.logs[-1]
+        deadline = time.monotonic() + 120
+        while "consumer started" not in (self.worker_log.read_text(errors="replace")
+                                         if self.worker_log.exists() else ""):
+            if time.monotonic() > deadline or self.worker.poll() is not None:
+                raise RuntimeError(f"worker did not start:\n{self.svc.logs_text()}")
+            time.sleep(0.2)
+
+    def run(self, d: Path, mode: str, poll_s: float = 0.1) -> dict:
+        """Upload the set over HTTP, submit the attitude job, poll to `succeeded`, list the products: wall time of
+        each part (client clock; queue pick-up and run from the job's created/started/finished times) and CPU
+        of the API and worker processes; the job's own stage timings from the worker's log."""
+        import httpx
+
+        files = [("files", (p.name, p.read_bytes(), "application/octet-stream")) for _, _, p in files_of(d)]
+        with self.svc.client(self.key) as c:
+            c.timeout = httpx.Timeout(600)
+            cpu_api0, cpu_w0 = _proc_cpu_s(self.svc.api.pid), _proc_cpu_s(self.worker.pid)
+            t0 = time.perf_counter()
+            r = c.post("/v1/observation-sets", files=files, data={"name": d.name})
+            r.raise_for_status()
+            t_up = time.perf_counter()
+            cpu_api_up = _proc_cpu_s(self.svc.api.pid) - cpu_api0
+            job = c.post("/v1/jobs", json={"type": "attitude", "observation_set_ids": [r.json()["id"]],
+                                           "config": {"mode": mode}})
+            job.raise_for_status()
+            jid = job.json()["id"]
+            t_sub = time.perf_counter()
+            polls = 0
+            while True:
+                j = c.get(f"/v1/jobs/{jid}").json()
+                polls += 1
+                if j["state"] in ("succeeded", "failed", "cancelled"):
+                    break
+                time.sleep(poll_s)
+            t_done = time.perf_counter()
+            if j["state"] != "succeeded":
+                raise RuntimeError(f"service run failed: {j}\n{self.svc.logs_text()}")
+            listing = c.get(f"/v1/jobs/{jid}/products").json()
+            t_list = time.perf_counter()
+            cpu_api, cpu_w = _proc_cpu_s(self.svc.api.pid) - cpu_api0, _proc_cpu_s(self.worker.pid) - cpu_w0
+        created, started, finished = (_iso_s(j[k]) for k in ("created_at", "started_at", "finished_at"))
+        stages = [ln.split(" stages (wall s / CPU s): ", 1)[1] for ln in
+                  self.worker_log.read_text(errors="replace").splitlines() if f"attitude job {jid} stages" in ln]
+        items = listing["items"] if isinstance(listing, dict) else listing
+        return {"upload_s": t_up - t0, "submit_s": t_sub - t_up, "pickup_s": started - created,
+                "run_s": finished - started, "seen_s": t_done - t_sub, "list_s": t_list - t_done,
+                "total_s": t_list - t0, "api_cpu_upload_s": cpu_api_up, "api_cpu_s": cpu_api,
+                "worker_cpu_s": cpu_w, "polls": polls, "stages": stages[-1] if stages else "",
+                "products": len(items), "upload_mb": sum(len(f[1][1]) for f in files) / 1e6}
+
+    def shutdown(self) -> None:
+        self.svc.shutdown()
+
+
+def run_service_jobs(d: Path, mode: str, runs: int, work: Path) -> list[dict]:
+    """`runs` uploads + jobs of the pass through one service (a fresh set each time; the first job also pays
+    the worker's imports of the science and plotting modules)."""
+    svc = AttitudeService(work)
+    try:
+        return [svc.run(d, mode) for _ in range(runs)]
+    finally:
+        svc.shutdown()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--minutes", type=float, default=106.0)
     ap.add_argument("--passes", default=",".join(PASSES))
     ap.add_argument("--no-rtklib", action="store_true")
+    ap.add_argument("--no-service", action="store_true", help="skip the upload-to-products runs through the service")
     ap.add_argument("--write", action="store_true")
     args = ap.parse_args()
     from worker.sim import simulate_scenario
 
     med = lambda rows, key: float(np.median([r[key] for r in rows]))  # noqa: E731
-    table, rtk = [], {}
+    table, rtk, service = [], {}, []
     load = os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp:
         for label in args.passes.split(","):
@@ -120,7 +230,9 @@ def main() -> None:
                 rows = [run_job(d, mode, Path(tmp) / f"work_{label}_{mode}_{i}") for i in range(args.runs)]
                 r = {"pass": label, "mode": mode, "epochs": rows[0]["epochs"],
                      **{k: med(rows, k) for k in ("filter_cpu_s", "job_cpu_s", "job_wall_s")},
-                     "products": rows[0]["products"]}
+                     "products": rows[0]["products"],
+                     "stages_cpu_s": {st: float(np.median([x["stages_cpu_s"][st] for x in rows]))
+                                      for st in rows[0]["stages_cpu_s"]}}
                 r["filter_eps"] = r["epochs"] / r["filter_cpu_s"]
                 table.append(r)
                 print({k: (round(v, 3) if isinstance(v, float) else v) for k, v in r.items()}, flush=True)
@@ -128,6 +240,15 @@ def main() -> None:
                 rows = [run_rtklib(d, Path(tmp) / f"rtk_{label}_{i}") for i in range(args.runs)]
                 rtk[label] = {k: med(rows, k) for k in ("cpu_s", "wall_s")}
                 print(label, "rtklib", rtk[label], flush=True)
+            if not args.no_service and label == "realistic":
+                for mode in MODES:
+                    rows = run_service_jobs(d, mode, args.runs + 1, Path(tmp) / f"svc_{mode}")
+                    rows = rows[1:]          # the first upload + job warms the API and the worker up
+                    keys = [k for k, v in rows[0].items() if isinstance(v, float)]
+                    r = {"pass": label, "mode": mode, **{k: med(rows, k) for k in keys},
+                         "stages": rows[len(rows) // 2]["stages"]}
+                    service.append(r)
+                    print({k: (round(v, 3) if isinstance(v, float) else v) for k, v in r.items()}, flush=True)
     load_after = os.getloadavg()
     lines = [f"Machine: {machine_line()}. One BLAS thread. Load average {load[0]:.1f} at the start, "
              f"{load_after[0]:.1f} at the end (2 cores shared with other work: wall times are inflated by the "
@@ -143,9 +264,34 @@ def main() -> None:
         lines.append(f"| {r['pass']} | {r['mode']} | {r['epochs']} | {r['filter_cpu_s']:.2f} | "
                      f"{r['filter_eps']:.0f} | {r['job_cpu_s']:.1f} | {r['job_wall_s']:.1f} | {peer} | {ratio} |")
     lines += ["", "Job = worker.pipelines.attitude.run on a JobContext (as the runner builds it): parsing, geometry, "
-              "filter, attitude, products " + ", ".join(table[0]["products"]) + " (each hashed as stored). "
-              "The HTTP upload and queue hand-over are not in these figures.", "",
-              f"Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_speed.py --runs {args.runs} "
+              "filter, attitude, products " + ", ".join(table[0]["products"]) + " (each hashed as stored).", "",
+              "CPU s per stage of the job (the pipeline's own stage clock, worker.pipelines.attitude.StageClock, "
+              "as logged by the worker):", "",
+              "| stage | " + " | ".join(f"{r['pass']} {r['mode']}" for r in table) + " |",
+              "|---|" + "---|" * len(table)]
+    stages = list(table[0]["stages_cpu_s"])
+    for st in stages:
+        lines.append(f"| {st} | " + " | ".join(f"{r['stages_cpu_s'].get(st, float('nan')):.2f}" for r in table)
+                     + " |")
+    outside = [sum(v for k, v in r["stages_cpu_s"].items() if k not in ("filtering", "total")) for r in table]
+    lines.append("| all but filtering | " + " | ".join(f"{x:.2f}" for x in outside) + " |")
+    if service:
+        lines += ["", "Upload to products through the real service (`make demo`'s setup: API + one worker, embedded "
+                  "SQLite + Huey, default settings; bench.bench_attitude_speed.AttitudeService): the set "
+                  f"({service[0]['upload_mb']:.1f} MB) uploaded over HTTP, the attitude job submitted, polled every "
+                  "0.1 s to `succeeded`, the product list fetched. Wall s (client clock; pick-up and run from the "
+                  "job's created/started/finished times) and CPU s of the API and worker processes. Median of "
+                  f"{args.runs} runs after one warm-up upload + job.", "",
+                  "| pass | mode | upload s | submit s | queue pick-up s | run s | submit to seen `succeeded` s | "
+                  "upload to product list s | API CPU s (upload) | worker CPU s |",
+                  "|---|---|---|---|---|---|---|---|---|---|"]
+        for r in service:
+            lines.append(f"| {r['pass']} | {r['mode']} | {r['upload_s']:.2f} | {r['submit_s']:.2f} | "
+                         f"{r['pickup_s']:.2f} | {r['run_s']:.1f} | {r['seen_s']:.1f} | {r['total_s']:.1f} | "
+                         f"{r['api_cpu_s']:.2f} ({r['api_cpu_upload_s']:.2f}) | {r['worker_cpu_s']:.1f} |")
+        lines += ["", "Stages of the middle run as the worker logged them (wall s / CPU s): "
+                  + "; ".join(f"{r['mode']}: {r['stages']}" for r in service) + "."]
+    lines += ["", f"Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_speed.py --runs {args.runs} "
               "--write`."]
     text = "\n".join(lines)
     print(text)

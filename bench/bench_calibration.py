@@ -15,7 +15,10 @@ seed 2024 (each pass simulated as its own run, see tests/calibration/_campaign.p
 offsets, PCO and PCV expressed in the calibration's baseline/map split (tests/calibration/_campaign.py
 `truth_split`, worker/calibration/decomposition.py); `--twin` also calibrates a noiseless twin campaign (no noise,
 no multipath, no reference noise). `--ekf`: the attitude filter on the held-out set with a priori baselines,
-calibrated baselines, and calibrated baselines + the PCV maps.
+calibrated baselines, and calibrated baselines + the PCV maps. `--budget`: the held-out error budget (a priori,
+true and calibrated baselines and maps in every combination, and the pass re-simulated without multipath and
+without noise). `--held-out-config '{...}'`: the calibration's held_out_attitude_config (attitude job config of
+the held-out comparison), also used by --ekf and --budget. The campaign is simulated once into --work and reused.
 Service runs use SQLite + the SQLite queue unless GNSSATT_TEST_DATABASE_URL / GNSSATT_TEST_QUEUE_URL are set.
 """
 from __future__ import annotations
@@ -319,7 +322,7 @@ def scale_markdown(res: dict, command: str) -> str:
         lines.append(f"| {w} | {res['median_wall_s'][w]:.1f} | {walls} | "
                      f"{res['speedup'][w]:.2f}x | {stages} | {per_w} |")
     lines += ["", f"Per-set cost (CPU, median over all runs): pass 1 {np.median(cpu1):.2f} s, pass 2 "
-              f"{np.median(cpu2):.2f} s, held-out set (pass 2, three extractions) "
+              f"{np.median(cpu2):.2f} s, held-out set (pass 2, three extractions + two filter runs) "
               f"{np.median(held) if held else float('nan'):.2f} s. Maps and baselines byte-identical (sha256) "
               f"over all {len(runs)} runs: {'yes' if res['identical'] else 'NO'}. The fan-out of every job is its "
               "`tasks.csv` product (pass, queue position, set, worker, start/end s); the held-out task is first "
@@ -354,7 +357,21 @@ def write_scale_block(path: Path, text: str) -> None:
     path.write_text(doc)
 
 
-def ekf_held_out(d: Path, calibrated: dict, maps: dict | None = None) -> dict:
+def _settings_of(config: dict) -> dict:
+    """AttitudeSettings keyword arguments of an attitude job config (worker.jobs.attitude.AttitudeConfig) that
+    differ from the settings' defaults (so the budget runs the filter the held-out comparison runs)."""
+    if not config:
+        return {}
+    from dataclasses import asdict
+
+    from worker.attitude.settings import AttitudeSettings
+    from worker.jobs.attitude import AttitudeConfig
+
+    s, d = asdict(AttitudeConfig(**config).to_settings()), asdict(AttitudeSettings())
+    return {k: v for k, v in s.items() if v != d[k]}
+
+
+def ekf_held_out(d: Path, calibrated: dict, maps: dict | None = None, config: dict | None = None) -> dict:
     """The attitude job's filter (issue 6, dynamic mode) on the held-out set with a priori baselines, calibrated
     baselines, and calibrated baselines + PCV maps ((first, second, freq) -> map JSON) applied by the filter."""
     from worker.attitude.process import load_inputs, process
@@ -369,8 +386,9 @@ def ekf_held_out(d: Path, calibrated: dict, maps: dict | None = None) -> dict:
         runs.append(("calibrated_baselines_and_maps_empty_bins_kept", calibrated, maps, "keep"))
     for tag, cal, pcv, empty in runs:
         t0 = time.perf_counter()
-        sol = process(inp, AttitudeSettings(mode="dynamic", calibrated_baselines=cal, pcv_maps=pcv,
-                                            pcv_empty_bins=empty))
+        sol = process(inp, AttitudeSettings(**{"mode": "dynamic", **_settings_of(config or {}),
+                                               "calibrated_baselines": cal, "pcv_maps": pcv,
+                                               "pcv_empty_bins": empty}))
         ref = sol.summary.get("reference", {}).get("fixed", {})
         out[tag] = {k: {"bias_deg": round(v["bias_deg"], 4), "sigma_deg": round(v["sigma_deg"], 4)}
                     for k, v in ref.items()}
@@ -385,6 +403,66 @@ def ekf_held_out(d: Path, calibrated: dict, maps: dict | None = None) -> dict:
     return out
 
 
+def held_out_budget(held: Path, prod: dict, extra: dict | None = None, twins: bool = True) -> dict:
+    """Error budget of the held-out comparison (docs/calibration.md "Held-out attitude"): the attitude filter
+    (dynamic mode, the attitude job's defaults + `extra` settings) on the held-out pass with a priori, true and
+    calibrated baselines and maps in every combination; truth = the injected offsets/PCO/PCV in the calibration's
+    split (truth_split), on the calibrated maps' filled bins and on the full grid. With `twins`, the same pass
+    re-simulated without multipath and without any noise (the reference attitude keeps its 2 arcsec) bounds what
+    noise and multipath leave."""
+    from worker.attitude.process import load_inputs
+    from worker.attitude.settings import AttitudeSettings
+    from worker.calibration.held_out import cut_percent, filter_errors
+
+    truth = truth_of(held)
+    doc = json.loads(prod["baselines.json"])
+    cal = {(b["from"], b["to"]): [float(x) for x in b["calibrated_m"]] for b in doc["baselines"]}
+    cmaps, tmaps, tfull, tb, tbf = {}, {}, {}, {}, {}
+    for key in cal:
+        ms, counts = {}, {}
+        for sig in ("L1", "L2"):
+            m = json.loads(prod[f"pcv_{key[0]}_{key[1]}_{sig}.json"])
+            v = np.array([[np.nan if x is None else x for x in row] for row in m["values_mm"]])
+            counts[sig], ms[sig] = np.where(np.isfinite(v), np.asarray(m["count"]), 0), m
+            cmaps[key + (sig,)] = m
+        tb[key], mt = truth_split(truth, key, m["azimuth_deg"], m["elevation_deg"], counts)
+        tbf[key], mtf = truth_split(truth, key, m["azimuth_deg"], m["elevation_deg"],
+                                    {s_: np.ones_like(c) for s_, c in counts.items()})
+        for sig in ("L1", "L2"):
+            tmaps[key + (sig,)] = {**ms[sig], "values_mm": [[None if not np.isfinite(x) else float(x) for x in r]
+                                                            for r in mt[sig]]}
+            tfull[key + (sig,)] = {**ms[sig], "values_mm": mtf[sig].tolist()}
+    sets = {"held": held}
+    if twins:
+        i = int(held.parent.name[1:])
+        from worker.gnss.time import GpsTime
+        t0 = GpsTime.from_iso("2018-01-10T03:00:00")
+        for tag, ov in (("no_multipath", {"multipath": False}),
+                        ("no_noise_no_multipath", {"multipath": False, "noise": False, "cn0_jitter_db": 0.0})):
+            sets[tag] = simulate_campaign(held.parents[1].parent / f"twin_{tag}" / held.parent.name, 1,
+                                          durations_s(i + 1)[i], seed=SEED, overrides={
+                                              "reference_sigma_arcsec": 2.0, "mean_anomaly_deg": (133.2 * i) % 360.0,
+                                              **ov}, start_gps=(t0 + i * (13 * 3600.0 + 7 * 60.0)).iso(0))[0]
+    runs = [("a_priori", {}, {}), ("calibrated_baselines", cal, {}), ("true_baselines", tb, {}),
+            ("calibrated_baselines_and_maps", cal, cmaps), ("true_baselines_and_maps_filled_bins", tb, tmaps),
+            ("true_baselines_and_maps_full_grid", tbf, tfull), ("true_baselines_calibrated_maps", tb, cmaps),
+            ("calibrated_baselines_true_maps", cal, tmaps)]
+    out = {"settings": extra or {}}
+    for sk, d in sets.items():
+        inputs = load_inputs([(f.name, f.kind, f.path) for f in input_set(d).files])
+        res = {}
+        for tag, b, m in runs if sk == "held" else [r for r in runs if r[0] in (
+                "a_priori", "calibrated_baselines_and_maps", "true_baselines_and_maps_full_grid")]:
+            res[tag] = filter_errors(inputs, AttitudeSettings(mode="dynamic", calibrated_baselines=b, pcv_maps=m,
+                                                              **(extra or {})))
+            if tag != "a_priori":
+                res[tag]["cut"] = cut_percent(res["a_priori"], res[tag])
+            print(sk, tag, {a: (res[tag][a]["bias_deg"], res[tag][a]["std_deg"]) for a in ("yaw", "pitch", "roll")},
+                  res[tag].get("cut"), flush=True)
+        out[sk] = res
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--sets", type=int, default=30)
@@ -392,6 +470,13 @@ def main() -> None:
     ap.add_argument("--no-service", action="store_true")
     ap.add_argument("--ekf", action="store_true")
     ap.add_argument("--twin", action="store_true", help="also calibrate the noiseless twin campaign")
+    ap.add_argument("--held-out-config", default="{}",
+                    help="JSON: the calibration's held_out_attitude_config (attitude job config of the held-out "
+                         "comparison), also used by --ekf and --budget")
+    ap.add_argument("--budget", action="store_true",
+                    help="error budget of the held-out comparison: true/calibrated baselines and maps, twins "
+                         "without multipath and noise (held_out_budget)")
+    ap.add_argument("--no-rerun", action="store_true", help="skip the in-process re-run (identical maps check)")
     ap.add_argument("--work", default="/tmp/gnssatt_bench_calibration")
     ap.add_argument("--scale", action="store_true",
                     help="only the service timing: --repeat jobs per worker count on one service")
@@ -420,12 +505,16 @@ def main() -> None:
                                        "reference_sigma_arcsec": 0.0}) if args.twin else None
     t_sim = time.perf_counter() - t0
     held = dirs[-1]
-    cfg = {"held_out_set": "cal" + f"{n - 1:03d}"}
+    held_cfg = json.loads(args.held_out_config)
+    cfg = {"held_out_set": "cal" + f"{n - 1:03d}", "held_out_attitude_config": held_cfg}
     prod, wall, ctx = run_inprocess(dirs, cfg, "cal", work / "jobs")
     cfg_twin = {"held_out_set": "twn" + f"{n - 1:03d}"}
     prod_twin = run_inprocess(twin, cfg_twin, "twn", work / "jobs")[0] if twin else None
-    prod_again, wall_again, _ = run_inprocess(dirs, cfg, "cal", work / "jobs_again")
-    identical = all(prod[k] == prod_again[k] for k in prod if k.startswith("pcv_") and k.endswith(".json"))
+    if args.no_rerun:
+        wall_again, identical = float("nan"), None
+    else:
+        prod_again, wall_again, _ = run_inprocess(dirs, cfg, "cal", work / "jobs_again")
+        identical = all(prod[k] == prod_again[k] for k in prod if k.startswith("pcv_") and k.endswith(".json"))
 
     truth = truth_of(dirs[0])
     doc = json.loads(prod["baselines.json"])
@@ -482,7 +571,8 @@ def main() -> None:
         "maps_identical_on_rerun": identical,
         "baselines": baselines, "maps": maps, "map_iterations": [(m["pair"], m["frequency"], m["iterations"],
                                                                    m["changes_mm"]) for m in summary["maps"]],
-        "held_out_attitude": held_att["cut"], "held_out_detail": held_att,
+        "held_out_attitude": held_att.get("cut"), "held_out_epoch_wise": held_att.get("epoch_wise", {}).get("cut"),
+        "held_out_detail": held_att,
         "residual_statistics": json.loads(prod["residual_statistics.json"]),
     }
     if args.ekf:
@@ -493,7 +583,9 @@ def main() -> None:
                 name = f"pcv_{first}_{second}_{sig}.json"
                 if name in prod:
                     pcv[(first, second, sig)] = json.loads(prod[name])
-        result["ekf_held_out"] = ekf_held_out(held, cal, pcv)
+        result["ekf_held_out"] = ekf_held_out(held, cal, pcv, held_cfg)
+    if args.budget:
+        result["held_out_budget"] = held_out_budget(held, prod, _settings_of(held_cfg))
     if not args.no_service:
         runs = []
         for w in [int(x) for x in args.workers.split(",") if x]:

@@ -42,13 +42,45 @@ class Reaper(threading.Thread):
                 return
 
 
+def preload_pipelines() -> None:
+    """Import every job type's pipeline and the modules it names in its PRELOAD tuple (science, plots), so the
+    first job a worker runs does not pay ~1 s of imports (numpy/scipy/matplotlib and the science modules) on top
+    of its own work. Run in a background thread at start: a job arriving meanwhile waits on the import lock."""
+    import importlib
+
+    from worker.jobs.registry import job_types
+
+    for name, spec in job_types().items():
+        try:
+            module = importlib.import_module(spec.pipeline.partition(":")[0])
+            for extra in getattr(module, "PRELOAD", ()):
+                importlib.import_module(extra)
+        except Exception:  # noqa: BLE001 - a broken pipeline fails its jobs, not the worker's start
+            log.warning("preloading the %s pipeline failed", name, exc_info=True)
+
+
+def _warm_up_kernels() -> None:
+    """Load (or compile, the first time on this machine) the attitude filter's numba kernels before taking jobs,
+    so the first job does not pay it (docs/attitude.md "Speed")."""
+    try:
+        from worker.attitude.kernels import warm_up as warm_up_attitude
+        from worker.estimation.ekf_kernels import warm_up as warm_up_ekf
+
+        warm_up_ekf()
+        warm_up_attitude()
+    except Exception:                       # a job would report the same error; the worker still serves others
+        log.exception("numba kernels failed to compile at start")
+
+
 def run_worker(settings: Settings, concurrency: int | None = None) -> None:
     """Run a worker until SIGINT/SIGTERM (the Huey consumer handles both)."""
     logging.basicConfig(level=settings.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     rt = build_runtime(settings)
     runner.cleanup_stale_workdirs(settings)
+    _warm_up_kernels()
     reaper = Reaper(rt)
     reaper.start()
+    threading.Thread(target=preload_pipelines, name="preload", daemon=True).start()
     workers = concurrency or settings.worker_concurrency
     log.info("worker %s: %d job slot(s), database %s, queue %s", rt.worker_name, workers,
              rt.engine.url.render_as_string(hide_password=True), settings.queue_url or "huey-sqlite")

@@ -209,7 +209,8 @@ def execute_job(rt: Runtime, job_id: str) -> str | None:
     from worker.fanout import gather
 
     ctx = JobContext(job_id=job_id, attempt=attempt, sets=[], workdir=workdir,
-                     _store_blob=lambda p: rt.blobs.put_file(p), _flush_progress=flush)
+                     _store_blob=lambda p: rt.blobs.put_file(p), _flush_progress=flush,
+                     _store_hashed_blob=lambda p, sha: rt.blobs.put_file(p, sha))
     ctx._map = lambda function, payloads, span, stage, offset: gather(rt, ctx, function, payloads, span, stage,
                                                                       offset)
     ctx._load_pcv_map = lambda map_id: load_pcv_map(rt, job_id, map_id)

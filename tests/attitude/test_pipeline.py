@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 
+import numpy as np
 import pytest
 from pydantic import ValidationError
 
@@ -74,3 +75,31 @@ def test_pipeline_cancellation_happens_at_progress(tmp_path, clean_pass):
     ctx.cancel_requested.set()
     with pytest.raises(JobCancelled):
         run(ctx, AttitudeConfig())
+
+
+def test_product_tables_are_the_csv_products_as_columns(clean_pass):
+    """The plots are drawn from product_tables (no re-parsing of residuals.csv): same columns, rows, names and
+    times as the CSV texts read back, numbers equal to the texts' rounding, empty cells where NaN."""
+    from tests.attitude.conftest import set_files
+    from worker.attitude.process import load_inputs, process
+    from worker.attitude.products import all_products, product_tables
+    from worker.plots.common import gps_time, read_csv_table
+
+    sol = process(load_inputs(set_files(clean_pass)), AttitudeConfig(mode="kinematic").to_settings())
+    texts, tables = all_products(sol), product_tables(sol)
+    assert set(tables) == {"attitude.csv", "baselines.csv", "residuals.csv"}
+    for name, table in tables.items():
+        csv = read_csv_table(texts[name])
+        assert list(table) == list(csv), name
+        assert len(csv["time_gps"]) > 100
+        assert np.array_equal(gps_time(table), gps_time(csv)), name
+        for col, values in table.items():
+            if col == "time_gps":
+                continue
+            if csv[col].dtype.kind == "f":
+                assert values.dtype.kind == "f", (name, col)
+                assert np.array_equal(np.isnan(values), np.isnan(csv[col])), (name, col)
+                ok = np.isfinite(values)
+                assert np.allclose(values[ok], csv[col][ok], rtol=0, atol=0.051), (name, col)
+            else:
+                assert values.tolist() == csv[col].tolist(), (name, col)

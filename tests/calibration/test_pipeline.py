@@ -165,3 +165,54 @@ def test_config_refuses_a_grid_that_does_not_divide():
         CalibrationConfig(azimuth_step_deg=7.0)
     with pytest.raises(ValueError):
         CalibrationConfig(elevation_step_deg=0.7)
+
+
+def test_held_out_comparison_is_the_attitude_filter_with_the_published_calibration(tmp_path, pcv_campaign):
+    """held_out_attitude.json comes from the attitude filter (dynamic mode, the attitude job's defaults) on the
+    held-out set, a priori vs calibrated baselines + maps, and is exactly what an attitude job with the published
+    baselines.json and maps (pcv_map_ids) gives; on this noiseless campaign the calibration removes the
+    attitude bias that the Table 3 offsets and the PCV put into the a priori solution."""
+    from worker.attitude.process import load_inputs
+    from worker.calibration.held_out import filter_errors
+    from worker.jobs.attitude import AttitudeConfig, maps_for_settings
+
+    sets = [input_set(d) for d in pcv_campaign]
+    ctx = _ctx(tmp_path / "job", sets)
+    run(ctx, CalibrationConfig(**FAST_CFG, held_out_set=sets[-1].id))
+    prod = _products(ctx)
+    doc = json.loads(prod["held_out_attitude.json"])
+    assert doc["method"].startswith("attitude filter (dynamic mode")
+    w0, w1 = doc["without_calibration"], doc["with_calibration"]
+    assert w0["fixed_epochs"] > 400 and w1["fixed_epochs"] > 300 and w0["wrong_fix_epochs"] == 0
+    b0 = np.linalg.norm([w0[a]["bias_deg"] for a in ("yaw", "pitch", "roll")])
+    b1 = np.linalg.norm([w1[a]["bias_deg"] for a in ("yaw", "pitch", "roll")])
+    print("bias vector deg", b0, "->", b1, doc["cut"])
+    assert b0 > 0.2          # the a priori baselines (Table 3 offsets, PCO, PCV) tilt the attitude
+    assert b1 < 0.2 * b0     # the calibration removes >= 80 % of it
+    assert set(doc["cut"]) == {"yaw", "pitch", "roll"}
+    assert "z_yaw" in doc["epoch_wise"]["cut"]     # the epoch-wise (QUEST) block is kept as secondary
+    report = prod["report.html"] if isinstance(prod["report.html"], str) else prod["report.html"].decode()
+    assert "Held-out attitude (attitude filter" in report
+    # an attitude job on the held-out set with the published products gives the same figures
+    maps = [(name, json.loads(prod[name])) for name in sorted(prod) if name.startswith("pcv_") and
+            name.endswith(".json")]
+    inputs = load_inputs([(f.name, f.kind, f.path) for f in sets[-1].files])
+    settings = AttitudeConfig(calibrated_baselines=json.loads(prod["baselines.json"])).to_settings()
+    settings.pcv_maps = maps_for_settings(maps, list(inputs.platform.baselines))
+    job = filter_errors(inputs, settings)
+    for a in ("yaw", "pitch", "roll"):
+        assert job[a]["bias_deg"] == w1[a]["bias_deg"] and job[a]["std_deg"] == w1[a]["std_deg"], (a, job, w1)
+    assert job["fixed_epochs"] == w1["fixed_epochs"]
+
+
+def test_held_out_attitude_config_is_an_attitude_job_config():
+    """held_out_attitude_config is validated as an attitude job config; the calibration's own baselines and maps
+    cannot be overridden there."""
+    from pydantic import ValidationError
+
+    assert CalibrationConfig(held_out_attitude_config={"mode": "kinematic"}).held_out_attitude_config["mode"] == \
+        "kinematic"
+    for bad in ({"calibrated_baselines": {}}, {"pcv_map_ids": ["x"]}, {"no_such_setting": 1}, {"mode": "other"}):
+        with pytest.raises(ValidationError) as exc:
+            CalibrationConfig(held_out_attitude_config=bad)
+        assert "held_out_attitude_config" in str(exc.value), bad

@@ -44,3 +44,34 @@ def test_same_table_as_dictreader(name):
             assert np.array_equal(got[k], ref[k], equal_nan=True), k
         else:
             assert got[k].tolist() == ref[k].tolist(), k
+
+
+@pytest.mark.parametrize("values", [["b", "a", "b", "c", "a"], ["GPS-2>GPS-0", "GPS-2>GPS-1", "G", "GPS-2>GPS-0"],
+                                    ["é", "e", "", "é", ""], [], ["x"]])
+def test_categories_are_first_appearance_order_and_codes(values):
+    from worker.plots.common import categories
+
+    names, codes = categories(np.array(values, dtype=str))
+    assert names == list(dict.fromkeys(values))
+    assert [names[c] for c in codes] == values
+
+
+def test_first_per_epoch_and_key_keeps_the_first_row_of_each_pair():
+    from worker.plots.common import first_per_epoch_and_key
+
+    t = np.array(["2018-01-01T00:00:00", "2018-01-01T00:00:00", "2018-01-01T00:00:00", "2018-01-01T00:00:01",
+                  "2018-01-01T00:00:01", "2018-01-01T00:00:00"], dtype="datetime64[ms]")
+    codes = np.array([0, 1, 0, 1, 1, 2])
+    assert first_per_epoch_and_key(t, codes, np.arange(6)).tolist() == [0, 1, 3, 5]
+    assert first_per_epoch_and_key(t, codes, np.array([2, 3, 4])).tolist() == [2, 3]
+
+
+def test_category_memo_reuses_the_codes_of_the_same_array_only_inside_the_block():
+    from worker.plots.common import categories, category_memo
+
+    a, b = np.array(["x", "y", "x"]), np.array(["x", "y", "x"])
+    with category_memo():
+        first = categories(a)
+        assert categories(a) is first                      # same array object: computed once
+        assert categories(b) is not first and categories(b)[0] == first[0]
+    assert categories(a) is not first and categories(a)[1].tolist() == [0, 1, 0]

@@ -92,8 +92,13 @@ def round_newcomers(x: np.ndarray, P: np.ndarray, new_idx: np.ndarray, ref_idx: 
     D = np.zeros((new_idx.size, x.size))
     D[np.arange(new_idx.size), new_idx] = 1.0
     D[:, ref_idx] -= 1.0
-    d = D @ x
-    var = np.einsum("ij,ij->i", D @ P, D)
+    # D x and diag(D P D^T) from the two non-zeros of each row (D has +1 at new, -1 at ref != new): the dense
+    # products D @ x, D @ P and the row sums add exact zeros to a single rounded difference, so these are the
+    # same numbers without the (n_new, n) x (n, n) product
+    d = x[new_idx] - x[ref_idx]
+    DP_new = P[new_idx, new_idx] - P[ref_idx, new_idx]           # (D P)[i, new_i]
+    DP_ref = P[new_idx, ref_idx] - P[ref_idx, ref_idx]           # (D P)[i, ref]
+    var = DP_new - DP_ref
     r = np.round(d)
     ok = (np.sqrt(np.maximum(var, 0.0)) < max_sigma_cyc) & (np.abs(d - r) < max_frac_cyc)
     return D[ok], r[ok], ok

@@ -32,12 +32,14 @@ from worker.attitude.ambiguity import (
     first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
 )
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
-from worker.attitude.fastops import clip as _clip, count_pairs as _count_pairs, median1d as _median1d
-from worker.attitude.fastops import nanmedian1 as _nanmedian1, nz as _nz
+from worker.attitude.fastops import clip as _clip, nz as _nz
+from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, count_pairs_masked,
+                                     masked_median_axis1, white_noise_update)
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from worker.attitude.settings import AttitudeSettings, cn0_mask_of
 from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
-from worker.estimation.ekf import joseph_update_sparse, rotation_rk4_stm
+from worker.estimation.ekf import joseph_update_sparse
+from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 from worker.gnss.constants import C_M_S
 
 __all__ = ["FilterResult", "run_filter", "REASONS"]
@@ -82,6 +84,10 @@ class FilterResult:
     # the noise model as estimated at the end: white sigma per signal (at 45 dB-Hz), C/N0 growth exponents, the
     # adaptive multipath scale (summary.json "noise_model")
     noise: dict = None
+    # dynamic mode with settings.smoother: per epoch the (omega, baselines) sub-state after propagation (prior) and
+    # at the output (posterior), the transition matrix from the previous epoch and the segment starts (resets),
+    # for the fixed-interval smoother (worker.attitude.smoother)
+    smoother_data: dict = None
 
 
 class _State:
@@ -187,7 +193,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     n_bl = len(baselines)
     dynamic = s.mode == "dynamic"
     st = _State(n_bl, n_sat, n_sig, dynamic, s.separate_phase_clock)
-    lam = pobs.wavelength_m
+    lam = np.ascontiguousarray(pobs.wavelength_m, dtype=np.float64)
     t_s = (pobs.time - pobs.time[0]) if n_ep else np.zeros(0)
     t_s = np.asarray(t_s, dtype=np.float64)
     lengths = np.linalg.norm(body_baselines_m, axis=1)
@@ -226,6 +232,14 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     out_n = np.zeros((n_ep, n_bl), np.int64)
     out_ratio = np.full((n_ep, n_bl), np.nan)
     out_w = np.full((n_ep, 3), np.nan)
+    n_sub = 3 + 3 * n_bl
+    record = dynamic and s.smoother
+    if record:
+        sm_xp, sm_xf = np.full((n_ep, n_sub), np.nan), np.full((n_ep, n_sub), np.nan)
+        sm_Pp, sm_Pf = np.full((n_ep, n_sub, n_sub), np.nan), np.full((n_ep, n_sub, n_sub), np.nan)
+        sm_Phi = np.full((n_ep, n_sub, n_sub), np.nan)
+        sm_start = np.ones(n_ep, bool)
+        sm_corr = np.zeros(n_ep)          # information-weighted share of time-correlated variance in the phases
     res_blocks: list[tuple] = []          # per epoch: see _residual_records
     events: list[dict] = []
     first_fix = np.full(n_bl, -1)
@@ -281,15 +295,17 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         if adapter is not None:
             adapter.reset()
         ev(k, "fix_reset", j, detail=f"{why}: ambiguities restart")
+        if record:
+            sm_start[k] = True
 
     def ev(k, kind, j=None, sat=None, sig=None, detail=""):
         events.append({"epoch": k, "event": kind, "baseline": j, "sat": sat, "signal": sig, "detail": detail})
 
     blk = None                                              # SdBlock of the current epochs
-    sub_w_b = np.concatenate([np.arange(3), all_b_idx])      # omega and baselines (dynamic propagation)
-    eye_sub = np.eye(sub_w_b.size)
-    ix_sub = np.ix_(sub_w_b, sub_w_b)
+    w_idx3 = np.arange(3)
     ix_b = np.ix_(all_b_idx, all_b_idx)
+    sub_w_b = np.concatenate([w_idx3, all_b_idx])            # omega and baselines (the smoother's sub-state)
+    ix_sub = np.ix_(sub_w_b, sub_w_b)
     for k in range(n_ep):
         st.epoch = k
         if progress is not None and k % 100 == 0:
@@ -301,30 +317,18 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             if dynamic:
                 w = st.x[0:3]
                 bb = st.x[all_b_idx].reshape(n_bl, 3)
-                b1, Pbb, Pbw = rotation_rk4_stm(bb, w, dt, s.rk4_step_s)
+                b1, Pbb, Pbw = rotation_rk4_stm_kernel(bb, w, dt, s.rk4_step_s)
                 st.x[all_b_idx] = b1.ravel()
-                sub = sub_w_b
-                Phi = eye_sub.copy()
-                for j in range(n_bl):
-                    r = 3 + 3 * j
-                    Phi[r:r + 3, r:r + 3] = Pbb[j]
-                    Phi[r:r + 3, 0:3] = Pbw[j]
-                st.P[sub, :] = Phi @ st.P[sub, :]
-                st.P[:, sub] = st.P[:, sub] @ Phi.T
-                # discrete process noise of the omega random walk and its effect on b (integrated over dt)
+                # P <- Phi P Phi^T + Q: the omega random walk's discrete noise and its effect on b over dt
                 Qw = adapter.q_rate() if adapter is not None else np.eye(3) * q_w       # (3, 3) rad^2/s^3
-                Q = np.zeros((sub.size, sub.size))
-                Q[0:3, 0:3] = Qw * dt
-                Bxs = [-_skew(b1[j]) for j in range(n_bl)]
-                for j in range(n_bl):
-                    r = 3 + 3 * j
-                    Bx = Bxs[j]
-                    Q[r:r + 3, 0:3] = Bx @ Qw * dt ** 2 / 2
-                    Q[0:3, r:r + 3] = Q[r:r + 3, 0:3].T
-                    for i in range(n_bl):
-                        ri = 3 + 3 * i
-                        Q[r:r + 3, ri:ri + 3] = Bx @ Qw @ Bxs[i].T * dt ** 3 / 3
-                st.P[ix_sub] += Q
+                propagate_rotation_cov(st.P, w_idx3, b_idx, Pbb, Pbw, np.ascontiguousarray(Qw, np.float64), b1,
+                                       float(dt))
+                if record:
+                    sm_Phi[k] = np.eye(n_sub)
+                    for j in range(n_bl):
+                        sm_Phi[k, 3 + 3 * j:6 + 3 * j, 3 + 3 * j:6 + 3 * j] = Pbb
+                        sm_Phi[k, 3 + 3 * j:6 + 3 * j, 0:3] = Pbw[j]
+                    sm_xp[k], sm_Pp[k], sm_start[k] = st.x[sub_w_b], st.P[ix_sub], False
             else:
                 st.P[all_b_idx, all_b_idx] += q_b * dt
         # white-noise clocks: reset every epoch
@@ -367,8 +371,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # epoch clock estimate from code (first signal): c dt0 = median(SD_code + u.b) / (1 - rdot/c)
         b_pred = st.x[all_b_idx].reshape(n_bl, 3)
         ub = b_pred @ u.T                                                   # (n_bl, n_sat)
-        c0 = np.where(use_c[:, :, 0], (sdc[:, :, 0] + ub) / cfac[None, :], np.nan)
-        clk0_raw = _nanmedian1(c0) if n_sat else np.full(n_bl, np.nan)
+        c0 = (sdc[:, :, 0] + ub) / cfac[None, :]
+        clk0_raw = masked_median_axis1(c0[:, :, None], use_c[:, :, :1])[:, 0] if n_sat else np.full(n_bl, np.nan)
         have0 = np.isfinite(clk0_raw)
         # no code this epoch: the last estimate (the phase clocks absorb the drift since)
         # predicted from the last estimate and the differential drift: free-running clocks drift by up to ~10 us/s
@@ -402,8 +406,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             td_p = sdp_c - prev_sdp - dgeo[:, :, None]
             td_c_ok = np.isfinite(td_c) & use_c
             td_p_ok = np.isfinite(td_p) & use_p
-            mc = _nanmedian1(np.where(td_c_ok, td_c, np.nan))                 # (n_bl, n_sig)
-            mp = _nanmedian1(np.where(td_p_ok, td_p, np.nan))
+            mc = masked_median_axis1(td_c, td_c_ok)                           # (n_bl, n_sig)
+            mp = masked_median_axis1(td_p, td_p_ok)
             # a common phase jump without a code jump: a receiver clock jump not applied to phase -> integer shift
             common = _nz(mp - mc)
             for j, f in zip(*np.nonzero(np.abs(common) > 1000.0)):
@@ -419,38 +423,15 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                     # exponent gamma of the C/N0 growth (variance ~ factor^gamma) per observable and signal: slope
                     # of ln|TD| against ln(factor) / 2 (E ln|x| = ln sigma + const for Gaussian x), pooled
                     # moments over NOISE_EPOCHS; a receiver whose noise does not grow as C/N0 falls gets gamma ~ 0
-                    for f in range(n_sig):
-                        for kk, td, okk, mref, big in ((0, td_c, td_c_ok, mc, 5.0), (1, td_p, td_p_ok, mp, lam[f])):
-                            sel = okk[..., f]
-                            r = np.abs((td[..., f] - _nz(mref[:, f])[:, None])[sel])
-                            x = lw[..., f][sel]
-                            keep = (r < big) & (r > 0)
-                            if keep.sum() >= 3:
-                                x, y = x[keep], np.log(r[keep])
-                                a = 1.0 / min(gam_n[kk, f] + 1.0, NOISE_EPOCHS)
-                                nx = x.size            # means as sum / size (what ndarray.mean computes)
-                                mom[kk, f] += a * (np.array([x.sum() / nx, y.sum() / nx, (x * x).sum() / nx,
-                                                             (x * y).sum() / nx]) - mom[kk, f])
-                                gam_n[kk, f] += 1
-                                vx = mom[kk, f, 2] - mom[kk, f, 0] ** 2
-                                if gam_n[kk, f] >= NOISE_MIN_EPOCHS and vx > 0.05:
-                                    gamma[kk, f] = _clip(2.0 * (mom[kk, f, 3] - mom[kk, f, 0] * mom[kk, f, 1]) / vx,
-                                                           0.0, 1.5)
+                    # (worker.attitude.kernels: the samples, then the moments and gamma, in place)
+                    xs, rs, g_off = cn0_growth_samples(td_c, td_p, td_c_ok, td_p_ok, mc, mp, lw, lam)
+                    cn0_growth_update(xs, np.log(rs), g_off, mom, gam_n, gamma, NOISE_EPOCHS, NOISE_MIN_EPOCHS,
+                                      0.05, POW2)
                 wfac_c = np.exp(gamma[0][None, None, :] * lw)
                 wfac_p = np.exp(gamma[1][None, None, :] * lw)
-                dc_all = (td_c - _nz(mc)[:, None, :]) / np.sqrt(wfac_c)
-                dp_all = (td_p - _nz(mp)[:, None, :]) / np.sqrt(wfac_p)
-                for f in range(n_sig):
-                    dc = dc_all[..., f][td_c_ok[..., f]]
-                    dp = dp_all[..., f][td_p_ok[..., f]]
-                    if dp.size >= 3 and dc.size >= 3:
-                        a = 1.0 / min(est_n[f] + 1.0, NOISE_EPOCHS)
-                        # MAD -> sigma of a TD = sqrt(2) sigma of one SD (white noise)
-                        vp = (_median1d(np.abs(dp)) / 0.6745) ** 2 / 2.0
-                        vc = (_median1d(np.abs(dc)) / 0.6745) ** 2 / 2.0
-                        est_var_p[f] += a * (vp - est_var_p[f])
-                        est_var_c[f] += a * (vc - est_var_c[f])
-                        est_n[f] += 1
+                # MAD of the normalised TDs -> sigma of a TD = sqrt(2) sigma of one SD (white noise), in place
+                white_noise_update(td_c, td_p, td_c_ok, td_p_ok, mc, mp, wfac_c, wfac_p, est_var_c, est_var_p, est_n,
+                                   NOISE_EPOCHS, POW2)
             bad_tc = td_c_ok & (np.abs(td_c - _nz(mc)[:, None, :]) > s.td_code_m)
             # every phase with a state is checked, used or not: a slip while rejected (C/N0, mask) must not
             # survive into the epochs where it is used again
@@ -539,6 +520,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                                        _mp_var(th_p, *s.sigma_multipath_phase_m)])
                 v_white = var.copy()
                 var += v_mp * (mp_infl * mp_scale)
+                if record and mp_n:
+                    w_p = 1.0 / var[mc_n:]
+                    sm_corr[k] = float(np.sum(v_mp[mc_n:] * (mp_infl * mp_scale) * w_p * w_p) / np.sum(w_p))
             ok_cols = np.where(cols >= 0, cols, 0)
             hx = np.einsum("mk,mk->m", np.where(cols >= 0, coef, 0.0), st.x[ok_cols])
             innov = z - hx
@@ -571,8 +555,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         if mp_n:
             used_amb = cols[mc_n:, 4]
             afix = st.amb_fixed[used_amb - st.n_fixed_part]
-            n_used = _count_pairs(jp, sp, n_bl, n_sat)
-            n_fixed_used = _count_pairs(jp[afix], sp[afix], n_bl, n_sat)
+            n_used = count_pairs_masked(jp, sp, np.ones(jp.size, bool), n_bl, n_sat)
+            n_fixed_used = count_pairs_masked(jp, sp, afix, n_bl, n_sat)
         joint_ar = {}          # ambiguity_search "constrained": one MC-LAMBDA first fix of all baselines together
         if s.ambiguity_search == "constrained" and n_bl >= 2 and mp_n and not st.amb_fixed.any():
             gb = {j: first_fix_groups(cols[mc_n:, 4][jp == j], fp[jp == j], el_loc[sp[jp == j]], n_sig)
@@ -593,8 +577,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 continue
             el_j = el_loc[sp[sel_j]]
             sig_j = fp[sel_j]
-            has_group = [bool(np.any(st.amb_fixed[(st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f)]))
-                         for f in range(n_sig)]
+            has_group = np.zeros((n_bl, n_sig), bool)              # signals of baseline j with a fixed ambiguity
+            has_group[st.amb_key[st.amb_fixed, 0], st.amb_key[st.amb_fixed, 2]] = True
+            has_group = has_group[j].tolist()
             if not any(has_group):
                 groups = first_fix_groups(idx_j, sig_j, el_j, n_sig)
                 if not groups or sum(g.size - 1 for g, _ in groups) < s.ar_min_dd:
@@ -640,6 +625,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                         st.P[:, 0:3] = 0.0
                         st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
                         ev(k, "omega_reset", j, detail=f"the fix turned the baseline by {turn_deg:.2f} deg")
+                        if record:
+                            sm_start[k] = True
                         if adapter is not None:
                             adapter.reset()
                     for g, _ in outcome.groups or groups:
@@ -701,12 +688,13 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         pending_reset.clear()
         # recount fixed after AR
         had_fix = ever_fixed
-        ever_fixed = np.array([bool(np.any(st.amb_fixed[st.amb_key[:, 0] == j])) for j in range(n_bl)])
+        ever_fixed = np.zeros(n_bl, bool)
+        ever_fixed[st.amb_key[st.amb_fixed, 0]] = True
         for j in np.flatnonzero(had_fix & ~ever_fixed):
             ev(k, "fix_lost", j, detail="no fixed ambiguity left (slips, gaps or setting satellites)")
         if mp_n:
             afix = st.amb_fixed[cols[mc_n:, 4] - st.n_fixed_part]
-            n_fixed_used = _count_pairs(jp[afix], sp[afix], n_bl, n_sat)
+            n_fixed_used = count_pairs_masked(jp, sp, afix, n_bl, n_sat)
         # ---------------- outputs ----------------
         okb = pa & (n_used >= 3)
         out_ok[k] = okb
@@ -717,6 +705,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         out_n[k] = n_used
         if dynamic:
             out_w[k] = st.x[0:3]
+        if record:
+            sm_xf[k], sm_Pf[k] = st.x[sub_w_b], st.P[ix_sub]
         if attitude_fn is not None and np.all(fixed_now) and k % (1 if pcv_tables else 10) == 0:
             R_mask = attitude_fn(out_b[k], fixed_now)
             R_mask_t = t
@@ -758,8 +748,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
              "cn0_gamma_phase": {sg: float(gamma[1, f]) for f, sg in enumerate(pobs.signals)},
              "multipath_scale": float(mp_scale) if mp_model else None,
              "multipath_correlation_factor": float(mp_infl)}
+    smoother_data = {"x_prior": sm_xp, "P_prior": sm_Pp, "x_post": sm_xf, "P_post": sm_Pf, "Phi": sm_Phi,
+                     "start": sm_start, "corr_share": sm_corr} if record else None
     return FilterResult(out_ok, out_b, out_P, out_fixed, out_n, out_ratio, out_w, residuals, events,
-                        first_fix, first_data, fix_log, noise)
+                        first_fix, first_data, fix_log, noise, smoother_data)
 
 
 def _pcv_epoch(tables, los_b, R_ant_first, n_sig, fixed):
@@ -809,6 +801,3 @@ def _pseudo_update(st: _State, D: np.ndarray, a_fix: np.ndarray) -> None:
     if good:
         st.x, st.P = x1, P1
 
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])

@@ -14,7 +14,7 @@ from worker.attitude.filter import FilterResult, run_filter
 from worker.attitude.geometry import EpochGeometry, compute_geometry, platform_state_from_sp3
 from worker.attitude.observations import PlatformObs, build_platform_obs
 from worker.attitude.settings import AttitudeSettings, effective_signals, signal_system
-from worker.attitude.solution import attitude_from_baselines, baseline_az_el, euler_and_sigma
+from worker.attitude.solution import attitude_from_baselines, attitude_quaternion, baseline_az_el, euler_and_sigma
 from worker.gnss import rotations as rot
 from worker.gnss.frames import (R_enu_from_ecef, R_gcrf_from_ecef, R_ned_from_ecef, R_orbital_from_ecef,
                                 ecef_to_geodetic)
@@ -81,19 +81,21 @@ def load_inputs(files: list[tuple[str, str, Path]]) -> AttitudeInputs:
         raise InputProblem("Too few antennas", f"{name}: attitude needs at least two antennas (one baseline)",
                            file=name)
     obs_files = {f[0]: f[2] for f in files if f[1] == "rinex_obs"}
-    from worker.gnss.io.rinex_obs import summarize_rinex_obs
-    markers = {}
-    for fname, fpath in obs_files.items():
+    parsed, failed, markers = {}, {}, {}
+    for fname, fpath in obs_files.items():      # each file parsed once: the marker names come from the headers
         try:
-            markers[fname] = summarize_rinex_obs(fpath, name=fname).get("marker_name")
-        except Exception:  # noqa: BLE001 - a bad file is reported by the full read below
-            markers[fname] = None
+            parsed[fname] = read_rinex_obs(fpath, name=fname)
+            markers[fname] = parsed[fname].header.marker_name
+        except Exception as exc:  # noqa: BLE001 - a bad file is reported when an antenna needs it, below
+            failed[fname], markers[fname] = exc, None
     mapping = match_observation_files(platform, markers, name=name)
     needed = {a for bl in platform.baselines for a in bl}
     obs = {}
     for ant in platform.antennas:
         if ant in needed:
-            obs[ant] = read_rinex_obs(obs_files[mapping[ant]], name=mapping[ant])
+            if mapping[ant] in failed:
+                raise failed[mapping[ant]]
+            obs[ant] = parsed[mapping[ant]]
     inputs = AttitudeInputs(platform, obs, {a: mapping[a] for a in obs})
     for fname, kind, fpath in files:
         if kind == "rinex_nav" and inputs.nav is None:
@@ -240,12 +242,14 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     attitude_fn = None
     if len(baselines) >= 2:
         def attitude_fn(b, fixed):
-            q, _ = attitude_from_baselines(b[None], np.zeros((1, 3 * len(b), 3 * len(b))), body,
-                                           settings.attitude_method)
+            q, _ = attitude_quaternion(b[None], body, settings.attitude_method)
             return rot.quat_to_dcm(q[0])
     prog(0.15, "filtering")
     fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
                     progress=lambda f: prog(0.15 + 0.75 * f))
+    if fr.smoother_data is not None:
+        from worker.attitude.smoother import smooth_filter_result
+        smooth_filter_result(fr)
     prog(0.92, "attitude")
     sol = AttitudeSolution(settings, inputs, pobs, geom, fr, baselines, body)
     # ---- baselines table ----

@@ -14,7 +14,8 @@ import numpy as np
 
 from worker.attitude.filter import REASONS
 
-__all__ = ["attitude_csv", "baselines_csv", "residuals_csv", "events_csv", "aem_kvn", "nmea_hdt", "all_products"]
+__all__ = ["attitude_csv", "baselines_csv", "residuals_csv", "events_csv", "aem_kvn", "nmea_hdt", "all_products",
+           "product_tables"]
 
 
 def _time_cols(t) -> tuple[list[str], np.ndarray, np.ndarray]:
@@ -26,6 +27,15 @@ def _time_cols(t) -> tuple[list[str], np.ndarray, np.ndarray]:
 def _fmt(arr: np.ndarray, fmt: str) -> np.ndarray:
     """fmt % value for each value, as a str array (Python's %-formatting, as np.char.mod, ~10x faster)."""
     return np.array(list(map(fmt.__mod__, np.asarray(arr).tolist())), dtype=object)
+
+
+def _fmt_repeated(arr: np.ndarray, fmt: str) -> np.ndarray:
+    """Like _fmt for a column with few distinct values (angles per satellite and epoch repeated over signals and
+    observables, C/N0 in 0.25 dB-Hz steps): each distinct value (bitwise, so -0.0 stays apart from 0.0) is
+    formatted once. Same text as _fmt."""
+    arr = np.ascontiguousarray(arr, dtype=np.float64)
+    bits, inverse = np.unique(arr.view(np.int64), return_inverse=True)
+    return _fmt(bits.view(np.float64), fmt)[inverse.ravel()]
 
 
 def attitude_csv(sol) -> str | None:
@@ -85,18 +95,23 @@ def residuals_csv(sol) -> str:
     kinds = np.array(["code", "phase"])
     ep = r["epoch"]
 
-    def num(a, f):
+    def num(a, f, repeated=False):
         out = np.full(a.shape, "", dtype=object)
         ok = np.isfinite(a)
-        out[ok] = _fmt(a[ok], f)
+        out[ok] = (_fmt_repeated if repeated else _fmt)(a[ok], f)
         return out
 
-    # per-epoch columns are formatted once per epoch and indexed
-    cols = [iso_all.astype(object)[ep], _fmt(sow_all, "%.3f")[ep], names.astype(object)[r["bl"]],
-            sats.astype(object)[r["sat"]], sigs.astype(object)[r["sig"]], kinds.astype(object)[r["kind"]],
-            num(r["residual_m"], "%.5f"), num(r["az_ant_deg"], "%.2f"), num(r["el_ant_deg"], "%.2f"),
-            num(r["cn0_dbhz"], "%.1f"), np.array(["0", "1"], dtype=object)[(r["reason"] == 0).astype(int)],
-            reasons.astype(object)[r["reason"]]]
+    def pairs(a, b):
+        """'a,b' for every pair of two small label lists, flat index i * len(b) + j."""
+        return np.array([f"{x},{y}" for x in a.tolist() for y in b.tolist()], dtype=object)
+
+    # columns that come from a few labels (epoch times, baseline + satellite, signal + observable,
+    # used + reason) are joined once per combination and indexed: fewer cells to join per row
+    used_reason = np.array([f"{int(i == 0)},{reasons[i]}" for i in range(len(reasons))], dtype=object)
+    cols = [(iso_all.astype(object) + "," + _fmt(sow_all, "%.3f"))[ep],
+            pairs(names, sats)[r["bl"] * len(sats) + r["sat"]], pairs(sigs, kinds)[r["sig"] * 2 + r["kind"]],
+            num(r["residual_m"], "%.5f"), num(r["az_ant_deg"], "%.2f", True), num(r["el_ant_deg"], "%.2f", True),
+            num(r["cn0_dbhz"], "%.1f", True), used_reason[r["reason"]]]
     return _join(header, cols)
 
 
@@ -196,4 +211,53 @@ def all_products(sol) -> dict[str, str | dict]:
         aem = aem_kvn(sol)
         if aem is not None:
             out["attitude.aem"] = aem
+    return out
+
+
+def _epoch_times(sol) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(time_gps as datetime64[ms], gps_week, gps_sow) of every epoch of the pass (the CSVs' time columns)."""
+    week, sow = sol.pobs.time.week_sow()
+    iso = sol.pobs.time.iso(3)
+    t = np.array(iso if isinstance(iso, list) else [iso], dtype="datetime64[ms]")
+    return t, np.asarray(week, float), np.asarray(sow, float)
+
+
+def product_tables(sol) -> dict[str, dict[str, np.ndarray]]:
+    """attitude.csv, baselines.csv and residuals.csv as column arrays (worker.plots.common.Table) straight from
+    the solution, for the plots: same column names and rows as the CSV texts, numbers as float64 (unrounded; NaN
+    where the CSV cell is empty), names as str arrays, time_gps as datetime64[ms] (GPS time, as written).
+    What read_csv_table would give back from the texts, without formatting and re-parsing ~6e5 residual rows."""
+    t_ep, week_ep, sow_ep = _epoch_times(sol)
+    out: dict[str, dict[str, np.ndarray]] = {}
+    if sol.att_epochs is not None:
+        ep = sol.att_epochs
+        tab = {"time_gps": t_ep[ep], "gps_week": week_ep[ep], "gps_sow": sow_ep[ep]}
+        for prefix, q in (("qe", sol.q_body_from_ecef), ("qi", sol.q_body_from_gcrf)):
+            tab.update({f"{prefix}_{c}": np.asarray(q[:, i], float) for i, c in enumerate("wxyz")})
+        for i, a in enumerate(("yaw", "pitch", "roll")):
+            tab[f"{a}_deg"] = np.asarray(sol.euler_deg[:, i], float)
+        for i, a in enumerate(("yaw", "pitch", "roll")):
+            tab[f"sigma_{a}_deg"] = np.asarray(sol.sigma_euler_deg[:, i], float)
+        tab["fixed"] = sol.att_fixed.astype(float)
+        tab["n_sats"] = np.asarray(sol.att_n_sats, float)
+        out["attitude.csv"] = tab
+    bt = sol.baseline_table
+    ep = bt["epoch"]
+    names = np.array([f"{a}>{b}" for a, b in sol.baselines] or ["-"])
+    tab = {"time_gps": t_ep[ep], "gps_week": week_ep[ep], "gps_sow": sow_ep[ep], "baseline": names[bt["bl"]]}
+    tab.update({c: np.asarray(bt["b"][:, i], float) for i, c in enumerate(("x_ecef_m", "y_ecef_m", "z_ecef_m"))})
+    for c in ("length_m", "azimuth_deg", "elevation_deg", "sigma_azimuth_deg", "sigma_elevation_deg",
+              "sigma_length_m", "fixed", "n_sats"):
+        tab[c] = np.asarray(bt[c], float)
+    out["baselines.csv"] = tab
+    r = sol.fr.residuals
+    ep = r["epoch"]
+    reasons = np.array([REASONS[i] for i in range(len(REASONS))])
+    out["residuals.csv"] = {
+        "time_gps": t_ep[ep], "gps_sow": sow_ep[ep],
+        "baseline": np.array([f"{a}>{b}" for a, b in sol.baselines] or ["-"])[r["bl"]],
+        "sat": np.asarray(sol.pobs.sats, str)[r["sat"]], "signal": np.asarray(sol.pobs.signals, str)[r["sig"]],
+        "observable": np.array(["code", "phase"])[r["kind"]],
+        **{c: np.asarray(r[c], float) for c in ("residual_m", "az_ant_deg", "el_ant_deg", "cn0_dbhz")},
+        "used": (r["reason"] == 0).astype(float), "reason": reasons[r["reason"]]}
     return out

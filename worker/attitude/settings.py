@@ -134,6 +134,10 @@ class AttitudeSettings:
     adaptive_omega_gain: float = 4.0            # scale of the estimated excess noise
     adaptive_omega_gate: float = 0.5            # chi-square quantile the window's normalised corrections must exceed
     tau_omega_s: float = 1.0
+    smoother: bool = False                      # dynamic mode: fixed-interval (Rauch-Tung-Striebel) smoothing of the
+                                                # angular velocity and baselines after the forward pass
+                                                # (worker/attitude/smoother.py); off = the forward filter's output
+                                                # post-processing only: each epoch uses the later data
     sigma0_ambiguity_cyc: float = 500.0
     sigma_baseline_kinematic_m: float = 1.0     # kinematic mode: per baseline component per tau (seed 000 sec. 4.1)
     tau_baseline_s: float = 1.0

@@ -17,7 +17,7 @@ import numpy as np
 
 from worker.gnss import rotations as rot
 
-__all__ = ["attitude_from_baselines", "euler_and_sigma", "baseline_az_el", "skew"]
+__all__ = ["attitude_from_baselines", "attitude_quaternion", "euler_and_sigma", "baseline_az_el", "skew"]
 
 
 def skew(v: np.ndarray) -> np.ndarray:
@@ -39,12 +39,7 @@ def attitude_from_baselines(b_ecef_m: np.ndarray, P_b_m2: np.ndarray, b_body_m: 
     """
     n, n_bl, _ = b_ecef_m.shape
     L = np.linalg.norm(b_body_m, axis=1)
-    if method == "triad":
-        q = rot.triad(b_body_m[0], b_body_m[1], b_ecef_m[:, 0], b_ecef_m[:, 1])
-        w = np.array([1e6] + [1.0] * (n_bl - 1))          # TRIAD = the limit of a dominant first weight
-    else:
-        w = L / L.sum()
-        q, _ = rot.quest(np.broadcast_to(b_body_m, b_ecef_m.shape), b_ecef_m, np.broadcast_to(w, (n, n_bl)))
+    q, w = attitude_quaternion(b_ecef_m, b_body_m, method)
     R = rot.quat_to_dcm(q)                                                      # (n, 3, 3) body <- ecef
     bh = b_body_m / L[:, None]                                                  # (n_bl, 3)
     M = np.einsum("i,ijk->jk", w, np.eye(3)[None] - np.einsum("ij,ik->ijk", bh, bh))
@@ -58,6 +53,21 @@ def attitude_from_baselines(b_ecef_m: np.ndarray, P_b_m2: np.ndarray, b_body_m: 
         G[:, :, 3 * i:3 * i + 3] = Gi
     P = G @ P_b_m2 @ np.swapaxes(G, -1, -2)
     return q, 0.5 * (P + np.swapaxes(P, -1, -2))
+
+
+def attitude_quaternion(b_ecef_m: np.ndarray, b_body_m: np.ndarray, method: str = "quest"):
+    """(q_body_from_ecef (n, 4), weights (n_bl,)) of n epochs of baselines b_ecef_m (n, n_bl, 3) with the known
+    body baselines (n_bl, 3): the attitude part of `attitude_from_baselines` without its covariance (the filter's
+    antenna-frame mask needs only the attitude). QUEST with weights by length (seed 000 sec. 2) or TRIAD."""
+    n, n_bl, _ = b_ecef_m.shape
+    L = np.linalg.norm(b_body_m, axis=1)
+    if method == "triad":
+        q = rot.triad(b_body_m[0], b_body_m[1], b_ecef_m[:, 0], b_ecef_m[:, 1])
+        w = np.array([1e6] + [1.0] * (n_bl - 1))          # TRIAD = the limit of a dominant first weight
+    else:
+        w = L / L.sum()
+        q, _ = rot.quest(np.broadcast_to(b_body_m, b_ecef_m.shape), b_ecef_m, np.broadcast_to(w, (n, n_bl)))
+    return q, w
 
 
 def euler_and_sigma(R_body_from_ref: np.ndarray, P_theta_rad2: np.ndarray):

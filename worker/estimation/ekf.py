@@ -17,6 +17,8 @@ import numpy as np
 import scipy.linalg as sla
 from scipy.linalg.lapack import dpotrf as _potrf, dpotrs as _potrs
 
+from worker.estimation.ekf_kernels import gather_AHt, gather_HA, joseph_combine, symmetric_plus_diag
+
 __all__ = ["joseph_update", "joseph_update_sparse", "rk4_step", "rk4_integrate", "rotation_rk4_stm",
            "sparse_rows_to_dense"]
 
@@ -69,14 +71,13 @@ def joseph_update_sparse(x: np.ndarray, P: np.ndarray, cols: np.ndarray, coef: n
     by gathers (O(n m k)) and the three O(n^2 m) products  A P = P - K (P H^T)^T,  (A P) A^T = A P - (A P H^T) K^T,
     and K R K^T.
     """
-    c = np.where(cols >= 0, cols, 0)
-    w = np.where(cols >= 0, coef, 0.0)
-    # P H^T (n, m): gather columns
-    PHt = np.einsum("nmk,mk->nm", P[:, c], w)
-    # S = H P H^T + R (m, m): gather rows of PHt
-    S = np.einsum("mkj,mk->mj", PHt[c, :], w)
-    S = 0.5 * (S + S.T)
-    S[np.diag_indices_from(S)] += R
+    P = np.ascontiguousarray(P, dtype=np.float64)
+    cols = np.ascontiguousarray(cols, dtype=np.int64)
+    coef = np.ascontiguousarray(coef, dtype=np.float64)
+    # P H^T (n, m) and S = H P H^T + R (m, m) by compiled gathers (worker.estimation.ekf_kernels)
+    PHt = gather_AHt(P, cols, coef)
+    R = np.broadcast_to(np.asarray(R, dtype=np.float64), (cols.shape[0],))
+    S = symmetric_plus_diag(gather_HA(PHt, cols, coef), R)
     # LAPACK potrf/potrs directly: what scipy's cho_factor/cho_solve call, without their per-call wrapper cost
     L, info = _potrf(S, lower=1, clean=0)
     if info != 0:
@@ -86,9 +87,8 @@ def joseph_update_sparse(x: np.ndarray, P: np.ndarray, cols: np.ndarray, coef: n
         return x, P, S, False
     K = Kt.T                                                     # (n, m)
     AP = P - K @ PHt.T                                           # (I - K H) P
-    APHt = np.einsum("nmk,mk->nm", AP[:, c], w)                  # (A P) H^T
-    P_new = AP - APHt @ K.T + (K * R) @ K.T                      # A P A^T + K R K^T
-    P_new = 0.5 * (P_new + P_new.T)
+    APHt = gather_AHt(AP, cols, coef)                            # (A P) H^T
+    P_new = joseph_combine(AP, APHt @ K.T, (K * R) @ K.T)        # A P A^T + K R K^T, symmetrised
     return x + K @ innovation, P_new, S, True
 
 
@@ -155,6 +155,7 @@ def rotation_rk4_stm(b_m: np.ndarray, omega_rad_s: np.ndarray, dt_s: float, max_
 
 
 _ZEROS33 = np.zeros((3, 3))
+
 
 
 def _skew(v: np.ndarray) -> np.ndarray:

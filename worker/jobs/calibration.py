@@ -30,6 +30,11 @@ class CalibrationConfig(BaseModel):
     held_out_set: str | None = Field(None, max_length=200,
                                      description="Id or name of a set kept out of the calibration and used for the "
                                                  "before/after attitude comparison.")
+    held_out_attitude_config: dict = Field(
+        {}, description="Attitude job config (docs/attitude.md) of the held-out comparison: the attitude filter "
+                        "runs on the held-out set with it, once as given (a priori baselines) and once with the "
+                        "calibrated baselines and maps; default: the attitude job's defaults (dynamic mode). "
+                        "calibrated_baselines and pcv_map_ids are the calibration's own and may not be given.")
     map_name: str | None = Field(None, max_length=150,
                                  description="Name under which the maps are published (default: '<platform> "
                                              "calibration'); each pair and frequency gets '<name> A>B L1'.")
@@ -61,6 +66,15 @@ class CalibrationConfig(BaseModel):
             raise ValueError("more than 200000 bins per map")
         if len(set(self.frequencies)) != len(self.frequencies):
             raise ValueError("frequencies repeat")
+        own = sorted({"calibrated_baselines", "pcv_map_ids"} & set(self.held_out_attitude_config))
+        if own:
+            raise ValueError(f"held_out_attitude_config: {own} come from the calibration itself")
+        from worker.jobs.attitude import AttitudeConfig
+
+        try:
+            AttitudeConfig(**self.held_out_attitude_config)
+        except ValueError as exc:
+            raise ValueError(f"held_out_attitude_config: {exc}") from exc
         return self
 
 

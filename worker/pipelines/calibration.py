@@ -19,7 +19,7 @@ from worker.errors import JobInputError
 
 STAGE_PASS1 = "pass 1 (baselines, PCV statistics)"
 STAGE_PASS2 = "pass 2 (residuals, final maps, held-out set)"
-HELD_OUT_COST = 3.0  # the held-out task's cost in set extractions (pass 2)
+HELD_OUT_COST = 12.0  # the held-out task's cost in set extractions (pass 2: three extractions + two filter runs)
 
 
 def _options(cfg: dict):
@@ -114,7 +114,34 @@ def final_task(payload: dict, sets):
         bl, sig = key.rsplit(" ", 1)
         maps[tuple(bl.split(">")) + (sig,)] = np.array([np.nan if v is None else v for v in values], float)
     final = set_final(data, calibrated, maps, options, held_out=payload["held_out"])
+    if payload["held_out"]:
+        final.attitude = held_out_attitude(payload, _find(sets, payload["set_id"]), calibrated, maps, options,
+                                           final.attitude)
     return {"final": final, "seconds": time.perf_counter() - t0, "cpu_s": time.process_time() - c0}
+
+
+def held_out_attitude(payload: dict, s, calibrated: dict, maps: dict, options, epoch_wise: dict | None) -> dict:
+    """held_out_attitude.json: the attitude filter (the attitude job's processing, `held_out_attitude_config`)
+    on the held-out set without and with the calibration (worker.calibration.held_out), and the epoch-wise QUEST
+    comparison (worker.calibration.campaign.attitude_comparison) as a secondary block."""
+    from worker.attitude.process import InputProblem, load_inputs
+    from worker.calibration.held_out import filter_comparison, map_documents
+    from worker.jobs.attitude import AttitudeConfig
+
+    att_cfg = AttitudeConfig(**payload["config"].get("held_out_attitude_config", {}))
+    out = {"set": _label(s),
+           "method": f"attitude filter ({att_cfg.mode} mode, the attitude job's processing) against the set's "
+                     "reference attitude, over the fixed epochs: a priori baselines without maps vs calibrated "
+                     "baselines + the calibration's maps (applied as with pcv_map_ids)",
+           "attitude_config": att_cfg.model_dump(exclude_defaults=True)}
+    try:
+        inputs = load_inputs([(f.name, f.kind, f.path) for f in s.files])
+        out.update(filter_comparison(inputs, att_cfg.to_settings(), calibrated, map_documents(options.grid, maps)))
+    except InputProblem as exc:
+        out["skipped"] = f"{exc.title}: {exc.detail}"
+    if epoch_wise is not None:
+        out["epoch_wise"] = epoch_wise
+    return out
 
 
 def _raise_input_errors(results: list, payloads: list) -> None:
@@ -243,7 +270,7 @@ def run(ctx: JobContext, config) -> None:
     cal_payload = {f"{a}>{b}": [float(x) for x in v] for (a, b), v in calibrated.items()}
     p2 = [{"set_id": s.id, "label": _label(s), "config": cfg, "held_out": s.id in held_ids}
           for s in cal_sets + held[:1]]
-    # the held-out set costs ~3 set extractions (two more for the attitude comparison): first in the queue
+    # the held-out set costs ~12 set extractions (three extractions + two attitude filter runs): first in the queue
     costs2 = [_cost(s) * (HELD_OUT_COST if s.id in held_ids else 1.0) for s in cal_sets + held[:1]]
     r2 = _map_in_order(ctx, "worker.pipelines.calibration:final_task", p2, costs2, progress_span=(0.52, 0.9),
                        stage=STAGE_PASS2, shared={"calibrated": cal_payload, "maps": maps_payload})
@@ -325,11 +352,32 @@ def run(ctx: JobContext, config) -> None:
     from worker.report import html_report
 
     report_summary = {k: v for k, v in summary.items() if k not in ("per_set", "baselines", "maps")}
+    tables = {"Baselines (body frame, Table 3 layout)": baselines_table(baselines_document(platform.name, rows))}
+    if held_att:
+        tables["Held-out attitude (attitude filter, errors against the reference over fixed epochs)"] = \
+            held_out_table(held_att[0])
+    tables.update({"PCV maps": maps_summary, "Sets": per_set})
     ctx.write_product("report.html", html_report(
-        f"Calibration · {platform.name} · {len(cal_sets)} sets", report_summary, pngs,
-        {"Baselines (body frame, Table 3 layout)": baselines_table(baselines_document(platform.name, rows)),
-         "PCV maps": maps_summary, "Sets": per_set}), media_type="text/html")
+        f"Calibration · {platform.name} · {len(cal_sets)} sets", report_summary, pngs, tables),
+        media_type="text/html")
     ctx.progress(1.0, "done")
+
+
+def held_out_table(doc: dict) -> list[dict]:
+    """Rows of the report's held-out table: per Euler angle the filter's bias and std without and with the
+    calibration and their cuts; the epoch-wise (QUEST) std cut alongside when computed."""
+    rows = []
+    w0, w1, cut = doc.get("without_calibration", {}), doc.get("with_calibration", {}), doc.get("cut", {})
+    ew = (doc.get("epoch_wise") or {}).get("cut", {})
+    for name, ew_name in (("yaw", "z_yaw"), ("pitch", "y_pitch"), ("roll", "x_roll")):
+        a, b, c = w0.get(name), w1.get(name), cut.get(name)
+        if not (a and b and c):
+            continue
+        rows.append({"angle": name, "bias a priori deg": a["bias_deg"], "bias calibrated deg": b["bias_deg"],
+                     "bias cut %": c["bias_cut_percent"], "std a priori deg": a["std_deg"],
+                     "std calibrated deg": b["std_deg"], "std cut %": c["std_cut_percent"],
+                     "epoch-wise std cut %": (ew.get(ew_name) or {}).get("std_cut_percent")})
+    return rows
 
 
 def tasks_csv(records: list[dict], job_start: datetime) -> str:
@@ -357,4 +405,5 @@ def workers_summary(records: list[dict]) -> dict:
     return out
 
 
-__all__ = ["run", "statistics_task", "final_task", "tasks_csv", "workers_summary"]
+__all__ = ["run", "statistics_task", "final_task", "held_out_attitude", "held_out_table", "tasks_csv",
+           "workers_summary"]

@@ -17,8 +17,9 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from worker.gnss.rotations import dcm_to_euler321, euler321_to_dcm, quat_to_dcm
-from worker.plots.common import (EULER_COLOURS, PlotContext, Table, column, figure_png, gps_time, new_figure,
-                                 no_data, numeric, read_csv_table, set_title, time_axis, truthy, wrap_deg)
+from worker.plots.common import (EULER_COLOURS, PlotContext, Table, categories, category_memo, column, figure_png,
+                                 first_per_epoch_and_key, gps_time, new_figure, no_data, numeric, read_csv_table,
+                                 set_title, time_axis, truthy, wrap_deg)
 
 AXES = ("yaw", "pitch", "roll")
 #: Offsets of the error curves, as seed 000 Figs. 5-7 draw them (roll +1.5 deg, pitch -1.5 deg) "for better
@@ -27,7 +28,8 @@ ERROR_OFFSETS_DEG = {"yaw": 0.0, "pitch": -1.5, "roll": 1.5}
 #: A reference sample farther than this from both neighbours of an epoch is not interpolated across [s]
 #: (star trackers drop out; bridging a gap would invent a reference).
 MAX_REFERENCE_GAP_S = 60.0
-#: Sky plots and residual scatters draw at most this many points (evenly thinned beyond; all stats use all).
+#: Sky plots and residual scatters draw at most this many points (evenly thinned beyond, as the panel titles say;
+#: all statistics use all rows, and residuals.csv holds them all).
 MAX_POINTS = 20000
 
 RESIDUAL_COLUMNS = {
@@ -63,8 +65,11 @@ def residual_values(table: Table) -> tuple[np.ndarray | None, np.ndarray | None]
     long (`observable` = code | phase with `residual_m`, one row per observable, as worker/attitude writes)."""
     kind, value = column(table, "observable"), numeric(table, "residual_m")
     if kind is not None and value is not None:
-        kind = np.char.lower(kind.astype(str))
-        return np.where(kind == "phase", value * 1000.0, np.nan), np.where(kind == "code", value, np.nan)
+        kinds, code = categories(kind)
+        kinds = [k.lower() for k in kinds]
+        is_phase = np.isin(code, [i for i, k in enumerate(kinds) if k == "phase"])
+        is_code = np.isin(code, [i for i, k in enumerate(kinds) if k == "code"])
+        return np.where(is_phase, value * 1000.0, np.nan), np.where(is_code, value, np.nan)
     phase = _residual_num(table, "phase_mm")
     if phase is None and _residual_num(table, "phase_m") is not None:
         phase = _residual_num(table, "phase_m") * 1000.0
@@ -329,8 +334,14 @@ def fix_status_figure(attitude_csv: Any = None, baselines_csv: Any = None, event
         palette = ["#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#17becf", "#bcbd22", "#1f77b4"]
         for k, kind in enumerate(dict.fromkeys(kinds)):
             m = kinds == kind
-            lanes.vlines(t_ev[m], -0.5, len(series) - 0.5, colors=palette[k % len(palette)], lw=0.8,
-                         alpha=0.8, label=f"{kind} ({int(m.sum())})")
+            # one path per kind (x = t, t, NaN per event time), not a collection of thousands of segments
+            # (a realistic pass has ~8e3 slip events; events at the same time are one line anyway)
+            t_k = mdates.date2num(np.unique(t_ev[m]))
+            x = np.repeat(t_k, 3)
+            x[2::3] = np.nan
+            y = np.tile([-0.5, len(series) - 0.5, np.nan], len(t_k))
+            lanes.plot(x, y, "-", color=palette[k % len(palette)], lw=0.8, alpha=0.8,
+                       label=f"{kind} ({int(m.sum())})")
     lanes.set_yticks(range(len(series)))
     lanes.set_yticklabels([s[0] for s in series], fontsize=8)
     lanes.set_ylim(len(series) - 0.5, -0.5)
@@ -394,17 +405,15 @@ def dop_series(residuals_csv: Any) -> dict[str, dict[str, np.ndarray]]:
         return out
     t = gps_time(res)
     base = _residual(res, "baseline")
-    base = base.astype(str) if base is not None else np.array(["all"] * len(t))
-    sats = _residual(res, "satellite").astype(str)
+    names, base_code = categories(base) if base is not None else (["all"], np.zeros(len(t), dtype=np.int64))
+    _, sat_code = categories(_residual(res, "satellite"))
     az, el = _residual_num(res, "azimuth_deg"), _residual_num(res, "elevation_deg")
     used = truthy(_residual(res, "used")) if _residual(res, "used") is not None else np.ones(len(t), bool)
-    for name in dict.fromkeys(base):
-        m = (base == name) & used & np.isfinite(az) & np.isfinite(el)
+    for j, name in enumerate(names):
+        m = (base_code == j) & used & np.isfinite(az) & np.isfinite(el)
         if not m.any():
             continue
-        key = np.char.add(np.datetime_as_string(t[m]).astype(str), np.char.add("|", sats[m]))
-        _, first = np.unique(key, return_index=True)
-        rows = np.flatnonzero(m)[np.sort(first)]
+        rows = first_per_epoch_and_key(t, sat_code, np.flatnonzero(m))
         epochs, idx = np.unique(t[rows], return_inverse=True)
         hdop, vdop = dop_from_directions(az[rows], el[rows], idx, len(epochs))
         out[name] = {"time": epochs, "hdop": hdop, "vdop": vdop, "n_sats": np.bincount(idx, minlength=len(epochs))}
@@ -463,7 +472,10 @@ def residuals_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
     res = read_csv_table(residuals_csv)
     has_rows = column(res, "time_gps") is not None and len(column(res, "time_gps")) > 0
     base = _residual(res, "baseline") if has_rows else None
-    names = list(dict.fromkeys(base.astype(str))) if base is not None else (["all"] if has_rows else [])
+    if base is not None:
+        names, base_code = categories(base)
+    else:
+        names, base_code = (["all"] if has_rows else []), None
     fig = new_figure(11.0, 1.5 + 2.6 * max(len(names), 1))
     axes = fig.subplots(max(len(names), 1), 2, sharex=True, squeeze=False)
     if not has_rows:
@@ -472,9 +484,10 @@ def residuals_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
         set_title(fig, "Single-difference residuals per baseline and signal", context)
         return fig
     t = gps_time(res)
-    base = base.astype(str) if base is not None else np.array(["all"] * len(t))
+    if base_code is None:
+        base_code = np.zeros(len(t), dtype=np.int64)
     sig = _residual(res, "signal")
-    sig = sig.astype(str) if sig is not None else np.array(["?"] * len(t))
+    sig_names, sig_code = categories(sig) if sig is not None else (["?"], np.zeros(len(t), dtype=np.int64))
     used = truthy(_residual(res, "used")) if _residual(res, "used") is not None else np.ones(len(t), bool)
     phase, code = residual_values(res)
     for row, name in enumerate(names):
@@ -483,23 +496,26 @@ def residuals_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
             if values is None:
                 no_data(ax, f"no {what} residual column")
                 continue
-            sel = base == name
+            sel = base_code == row
             n_rejected = int((sel & ~used & np.isfinite(values)).sum())
-            for s in sorted(set(sig[sel])):
-                m = np.flatnonzero(sel & used & (sig == s) & np.isfinite(values))
+            n_used = n_drawn = 0
+            for s in sorted(sig_names[j] for j in np.unique(sig_code[sel])):
+                m = np.flatnonzero(sel & used & (sig_code == sig_names.index(s)) & np.isfinite(values))
                 if not len(m):
                     continue
                 rms = float(np.sqrt(np.mean(values[m] ** 2)))
                 k = _thin(m)
+                n_used, n_drawn = n_used + len(m), n_drawn + len(k)
                 ax.plot(t[k], values[k], ".", ms=1.5, label=f"{s}: RMS {rms:.3g} {unit} (n={len(m)})")
             ax.set_ylabel(f"{what} residual [{unit}]")
-            ax.set_title(f"{name} · {what}" + (f" · {n_rejected} rejected not shown" if n_rejected else ""),
-                         fontsize=8)
+            ax.set_title(f"{name} · {what}" + (f" · {n_rejected} rejected not shown" if n_rejected else "")
+                         + (f" · {n_drawn} of {n_used} drawn (evenly thinned; RMS of all)"
+                            if n_drawn < n_used else ""), fontsize=8)
             ax.grid(color="0.88", lw=0.5)
             if ax.get_legend_handles_labels()[0]:
                 ax.legend(fontsize=7, markerscale=4, loc="upper right")
     for a in axes[-1]:
-        time_axis(a, t)
+        time_axis(a, t, maxticks=5)       # two panels side by side: ~5 HH:MM:SS labels fit each
     set_title(fig, "Single-difference residuals per baseline and signal", context)
     return fig
 
@@ -520,7 +536,10 @@ def skyplot_figure(residuals_csv: Any, context: PlotContext | Mapping | None = N
     res = read_csv_table(residuals_csv)
     has_rows = column(res, "time_gps") is not None and len(column(res, "time_gps")) > 0
     base = _residual(res, "baseline") if has_rows else None
-    names = list(dict.fromkeys(base.astype(str))) if base is not None else (["all"] if has_rows else [])
+    if base is not None:
+        names, base_code = categories(base)
+    else:
+        names, base_code = (["all"] if has_rows else []), None
     n = max(len(names), 1)
     fig = new_figure(4.6 * n + 1.0, 5.2)
     axes = [fig.add_subplot(1, n, i + 1, projection="polar") for i in range(n)]
@@ -529,7 +548,9 @@ def skyplot_figure(residuals_csv: Any, context: PlotContext | Mapping | None = N
         set_title(fig, "Sky plot in the antenna frame, coloured by C/N0", context)
         return fig
     t = gps_time(res)
-    base = base.astype(str) if base is not None else np.array(["all"] * len(t))
+    if base_code is None:
+        base_code = np.zeros(len(t), dtype=np.int64)
+    _, sat_code = categories(_residual(res, "satellite"))
     sats = _residual(res, "satellite").astype(str)
     az, el = _residual_num(res, "azimuth_deg"), _residual_num(res, "elevation_deg")
     cn0 = _residual_num(res, "cn0_dbhz")
@@ -539,11 +560,10 @@ def skyplot_figure(residuals_csv: Any, context: PlotContext | Mapping | None = N
     vmin, vmax = ((float(np.floor(finite_cn0.min())), float(np.ceil(finite_cn0.max()))) if finite_cn0.size
                   else (20.0, 55.0))
     scatter = None
-    for ax, name in zip(axes, names):
-        m = (base == name) & np.isfinite(az) & np.isfinite(el)
-        key = np.char.add(np.datetime_as_string(t[m]).astype(str), np.char.add("|", sats[m]))
-        _, first = np.unique(key, return_index=True)
-        rows = _thin(np.flatnonzero(m)[np.sort(first)])
+    for j, (ax, name) in enumerate(zip(axes, names)):
+        m = (base_code == j) & np.isfinite(az) & np.isfinite(el)
+        rows_all = first_per_epoch_and_key(t, sat_code, np.flatnonzero(m))
+        rows = _thin(rows_all)
         ax.set_theta_zero_location("N")
         ax.set_theta_direction(-1)
         r_max = max(90.0, 90.0 - float(np.min(el[rows])) + 2.0) if len(rows) else 90.0
@@ -561,7 +581,9 @@ def skyplot_figure(residuals_csv: Any, context: PlotContext | Mapping | None = N
             last = rows[sats[rows] == s][-1]
             ax.annotate(s, (np.radians(az[last]), 90.0 - el[last]), fontsize=6, color="0.25")
         first_ant = name.split(">")[0] if ">" in name else name
-        ax.set_title(f"{name}\nantenna frame of {first_ant} (elevation on radius)", fontsize=8)
+        thinned = (f"\n{len(rows)} of {len(rows_all)} epoch-satellite points drawn (evenly thinned)"
+                   if len(rows) < len(rows_all) else "")
+        ax.set_title(f"{name}\nantenna frame of {first_ant} (elevation on radius){thinned}", fontsize=8)
     if scatter is not None:
         fig.colorbar(scatter, ax=axes, label="C/N0 [dB-Hz]", shrink=0.8)
     set_title(fig, "Sky plot in the antenna frame, coloured by C/N0", context)
@@ -593,7 +615,8 @@ def attitude_plots(products: Mapping[str, Any], reference: Any = None,
     if att is not None or bl is not None:
         out["fix_status.png"] = fix_status_plot(att, bl, ev, context)
     if res is not None:
-        out["dop.png"] = dop_plot(res, att, context)
-        out["residuals.png"] = residuals_plot(res, context)
-        out["skyplot.png"] = skyplot_plot(res, context)
+        with category_memo():
+            out["dop.png"] = dop_plot(res, att, context)
+            out["residuals.png"] = residuals_plot(res, context)
+            out["skyplot.png"] = skyplot_plot(res, context)
     return out

@@ -4,6 +4,8 @@ from __future__ import annotations
 import csv
 import gc
 import io
+import threading
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any, Iterable, Mapping
 
@@ -195,6 +197,65 @@ def numeric(table: Table, *names: str) -> np.ndarray | None:
     return out
 
 
+_memo = threading.local()
+
+
+@contextmanager
+def category_memo():
+    """Within this block (this thread), `categories` of the same array object is computed once: several plots of
+    one table (residuals.csv feeds three) share the codes of its baseline/satellite/signal columns."""
+    outer = getattr(_memo, "table", None)
+    _memo.table = {} if outer is None else outer
+    try:
+        yield
+    finally:
+        _memo.table = outer
+
+
+def categories(values: np.ndarray) -> tuple[list[str], np.ndarray]:
+    """(distinct values in order of first appearance, int code per row indexing that list) of a column, as
+    `list(dict.fromkeys(values))` and a lookup would give, by one sort of the fixed-width cells as raw bytes
+    (~6e5 residual rows: 0.07 s instead of ~0.3 s for dict/set over numpy str scalars)."""
+    memo = getattr(_memo, "table", None)
+    if memo is not None:
+        hit = memo.get(id(values))
+        if hit is not None and hit[0] is values:
+            return hit[1]
+        result = _categories(values)
+        memo[id(values)] = (values, result)     # the array is kept alive, so its id is not reused meanwhile
+        return result
+    return _categories(values)
+
+
+def _categories(values: np.ndarray) -> tuple[list[str], np.ndarray]:
+    arr = np.asarray(values)
+    if arr.dtype.kind != "U":
+        arr = arr.astype(str)
+    arr = np.ascontiguousarray(arr.ravel())
+    if arr.size == 0:
+        return [], np.zeros(0, dtype=np.int64)
+    raw = arr.view(np.dtype((np.void, arr.dtype.itemsize)))
+    _, first, inverse = np.unique(raw, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(order.size)
+    return [str(arr[first[j]]) for j in order], rank[inverse.ravel()]
+
+
+def first_per_epoch_and_key(time: np.ndarray, codes: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """The subset of `rows` (sorted indices) that is the first row of each (time, code) pair, in row order: one
+    row per epoch and satellite of a long table with one row per signal/observable. time: datetime64 per row,
+    codes: int per row (e.g. from `categories`)."""
+    rows = np.asarray(rows, dtype=np.int64)
+    if rows.size == 0:
+        return rows
+    n_codes = int(codes.max()) + 1 if codes.size else 1
+    t_ms = np.asarray(time, dtype="datetime64[ms]").astype(np.int64)
+    key = t_ms[rows] * n_codes + codes[rows]
+    _, first = np.unique(key, return_index=True)
+    return rows[np.sort(first)]
+
+
 def truthy(values: np.ndarray) -> np.ndarray:
     """bool array of a 0/1 or true/false column (NaN / empty -> False)."""
     if values.dtype.kind == "f":
@@ -208,14 +269,16 @@ def gps_time(table: Table) -> np.ndarray:
     col = column(table, "time_gps")
     if col is None:
         raise KeyError("the table has no time_gps column")
-    if col.dtype.kind == "U":
-        return col.astype("datetime64[ms]")      # one cast, same parser as per-element np.array(str)
+    if col.dtype.kind in "UM":
+        return col.astype("datetime64[ms]")      # text: one cast, same parser as per-element np.array(str)
     return np.array([str(c) for c in col], dtype="datetime64[ms]")
 
 
-def time_axis(ax, t: np.ndarray, label: bool = True) -> None:
-    """Format an x axis holding GPS datetimes: HH:MM:SS ticks, label naming GPS time and the date."""
-    locator = mdates.AutoDateLocator(minticks=4, maxticks=9)
+def time_axis(ax, t: np.ndarray, label: bool = True, maxticks: int = 9) -> None:
+    """Format an x axis holding GPS datetimes: HH:MM:SS ticks (at most `maxticks`: fewer on narrow axes, so the
+    labels do not run into each other), label naming GPS time and the date."""
+    locator = mdates.AutoDateLocator(minticks=3, maxticks=maxticks) if maxticks < 9 else \
+        mdates.AutoDateLocator(minticks=4, maxticks=maxticks)
     ax.xaxis.set_major_locator(locator)
     ax.xaxis.set_major_formatter(mdates.DateFormatter("%H:%M:%S"))
     if label:

@@ -38,22 +38,32 @@ BEIDOU_GEO_PRNS = frozenset({1, 2, 3, 4, 5, 59, 60, 61, 62, 63})
 _BDS_GEO_INCL_RAD = np.radians(-5.0)
 
 
+def _per_record(eph, idx: np.ndarray, of_name) -> np.ndarray:
+    """of_name(str name) for the `sat` of each selected record, evaluated once per distinct record (idx repeats
+    each record over many epochs and satellites)."""
+    idx = np.asarray(idx)
+    u, inverse = np.unique(idx, return_inverse=True)
+    names = np.asarray(eph.sat)[u]
+    return np.array([of_name(str(s)) for s in names.ravel()])[inverse.ravel()].reshape(idx.shape)
+
+
 def _systems(eph, idx: np.ndarray) -> np.ndarray:
     """System letter of each selected record: first character of `sat`, else `eph.system`."""
-    sat = np.asarray(eph.sat)[idx]
-    if sat.dtype.kind in "US" and sat.size:
-        letters = np.array([str(s)[:1] for s in sat.ravel()]).reshape(sat.shape)
+    sat = np.asarray(eph.sat)
+    if sat.dtype.kind in "US" and np.size(idx):
+        letters = _per_record(eph, idx, lambda s: s[:1])
         if np.all(np.isin(letters, list("GJECRSI"))):
             return letters
     return np.full(np.shape(idx), getattr(eph, "system", "G"))
 
 
 def _prns(eph, idx: np.ndarray) -> np.ndarray:
-    sat = np.asarray(eph.sat)[idx]
+    sat = np.asarray(eph.sat)
     if sat.dtype.kind in "US":
-        return np.array([int(str(s)[1:]) if str(s)[1:].strip().isdigit() else -1 for s in sat.ravel()],
-                        dtype=np.int64).reshape(sat.shape)
-    return np.asarray(sat, dtype=np.int64)
+        if not np.size(idx):
+            return np.zeros(np.shape(idx), dtype=np.int64)
+        return _per_record(eph, idx, lambda s: int(s[1:]) if s[1:].strip().isdigit() else -1).astype(np.int64)
+    return np.asarray(sat[idx], dtype=np.int64)
 
 
 def solve_kepler(m_rad, e, tol_rad: float = KEPLER_TOL_RAD, max_iter: int = KEPLER_MAX_ITER) -> np.ndarray:
