@@ -5,7 +5,7 @@ import numpy as np
 
 from worker.attitude.fastops import count_pairs, median1d, nanmedian1, nz
 from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, count_pairs_masked,
-                                     masked_median_axis1, np_sum, white_noise_update)
+                                     masked_median_axis1, measurement_rows, np_sum, white_noise_update)
 
 NOISE_EPOCHS, MIN_EPOCHS = 300.0, 10
 
@@ -136,3 +136,35 @@ def test_round_newcomers_equals_the_dense_dd_products():
         ok = (np.sqrt(np.maximum(var, 0.0)) < 0.3) & (np.abs(d - r) < 0.35)
         D1, v1, ok1 = round_newcomers(x, P, idx[1:], int(idx[0]), 0.3, 0.35)
         assert np.array_equal(ok1, ok) and np.array_equal(D1, D[ok]) and np.array_equal(v1, r[ok])
+
+
+def test_measurement_rows_equal_the_numpy_assembly():
+    rng = np.random.default_rng(10)
+    for n_sig in (1, 2, 3):
+        n_bl, n_sat = 2, 11
+        b_idx = (3 + 8 * np.arange(n_bl))[:, None] + np.arange(3)[None, :]
+        clk = b_idx[:, 0] + 3
+        bias = np.full((n_bl, n_sig), -1, np.int64)
+        bias[:, 1:] = clk[:, None] + 1 + np.arange(n_sig - 1)[None, :]
+        pclk = clk[:, None] + n_sig + np.arange(n_sig)[None, :]
+        amb_index = rng.integers(20, 60, size=(n_bl, n_sat, n_sig))
+        u, cfac, lam = rng.normal(size=(n_sat, 3)), 1.0 + rng.normal(size=n_sat) * 1e-6, rng.uniform(0.1, 0.3, n_sig)
+        sdc_c, sdp_c, pcv_m = rng.normal(size=(3, n_bl, n_sat, n_sig))
+        use_c = rng.random((n_bl, n_sat, n_sig)) < 0.7
+        use_p = use_c & (rng.random(use_c.shape) < 0.8)
+        jc, sc, fc = np.nonzero(use_c)
+        jp, sp, fp = np.nonzero(use_p)
+        mc_n, m = jc.size, jc.size + jp.size
+        cols = np.full((m, 5), -1, dtype=np.int64)
+        coef = np.zeros((m, 5))
+        jb, sb = np.concatenate([jc, jp]), np.concatenate([sc, sp])
+        cols[:, 0:3], coef[:, 0:3] = b_idx[jb], -u[sb]
+        cols[:mc_n, 3], cols[mc_n:, 3], coef[:, 3] = clk[jc], pclk[jp, fp], cfac[sb]
+        if n_sig > 1:
+            cols[:mc_n, 4], coef[:mc_n, 4] = bias[jc, fc], 1.0
+        cols[mc_n:, 4], coef[mc_n:, 4] = amb_index[jp, sp, fp], lam[fp]
+        z = np.concatenate([sdc_c[jc, sc, fc], sdp_c[jp, sp, fp] - pcv_m[jp, sp, fp]])
+        out = measurement_rows(jc, sc, fc, jp, sp, fp, b_idx, u, cfac, clk, pclk, bias, amb_index, lam, sdc_c, sdp_c,
+                               pcv_m)
+        for a, b in zip(out, (cols, coef, z)):
+            assert np.array_equal(a, b)

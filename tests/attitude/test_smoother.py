@@ -131,9 +131,19 @@ def test_smoother_changes_nothing_but_the_baselines_omega_and_their_covariance(p
     _, sols = pitch_up
     a, b = sols[False].fr, sols[True].fr
     assert AttitudeSettings().smoother is False and a.smoother_data is None
+    assert "smoother" not in sols[False].summary
+    assert sols[True].summary["smoother"]["epochs_smoothed"] == int((np.linalg.norm(
+        a.b_ecef_m - b.b_ecef_m, axis=-1).max(axis=1) > 0).sum())
     assert np.array_equal(a.fixed, b.fixed) and np.array_equal(a.ok, b.ok) and a.events == b.events
     f = a.fixed.all(axis=1)
     moved = np.linalg.norm(a.b_ecef_m - b.b_ecef_m, axis=-1).max(axis=1)
     assert np.all(moved[~f] == 0.0) and moved[f].max() > 1e-4      # float epochs as filtered
     last = int(np.flatnonzero(f)[-1])
     assert moved[last] == 0.0                                       # the last epoch: nothing later to use
+
+
+def test_job_config_passes_the_smoother_setting():
+    from worker.jobs.attitude import AttitudeConfig
+
+    assert AttitudeConfig.model_validate({"smoother": True}).to_settings().smoother is True
+    assert AttitudeConfig.model_validate({}).to_settings().smoother is False

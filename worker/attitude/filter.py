@@ -34,7 +34,7 @@ from worker.attitude.ambiguity import (
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
 from worker.attitude.fastops import clip as _clip, nz as _nz
 from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, count_pairs_masked,
-                                     masked_median_axis1, white_noise_update)
+                                     masked_median_axis1, measurement_rows, white_noise_update)
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from worker.attitude.settings import AttitudeSettings, cn0_mask_of
 from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
@@ -479,21 +479,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         m = mc_n + mp_n
         vp_f = np.full(n_sig, s.sigma_phase_m ** 2)
         if m:
-            cols = np.full((m, 5), -1, dtype=np.int64)
-            coef = np.zeros((m, 5))
-            jb = np.concatenate([jc, jp])
-            sb = np.concatenate([sc, sp])
-            cols[:, 0:3] = b_idx[jb]
-            coef[:, 0:3] = -u[sb]
-            cols[:mc_n, 3] = st.clk[jc]
-            cols[mc_n:, 3] = st.pclk[jp, fp]
-            coef[:, 3] = cfac[sb]
-            if n_sig > 1:
-                cols[:mc_n, 4] = st.bias[jc, fc]             # -1 (no term) for signal 1
-                coef[:mc_n, 4] = 1.0
-            cols[mc_n:, 4] = st.amb_index[jp, sp, fp]
-            coef[mc_n:, 4] = lam[fp]
-            z = np.concatenate([sdc_c[jc, sc, fc], sdp_c[jp, sp, fp] - pcv_m[jp, sp, fp]])
+            # sparse rows (baseline, clock, code bias / ambiguity) and observations, code rows then phase rows
+            cols, coef, z = measurement_rows(jc, sc, fc, jp, sp, fp, b_idx, u, cfac, st.clk, st.pclk, st.bias,
+                                             st.amb_index, lam, sdc_c, sdp_c, pcv_m)
             if s.noise_estimation:
                 # the configured sigmas are floors: receivers smooth their code (tiny code TDs), and time-
                 # correlated errors (multipath) never show in a triple difference

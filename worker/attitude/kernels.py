@@ -19,7 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["POW2", "np_sum", "count_pairs_masked", "masked_median_axis1", "cn0_growth_samples", "cn0_growth_update", "white_noise_update",
+__all__ = ["POW2", "np_sum", "count_pairs_masked", "masked_median_axis1", "measurement_rows", "cn0_growth_samples", "cn0_growth_update", "white_noise_update",
            "warm_up"]
 
 #: the exponent of the squares below, passed to the kernels at run time (a compile-time 2.0 would let LLVM turn
@@ -254,6 +254,42 @@ def count_pairs_masked(first, second, mask, n_first, n_second):
     return out
 
 
+@njit(cache=True, nogil=True)
+def measurement_rows(jc, sc, fc, jp, sp, fp, b_idx, u, cfac, clk, pclk, bias, amb_index, lam, sdc_c, sdp_c,
+                     pcv_m):
+    """(cols (m, 5) int64, coef (m, 5), z (m,)) of run_filter's update: the code rows (jc, sc, fc), then the phase
+    rows (jp, sp, fp) of seed 000 eq. 1 in sparse-row form (worker.estimation.ekf.joseph_update_sparse):
+    baseline -u (3), clock partial 1 - rho_dot / c on the code / phase clock, then the code bias of signals 2..
+    (coefficient 1; no term for signal 1) or the ambiguity (lambda); z = clock-corrected SD code, SD phase - PCV."""
+    mc_n = jc.size
+    m = mc_n + jp.size
+    n_sig = sdc_c.shape[2]
+    cols = np.full((m, 5), -1, np.int64)
+    coef = np.zeros((m, 5))
+    z = np.empty(m)
+    for r in range(m):
+        if r < mc_n:
+            j, s, f = jc[r], sc[r], fc[r]
+        else:
+            j, s, f = jp[r - mc_n], sp[r - mc_n], fp[r - mc_n]
+        for a in range(3):
+            cols[r, a] = b_idx[j, a]
+            coef[r, a] = -u[s, a]
+        coef[r, 3] = cfac[s]
+        if r < mc_n:
+            cols[r, 3] = clk[j]
+            if n_sig > 1:
+                cols[r, 4] = bias[j, f]
+                coef[r, 4] = 1.0
+            z[r] = sdc_c[j, s, f]
+        else:
+            cols[r, 3] = pclk[j, f]
+            cols[r, 4] = amb_index[j, s, f]
+            coef[r, 4] = lam[f]
+            z[r] = sdp_c[j, s, f] - pcv_m[j, s, f]
+    return cols, coef, z
+
+
 def warm_up() -> None:
     """Compile (or load from the cache) every kernel once on tiny inputs."""
     td = np.zeros((1, 3, 2))
@@ -261,6 +297,10 @@ def warm_up() -> None:
     m = masked_median_axis1(td, ok)
     masked_median_axis1(np.zeros((1, 3))[:, :, None], ok[:, :, :1])       # the epoch clock's call
     count_pairs_masked(np.zeros(2, np.int64), np.ones(2, np.int64), np.ones(2, np.bool_), 1, 2)
+    i0 = np.zeros(1, np.int64)
+    idx2 = np.zeros((1, 2), np.int64)
+    measurement_rows(i0, i0, i0, i0, i0, i0, np.zeros((1, 3), np.int64), np.ones((3, 3)), np.ones(3), i0, idx2,
+                     idx2, np.zeros((1, 3, 2), np.int64), np.ones(2), td, td, td)
     xs, rs, off = cn0_growth_samples(td, td, ok, ok, m, m, td, np.ones(2))
     cn0_growth_update(xs, rs, off, np.zeros((2, 2, 4)), np.zeros((2, 2)), np.ones((2, 2)), 300.0, 10, 0.05, POW2)
     white_noise_update(td, td, ok, ok, m, m, np.ones_like(td), np.ones_like(td), np.ones(2), np.ones(2),

@@ -80,4 +80,5 @@ def smooth_filter_result(fr) -> int:
     f = np.clip(sd.get("corr_share", np.zeros(n_ep)), 0.0, 1.0)[ep, None, None]
     P_post = sd["P_post"][ep, 3:, 3:]
     fr.P_b_m2[ep] = Ps[ep, 3:, 3:] + f * (P_post - Ps[ep, 3:, 3:])
+    sd["epochs_smoothed"] = int(ep.size)
     return int(ep.size)

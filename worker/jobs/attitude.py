@@ -58,6 +58,10 @@ class AttitudeConfig(BaseModel):
                               "single-frequency starts sooner, docs/ttff.md).")
     min_ratio_constrained: float = Field(3.0, ge=1, le=1000,
                                          description="constrained: ratio of the constrained objective to accept.")
+    smoother: bool = Field(False, description="Dynamic mode: fixed-interval (RTS) smoothing of the angular velocity "
+                                              "and baselines after the forward pass, so each epoch also uses the "
+                                              "later data: no lag in slews, about half the noise (docs/attitude.md "
+                                              "'Where the slew errors come from'). Off: the forward filter's output.")
     attitude_method: Literal["quest", "triad"] = "quest"
     initial_q_body_from_ecef: list[float] | None = Field(
         None, min_length=4, max_length=4, description="Initial attitude; default Earth pointing (spacecraft) or "
