@@ -4,6 +4,7 @@ on one and two workers.
 
     .venv/bin/python -m bench.bench_ttff study   --count 200 --seed 1 --procs 2   # -> /tmp/bench_ttff_study.json
     .venv/bin/python -m bench.bench_ttff cubesat --count 4 --seed 1              # -> /tmp/bench_ttff_cubesat.json
+    .venv/bin/python -m bench.bench_ttff cubesat --count 4 --seed 1 --duration 600   # the earlier 600 s sets
     .venv/bin/python -m bench.bench_ttff job     --count 200 --workers 1 2        # -> /tmp/bench_ttff_job.json
     .venv/bin/python -m bench.bench_ttff report  [--rtk A.json B.json] [--write]  # tables; --write: BENCHMARKS.md
 
@@ -79,30 +80,86 @@ def cmd_study(args) -> None:
     print(f"wrote {args.out} ({wall:.0f} s)")
 
 
+def satellite_counts(ss, step_s: float) -> list[list[int]]:
+    """Per sampled epoch (every step_s, as the study samples), per baseline: satellites with L1 phase and code
+    above the Table 2 C/N0 mask on both antennas (the count epoch_problem's usability rules see)."""
+    import numpy as np
+
+    from worker.ttff.single_epoch import SingleEpochOptions
+
+    pobs, geom, t = ss.pobs, ss.geom, ss.t_s
+    f = pobs.signals.index("L1")
+    mask = SingleEpochOptions().cn0_mask("L1")
+    sample = np.flatnonzero(np.diff(np.floor((t - t[0]) / step_s), prepend=-1) > 0)
+    out = []
+    for k in sample:
+        cn = pobs.cn0_dbhz[:, k, :, f]
+        ok = (np.isfinite(pobs.code_m[:, k, :, f]) & np.isfinite(pobs.phase_m[:, k, :, f])
+              & ~(np.nan_to_num(cn, nan=np.inf) < mask) & ~((np.maximum(pobs.lli[:, k, :, f], 0) & 2).astype(bool))
+              & geom.valid[k][None, :] & pobs.present[:, k][:, None])
+        out.append([int((ok[a] & ok[b]).sum()) for a, b in ss.bl_idx])
+    return out
+
+
 def cmd_cubesat(args) -> None:
-    """Single-frequency single-epoch success on CubeSat-like sets (10 cm baselines, L1 only, preset `cubesat`)."""
+    """Single-frequency single-epoch success on CubeSat-like sets (10 cm baselines, L1 only, preset `cubesat`):
+    every sampled epoch of every set counts (acquisition included unless --no-acquisition)."""
     from threadpoolctl import threadpool_limits
 
     from worker.sim import simulate_scenario
+    from worker.sim.scenarios import make_params
     from worker.ttff.data import load_study_set
     from worker.ttff.study import StudyOptions, run_set
 
     threadpool_limits(1)
+    duration = args.duration if args.duration else make_params("cubesat").duration_s
     res = []
     for i in range(args.count):
         tmp = Path(tempfile.mkdtemp(prefix="cubesat_"))
         try:
-            ov = {"count": 1, "duration_s": args.duration, "truth_components": False,
+            ov = {"count": 1, "duration_s": duration, "truth_components": False,
                   "start_gps": f"2019-0{1 + i % 9}-1{i % 10}T0{i % 10}:00:00"}
+            if args.no_acquisition:
+                ov["acquisition_delays"] = False
             simulate_scenario("cubesat", tmp, seed=args.seed * 1000 + i, overrides=ov)
             ss = load_study_set(set_files(tmp), f"cubesat {i}", truth_dir=tmp / "truth")
             r = run_set(ss, StudyOptions(configurations=("L1",), methods=("epoch-lambda", "epoch-constrained"),
                                          max_duration_s=None, single_epoch_step_s=args.step))
+            r["satellites_per_baseline"] = satellite_counts(ss, args.step)
             res.append(r)
             print(i, r["seconds"], flush=True)
         finally:
             shutil.rmtree(tmp, ignore_errors=True)
-    Path(args.out).write_text(json.dumps({"count": args.count, "seed": args.seed, "results": res}))
+    Path(args.out).write_text(json.dumps({"count": args.count, "seed": args.seed, "duration_s": duration,
+                                          "step_s": args.step, "acquisition_delays": not args.no_acquisition,
+                                          "results": res}))
+    print(cubesat_lines(json.loads(Path(args.out).read_text())))
+
+
+def cubesat_lines(cubesat: dict) -> str:
+    """Markdown lines of a cubesat run: success per method and baseline, and the satellite-count distribution."""
+    from collections import Counter
+
+    from worker.ttff.study import summarize
+
+    cr = [row for r in cubesat["results"] for row in r["runs"]]
+    cs = summarize(cr)["methods"]
+    acq = cubesat.get("acquisition_delays", True)
+    lines = [f"CubeSat-like (preset `cubesat`: 10 cm L-shaped baselines, L1 only, 45 dB-Hz zenith; "
+             f"{cubesat['count']} sets of {cubesat.get('duration_s', 600):.0f} s, seed {cubesat['seed']}, "
+             f"switch-on acquisition delays {'on (preset default)' if acq else 'off'}, every "
+             f"{cubesat.get('step_s', 5):.0f} s sampled, every sampled epoch counted), single-epoch success:", ""]
+    for m in ("epoch-lambda", "epoch-constrained"):
+        d = cs.get(m, {}).get("L1", {})
+        parts = [f"{bl}: {_pct(v['single_epoch_success'])} % of {v['single_epoch_epochs']}, wrong "
+                 f"{v['single_epoch_wrong']}" for bl, v in d.items()]
+        lines.append(f"- {m}: " + "; ".join(parts))
+    counts = [n for r in cubesat["results"] for ep in r.get("satellites_per_baseline", []) for n in ep]
+    if counts:
+        c = Counter(min(n, 7) for n in counts)
+        lines.append("- satellites per baseline and sampled epoch (L1 above 35 dB-Hz on both antennas): "
+                     + ", ".join(f"{'>= 7' if k == 7 else k}: {v}" for k, v in sorted(c.items())))
+    return "\n".join(lines)
 
 
 def _proc_cpu_s(pid: int) -> float:
@@ -223,16 +280,7 @@ def report(study: dict, cubesat: dict | None, job: dict | None, rtk: dict | None
     lines += ["", f"Per start (simulation + study of 3 configurations x 3 methods): median "
                   f"{sorted(secs)[len(secs) // 2]:.2f} s, {study['procs']} processes, wall {study['wall_s']:.0f} s."]
     if cubesat:
-        cr = [row for r in cubesat["results"] for row in r["runs"]]
-        cs = summarize(cr)["methods"]
-        lines += ["", f"CubeSat-like (preset `cubesat`: 10 cm L-shaped baselines, L1 only, 45 dB-Hz zenith, "
-                      f"{cubesat['count']} sets, every epoch sampled at "
-                      f"{cubesat['results'][0]['n_epochs'] and 'the configured step'}), single-epoch success:", ""]
-        for m in ("epoch-lambda", "epoch-constrained"):
-            d = cs.get(m, {}).get("L1", {})
-            parts = [f"{bl}: {_pct(v['single_epoch_success'])} % of {v['single_epoch_epochs']}, wrong "
-                     f"{v['single_epoch_wrong']}" for bl, v in d.items()]
-            lines.append(f"- {m}: " + "; ".join(parts))
+        lines += ["", cubesat_lines(cubesat)]
     if job:
         lines += ["", f"`ttff` job over {job['count']} simulated starts ({job['duration_s']:.0f} s each, single-epoch "
                       f"step {job['step_s']:.0f} s, all 3 configurations and 3 methods), submitted through the API "
@@ -276,7 +324,10 @@ def main(argv=None) -> None:
     p = sub.add_parser("cubesat")
     p.add_argument("--count", type=int, default=4)
     p.add_argument("--seed", type=int, default=1)
-    p.add_argument("--duration", type=float, default=600.0)
+    p.add_argument("--duration", type=float, default=None,
+                   help="seconds per set (default: the preset's own duration_s, 3000 s)")
+    p.add_argument("--no-acquisition", action="store_true",
+                   help="receivers start already tracking (preset default: switch-on acquisition delays)")
     p.add_argument("--step", type=float, default=5.0)
     p.add_argument("--out", default="/tmp/bench_ttff_cubesat.json")
     p = sub.add_parser("job")

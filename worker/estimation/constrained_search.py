@@ -29,11 +29,13 @@ By the chain rule for the joint quadratic form of (z, b), every completion of a 
 with ``dist_k`` the MLAMBDA partial squared norm and ``c_k`` a closed-form Euclidean distance to Omega
 (sphere: (|b| - l)^2; two baselines: min over O(3) of ||B - R F||_F^2 = ||B||^2 + ||F||^2 - 2 ||B F^T||_*;
 more: the sum of the per-baseline length terms). A node is pruned when this bound reaches the current radius
-(the m-th best full cost found, or the start radius), a leaf's exact cost is evaluated (sphere: the
-trust-region secular equation; rotation: Gauss-Newton on SO(3) from the orthogonal Procrustes / Wahba SVD
-solution), and the radius is expanded x4 (search and expand, Teunissen 2010 sec. 5) until the best and the
-second-best candidates (or a ratio cap) are inside. The result is the exact minimiser for C-LAMBDA and, for
-MC-LAMBDA, exact up to the Gauss-Newton solution of the weighted rotation fit being the global one.
+(the m-th best full cost found, or the start radius); for one baseline a node passing it is also checked against
+a lower bound of the exact cost-to-go min_{|b| = l} ||b_hat(z_{k:}) - b||^2_{Q_b|z_{k:}} (the Lagrangian dual of the
+trust-region problem, ``_sphere_dual_bound``). A leaf's exact cost is evaluated (sphere: the trust-region secular
+equation; rotation: damped Newton on SO(3) from the orthogonal Procrustes / Wahba SVD solution and, for coplanar
+baselines, its mirror images, ``rotation_starts``), and the radius is expanded x4 (search and expand, Teunissen
+2010 sec. 5) until the best and the second-best candidates (or a ratio cap) are inside. The result is the exact
+minimiser for C-LAMBDA and, for MC-LAMBDA, exact up to the rotation fit being the global one.
 
 Input layout (what a single-difference attitude EKF hands over; see docs/design/ambiguity_resolution.md):
 ambiguities are double differences ordered by blocks, one block per (baseline, signal), each block ordered by
@@ -60,6 +62,7 @@ __all__ = [
     "dd_geometry", "dd_operator", "single_epoch_float", "float_from_single_differences",
     "constrained_search", "constrained_search_float", "constrained_search_by_baselines", "sphere_fit",
     "rotation_fit",
+    "rotation_starts",
 ]
 
 #: Start radius: the chi-square quantile of the full objective's degrees of freedom (n + constraint residual
@@ -268,7 +271,12 @@ def sphere_fit(b_hat_m: np.ndarray, W: np.ndarray, length_m: float) -> tuple[flo
     unique root mu > -w_min of |y(mu)| = l, found by Newton on 1/|y(mu)| - 1/l safeguarded by bisection.
     """
     w, V = np.linalg.eigh(W)
-    c = V.T @ np.asarray(b_hat_m, float)
+    return _sphere_fit_eig(np.asarray(b_hat_m, float), w, V, length_m)
+
+
+def _sphere_fit_eig(b_hat_m: np.ndarray, w: np.ndarray, V: np.ndarray, length_m: float) -> tuple[float, np.ndarray]:
+    """``sphere_fit`` with W = V diag(w) V^T given (w ascending)."""
+    c = V.T @ b_hat_m
     wc = w * c
     lo = -w[0]
     # |y(mu)| <= |w c| / (w_min + mu): an upper bracket where |y| <= l
@@ -296,8 +304,44 @@ def sphere_fit(b_hat_m: np.ndarray, W: np.ndarray, length_m: float) -> tuple[flo
     y = wc / (w + mu)
     y *= length_m / np.linalg.norm(y)
     b = V @ y
-    r = np.asarray(b_hat_m, float) - b
-    return float(r @ W @ r), b
+    cr = c - y                                           # b_hat - b in the eigenbasis of W
+    return float(np.sum(w * cr * cr)), b
+
+
+def _sphere_dual_bound(b: list, w: list, Vt: list, length_m: float, iterations: int = 10) -> float:
+    """A lower bound of ``min_{|x| = l} (b - x)^T W (b - x)``, W = V diag(w) V^T (w ascending, > 0), in plain
+    floats (the C-LAMBDA node bound; numpy's per-call overhead dominates at 3 elements).
+
+    Implements: the Lagrangian dual of the trust-region problem, g(mu) = sum_i mu w_i c_i^2 / (w_i + mu) - mu l^2
+    for mu > -w_min, c = V^T b: every such mu gives g(mu) <= the minimum (weak duality; equal at the root of the
+    secular equation, strong duality of the trust-region problem, More & Sorensen 1983). A few safeguarded
+    Newton steps on 1/|y(mu)| - 1/l towards the root, then g at the last feasible mu.
+    """
+    c = [Vt[i][0] * b[0] + Vt[i][1] * b[1] + Vt[i][2] * b[2] for i in range(3)]
+    wc = [w[i] * c[i] for i in range(3)]
+    lo = -w[0]
+    hi = -w[0] + math.sqrt(wc[0] * wc[0] + wc[1] * wc[1] + wc[2] * wc[2]) / length_m + 1e-300
+    mu = 0.0 if lo < 0.0 < hi else 0.5 * (lo + hi)
+    for _ in range(iterations):
+        den = [w[i] + mu for i in range(3)]
+        if den[0] <= 0.0:
+            mu = 0.5 * (lo + hi)
+            continue
+        y = [wc[i] / den[i] for i in range(3)]
+        ny = math.sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2])
+        if ny > length_m:
+            lo = mu
+        else:
+            hi = mu
+        if ny == 0.0:
+            break
+        dphi = (y[0] * y[0] / den[0] + y[1] * y[1] / den[1] + y[2] * y[2] / den[2]) / ny ** 3
+        mu_new = mu + (1.0 / ny - 1.0 / length_m) / dphi
+        mu = mu_new if lo < mu_new < hi else 0.5 * (lo + hi)
+    if w[0] + mu <= 0.0:
+        return 0.0
+    g = sum(mu * w[i] * c[i] * c[i] / (w[i] + mu) for i in range(3)) - mu * length_m * length_m
+    return max(g, 0.0)
 
 
 def _skew(v: np.ndarray) -> np.ndarray:
@@ -312,6 +356,153 @@ def _procrustes(B: np.ndarray, F: np.ndarray, weights: np.ndarray) -> np.ndarray
     return U @ np.diag([1.0, 1.0, s]) @ Vt
 
 
+def _exp_so3(theta: np.ndarray) -> np.ndarray:
+    ang = float(np.linalg.norm(theta))
+    if ang == 0.0:
+        return np.eye(3)
+    K = _skew(theta / ang)
+    return np.eye(3) + math.sin(ang) * K + (1.0 - math.cos(ang)) * (K @ K)
+
+
+def _gauss_newton_rotation(bh: np.ndarray, W: np.ndarray, F: np.ndarray, R: np.ndarray,
+                           iterations: int) -> tuple[float, np.ndarray]:
+    """Damped Newton on SO(3) from R for min r^T W r, r = bh - vec(R F) (left perturbation exp([theta x]) R;
+    Gauss-Newton where the Newton matrix is not positive definite): a step is halved until the cost does not
+    increase (plain Gauss-Newton oscillated and converged slowly on large-residual problems: short baselines
+    against their errors)."""
+    def cost(Rm):
+        r = bh - (F @ Rm.T).reshape(-1)
+        return float(r @ W @ r)
+    c = cost(R)
+    for _ in range(iterations):
+        RF = F @ R.T                                     # (q, 3) rows R f_i
+        r = bh - RF.reshape(-1)
+        J = np.vstack([_skew(v) for v in RF])            # d r / d theta = [R f_i x]
+        H = J.T @ W @ J
+        g = J.T @ W @ r
+        # Newton: the residual's curvature, r' = r + J theta - theta x (theta x R f_i) / 2 + ..., adds -M to
+        # the Gauss-Newton matrix, M = sum_i sym(w_i v_i^T) - (w_i . v_i) I, w = W r, v_i = R f_i
+        w = (W @ r).reshape(-1, 3)
+        M = sum(0.5 * (np.outer(wi, vi) + np.outer(vi, wi)) - float(wi @ vi) * np.eye(3) for wi, vi in zip(w, RF))
+        try:
+            Hn = H - M
+            theta = -np.linalg.solve(Hn, g) if np.linalg.eigvalsh(Hn)[0] > 0.0 else -np.linalg.solve(H, g)
+        except np.linalg.LinAlgError:
+            break
+        if float(np.linalg.norm(theta)) < 1e-12:
+            break
+        for _ in range(12):
+            R_new = _exp_so3(theta) @ R
+            c_new = cost(R_new)
+            if c_new <= c:
+                break
+            theta = 0.5 * theta
+        else:
+            break
+        done = c - c_new <= 1e-14 * max(c, 1e-300) and float(np.linalg.norm(theta)) < 1e-9
+        R, c = R_new, c_new
+        if done:
+            break
+    return c, R
+
+
+def _skew_batch(v: np.ndarray) -> np.ndarray:
+    """(..., 3) -> (..., 3, 3) cross-product matrices."""
+    S = np.zeros(v.shape + (3,))
+    S[..., 0, 1], S[..., 0, 2], S[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    S[..., 1, 0], S[..., 2, 0], S[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
+    return S
+
+
+def _exp_so3_batch(theta: np.ndarray) -> np.ndarray:
+    """(k, 3) rotation vectors -> (k, 3, 3) rotation matrices (Rodrigues)."""
+    ang = np.linalg.norm(theta, axis=1)
+    safe = np.where(ang > 0.0, ang, 1.0)
+    K = _skew_batch(theta / safe[:, None])
+    s, c = np.sin(ang)[:, None, None], (1.0 - np.cos(ang))[:, None, None]
+    return np.eye(3) + s * K + c * (K @ K)
+
+
+def _newton_rotation_batch(bh: np.ndarray, W: np.ndarray, F: np.ndarray, Rs: np.ndarray,
+                           iterations: int) -> tuple[np.ndarray, np.ndarray]:
+    """``_gauss_newton_rotation`` from k starts at once (numpy over the starts): (costs (k,), R (k, 3, 3))."""
+    q = F.shape[0]
+    I3 = np.eye(3)
+
+    def cost(Rm):
+        r = bh - np.einsum("kij,qj->kqi", Rm, F).reshape(len(Rm), 3 * q)
+        return np.einsum("ki,ij,kj->k", r, W, r), r
+
+    c, r = cost(Rs)
+    active = np.ones(len(Rs), bool)
+    for _ in range(iterations):
+        RF = np.einsum("kij,qj->kqi", Rs, F)                         # (k, q, 3)
+        J = _skew_batch(RF).reshape(len(Rs), 3 * q, 3)               # d r / d theta = [R f_i x]
+        WJ = W @ J                                                    # (k, 3q, 3)
+        H = np.einsum("kai,kaj->kij", J, WJ)
+        g = np.einsum("kai,ka->ki", WJ, r)
+        w = (r @ W).reshape(len(Rs), q, 3)
+        wv = np.einsum("kqi,kqj->kij", w, RF)
+        M = 0.5 * (wv + np.swapaxes(wv, 1, 2)) - np.einsum("kqi,kqi->k", w, RF)[:, None, None] * I3
+        Hn = H - M
+        pd = np.linalg.eigvalsh(Hn)[:, 0] > 0.0
+        Hs = np.where(pd[:, None, None], Hn, H)
+        try:
+            theta = -np.linalg.solve(Hs, g[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            break
+        theta[~active] = 0.0
+        moved = np.zeros(len(Rs), bool)
+        R_new, c_new, r_new = Rs, c, r
+        todo = active & (np.linalg.norm(theta, axis=1) >= 1e-12)
+        for _ in range(12):
+            if not todo.any():
+                break
+            Rt = _exp_so3_batch(theta) @ Rs
+            ct, rt = cost(Rt)
+            ok = todo & (ct <= c)
+            R_new = np.where(ok[:, None, None], Rt, R_new)
+            c_new = np.where(ok, ct, c_new)
+            r_new = np.where(ok[:, None], rt, r_new)
+            moved |= ok
+            todo &= ~ok
+            theta[todo] *= 0.5
+        done = ~moved | ((c - c_new <= 1e-14 * np.maximum(c, 1e-300)) & (np.linalg.norm(theta, axis=1) < 1e-9))
+        Rs, c, r = R_new, c_new, r_new
+        active &= ~done
+        if not active.any():
+            break
+    return c, Rs
+
+
+def rotation_starts(b_hat_m: np.ndarray, W: np.ndarray, body_baselines_m: np.ndarray) -> list[np.ndarray]:
+    """Start rotations of ``rotation_fit``: the weighted Wahba / SVD solution R0, and, when the body baselines
+    are coplanar (always for two), its mirror images across the planes normal to the eigenvectors e of the
+    summed weight blocks: R = H_e R0 D, H_e = I - 2 e e^T (frame of b_hat), D = I - 2 n n^T (n normal to the
+    baselines' plane in the body frame), a proper rotation with R f_i = H_e R0 f_i.
+
+    Why: with an anisotropic W (baselines short against their errors, e.g. 10 cm CubeSat baselines with a
+    poorly determined boresight component) the cost has a second basin at the configuration mirrored across
+    the weak plane, which Gauss-Newton from R0 alone does not leave (a right integer vector then got 72
+    instead of its 26 and lost to a wrong one: docs/ttff.md "Fewer satellites").
+    """
+    F = np.asarray(body_baselines_m, float).reshape(-1, 3)
+    q = F.shape[0]
+    B = np.asarray(b_hat_m, float).reshape(q, 3)
+    wts = np.array([np.trace(W[3 * i:3 * i + 3, 3 * i:3 * i + 3]) for i in range(q)])
+    R0 = _procrustes(B, F, wts)
+    starts = [R0]
+    _, sv, vt = np.linalg.svd(F)
+    if q == 2 or (sv.size == 3 and sv[2] <= 1e-9 * sv[0]):
+        n_body = vt[-1]
+        D = np.eye(3) - 2.0 * np.outer(n_body, n_body)
+        Wsum = sum(W[3 * i:3 * i + 3, 3 * i:3 * i + 3] for i in range(q))
+        _, E = np.linalg.eigh(0.5 * (Wsum + Wsum.T))
+        for e in E.T:
+            starts.append((np.eye(3) - 2.0 * np.outer(e, e)) @ R0 @ D)
+    return starts
+
+
 def rotation_fit(b_hat_m: np.ndarray, W: np.ndarray, body_baselines_m: np.ndarray,
                  iterations: int = 8) -> tuple[float, np.ndarray]:
     """Return ``(cost, R)``: ``min_{R in SO(3)} r^T W r``, ``r = b_hat - vec(R F)``, and the minimising R.
@@ -319,36 +510,22 @@ def rotation_fit(b_hat_m: np.ndarray, W: np.ndarray, body_baselines_m: np.ndarra
     Args:
         b_hat_m: (3q,) stacked baselines (frame A), metres. W: (3q, 3q) weight, 1/m^2.
         body_baselines_m: (q, 3) the same baselines in the body frame, metres.
-        iterations: Gauss-Newton iterations after the start.
+        iterations: Gauss-Newton iterations after each start.
 
     Returns:
         cost, R_a_from_body (3, 3) with b_i = R f_i.
 
     Implements: the weighted orthogonal Procrustes problem of MC-LAMBDA (Teunissen 2007; Giorgi et al. 2010
-    eq. 9): start from the Wahba / SVD solution weighted per baseline by the trace of its W block, then
-    Gauss-Newton with the left perturbation R <- exp([theta x]) R, d(R f)/d theta = -[R f x].
+    eq. 9): Gauss-Newton with the left perturbation R <- exp([theta x]) R, d(R f)/d theta = -[R f x], from
+    each of ``rotation_starts`` (the Wahba / SVD solution weighted per baseline by the trace of its W block and,
+    for coplanar baselines, its mirror images across the weak planes); the lowest cost is returned.
     """
     F = np.asarray(body_baselines_m, float).reshape(-1, 3)
-    q = F.shape[0]
     bh = np.asarray(b_hat_m, float)
-    B = bh.reshape(q, 3)
-    wts = np.array([np.trace(W[3 * i:3 * i + 3, 3 * i:3 * i + 3]) for i in range(q)])
-    R = _procrustes(B, F, wts)
-    for _ in range(iterations):
-        RF = F @ R.T                                     # (q, 3) rows R f_i
-        r = bh - RF.reshape(-1)
-        J = np.vstack([_skew(v) for v in RF])            # d r / d theta = [R f_i x]
-        H = J.T @ W @ J
-        g = J.T @ W @ r
-        theta = -np.linalg.solve(H, g)
-        ang = float(np.linalg.norm(theta))
-        if ang > 0.0:
-            K = _skew(theta / ang)
-            R = (np.eye(3) + math.sin(ang) * K + (1.0 - math.cos(ang)) * (K @ K)) @ R
-        if ang < 1e-12:
-            break
-    r = bh - (F @ R.T).reshape(-1)
-    return float(r @ W @ r), R
+    W = np.asarray(W, float)
+    c, R = _newton_rotation_batch(bh, W, F, np.array(rotation_starts(bh, W, F)), iterations)
+    i = int(np.argmin(c))
+    return float(c[i]), R[i]
 
 
 # -------------------------------------------------------------------------------------------- search ---
@@ -458,11 +635,15 @@ def constrained_search(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_float_m: np.n
     Linv = np.linalg.inv(dec.L)
     G = (Q_bz @ Linv) / dec.d                             # G = Q_bz L^-1 D^-1, columns g_k
     lam_max = [0.0] * (n + 1)
+    eig_k: list = [None] * (n + 1)                        # q = 1: eigen-decomposition of W_k = (Q_b|z_{k:})^-1
     Qk = Q_b.copy()
     lam_max[n] = float(np.linalg.eigvalsh(Qk)[-1])
     for k in range(n - 1, -1, -1):
         Qk = Qk - dec.d[k] * np.outer(G[:, k], G[:, k])  # Q_b|z_{k:} = Q_b|z_{k+1:} - d_k g_k g_k^T
-        lam_max[k] = max(float(np.linalg.eigvalsh(0.5 * (Qk + Qk.T))[-1]), 1e-300)
+        lq, Vq = np.linalg.eigh(0.5 * (Qk + Qk.T))
+        lam_max[k] = max(float(lq[-1]), 1e-300)
+        if q == 1 and lq[0] > 0.0:
+            eig_k[k] = (1.0 / lq[::-1], Vq[:, ::-1])       # W_k eigenvalues ascending
     # the fully conditioned covariance of the leaf, directly (better conditioned than the recursion)
     Ca = np.linalg.cholesky(Q_a)
     K = np.linalg.solve(Ca.T, np.linalg.solve(Ca, Q_ab)).T     # Q_ba Q_a^-1
@@ -471,11 +652,21 @@ def constrained_search(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_float_m: np.n
     W_leaf = np.linalg.inv(Q_cond)
     W_leaf = 0.5 * (W_leaf + W_leaf.T)
 
+    tight_fn = None
     if q == 1:
         bound_fn = _bound_sphere(float(lengths[0]))
 
         def leaf_fn(b):
             return sphere_fit(np.array(b), W_leaf, float(lengths[0]))
+
+        eig_py = [None if e is None else ([float(v) for v in e[0]], [[float(v) for v in row] for row in e[1].T])
+                  for e in eig_k]
+        l0 = float(lengths[0])
+
+        def tight_fn(k, b):
+            # a lower bound of min_{|b| = l} ||b_hat(z_{k:}) - b||^2_{Q_b|z_{k:}} (module docstring)
+            e = eig_py[k]
+            return 0.0 if e is None else _sphere_dual_bound(b, e[0], e[1], l0)
         dof = n + 1
     else:
         bound_fn = _bound_two_baselines(F) if q == 2 else _bound_lengths(lengths)
@@ -491,7 +682,7 @@ def constrained_search(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_float_m: np.n
     while True:
         try:
             found_r, nodes, leaves = _constrained_dfs(zs, dec.L, dec.d, G, lam_max, bh, bound_fn, leaf_fn, radius,
-                                                      m, max_nodes - total_nodes)
+                                                      m, max_nodes - total_nodes, tight_fn)
         except _BudgetExhausted as exc:
             total_nodes += exc.nodes
             if not found:
@@ -545,12 +736,14 @@ class _BudgetExhausted(Exception):
         self.nodes = nodes
 
 
-def _constrained_dfs(zs, L, d, G, lam_max, b_hat, bound_fn, leaf_fn, radius, m, max_nodes):
+def _constrained_dfs(zs, L, d, G, lam_max, b_hat, bound_fn, leaf_fn, radius, m, max_nodes, tight_fn=None):
     """Depth-first MLAMBDA enumeration with the constrained node bound; returns the m best inside ``radius``.
 
     Each found entry is (cost, ils_sqnorm, z list, b_hat(z) list, leaf fit). Levels as in
     ``lambda_search.search``; at each node the conditional baseline b_k = b_{k+1} - g_k u_k is updated and the
-    node is skipped (its siblings still visited) when dist + c(b_k)/lambda_max_k >= the radius.
+    node is skipped (its siblings still visited) when dist + c(b_k)/lambda_max_k >= the radius, or, with
+    ``tight_fn(k, b_k)`` (C-LAMBDA: the exact distance to the sphere in the metric of Q_b|z_{k:}, a lower bound
+    of every completion by the chain rule), when dist + tight_fn >= the radius (inner levels only).
     """
     n = len(zs)
     zs = [float(v) for v in zs]
@@ -590,7 +783,8 @@ def _constrained_dfs(zs, L, d, G, lam_max, b_hat, bound_fn, leaf_fn, radius, m, 
         g = Gt[k]
         bp = bv[k + 1]
         b = [bp[i] - g[i] * y for i in range(p)]           # b_hat(z_{k:}) = b_hat(z_{k+1:}) - g_k u_k
-        if new_dist + bound_fn(b) * inv_lam[k] < max_dist:
+        if new_dist + bound_fn(b) * inv_lam[k] < max_dist and (
+                tight_fn is None or k == 0 or new_dist + tight_fn(k, b) < max_dist):
             if k != 0:
                 dist[k] = new_dist
                 bv[k] = b
@@ -681,7 +875,7 @@ def constrained_search_by_baselines(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_
         return constrained_search(a_hat[r], Q_a[np.ix_(r, r)], bh[jb], Q_b[np.ix_(jb, jb)], Q_ab[np.ix_(r, jb)],
                                   F[i:i + 1], m=m, start_radius=start_radius, ratio_cap=cap, max_nodes=max_nodes)
 
-    def evaluate(combo):
+    def evaluate(combo, bound=math.inf):
         key = tuple(tuple(int(v) for v in c) for c in combo)
         if key in joint:
             return
@@ -690,6 +884,8 @@ def constrained_search_by_baselines(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_
             a[r] = vec
         da = a_hat - a
         y = np.linalg.solve(C, da)
+        if float(y @ y) >= bound:              # J >= its ILS part >= bound: neither best nor second below bound
+            return
         b = bh - K @ da
         c_rot, R = rotation_fit(b, W, F)
         joint[key] = (float(y @ y) + c_rot, float(y @ y), a, b, R)
@@ -728,7 +924,7 @@ def constrained_search_by_baselines(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_
     cost_of = [{tuple(int(x) for x in v): float(c) for c, v in lst} for lst, _ in lists]
     for combo in itertools.product(*pruned):
         if max(cost_of[i][tuple(int(x) for x in v)] for i, v in enumerate(combo)) < bound:
-            evaluate(combo)
+            evaluate(combo, bound)
     best = sorted(joint.values(), key=lambda t: t[0])
     cost = best[0][0]
     if len(best) > 1 and best[1][0] < ratio_cap * cost:

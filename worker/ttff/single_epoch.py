@@ -51,6 +51,10 @@ class SingleEpochOptions:
     elevation_mask_local_deg: float = -90.0               # Table 2 (spacecraft: none)
     min_sats: int = 4                      # satellites with phase on a baseline (attitude filter ar_min_sats)
     min_dd: int = 6                        # DD ambiguities of a baseline over all signals (ar_min_dd)
+    # the constrained search: the joint problem over all baselines with the body geometry has 3 unknowns (the
+    # rotation) besides the integers; 3 DDs (4 satellites) per baseline already give each baseline's float from
+    # the code and, once fixed, a baseline determined by its phase alone (see docs/ttff.md "Fewer satellites")
+    min_dd_constrained: int = 3
     max_length_error_m: float = 0.03       # Table 2
     min_ratio_constrained: float = 1.5     # ratio of the constrained objective (see docs/ttff.md)
     constrained_candidates: int = 3        # C-LAMBDA candidates per baseline combined by the MC-LAMBDA objective
@@ -67,6 +71,15 @@ class SingleEpochOptions:
     def cn0_mask(self, signal: str) -> float:
         return dict(self.cn0_mask_dbhz).get(signal, -math.inf)
 
+    def usability(self, method: str) -> tuple[int, int]:
+        """(satellites with phase per baseline and signal, DDs per baseline over all signals) a baseline needs to
+        be attempted by ``method`` ("lambda": the paper's ar_min_sats / ar_min_dd; "constrained": fewer DDs)."""
+        if method == "constrained":
+            return self.min_sats, self.min_dd_constrained
+        if method == "lambda":
+            return self.min_sats, self.min_dd
+        raise ValueError(f"unknown single-epoch method {method!r}")
+
 
 @dataclass
 class EpochProblem:
@@ -78,7 +91,8 @@ class EpochProblem:
     truth_dd: list                        # per block, (n_dd,) truth integers or None
     b_true_ecef_m: np.ndarray | None      # (q, 3) or None
     n_sats: np.ndarray                    # (q,) satellites with phase per baseline
-    usable: np.ndarray                    # (q,) bool: enough satellites / DDs for an attempt
+    usable: np.ndarray                    # (q,) bool: enough satellites / DDs for an attempt by ``method``
+    method: str = "lambda"                # whose usability rule built the problem (SingleEpochOptions.usability)
 
 
 @dataclass
@@ -102,9 +116,11 @@ def _var_factor(cn0: np.ndarray, weighting: str) -> np.ndarray:
     return np.clip(10.0 ** ((45.0 - np.nan_to_num(cn0, nan=45.0)) / 10.0), 0.25, 16.0)
 
 
-def epoch_problem(ss, k: int, signals: list[str], opts: SingleEpochOptions) -> EpochProblem | None:
+def epoch_problem(ss, k: int, signals: list[str], opts: SingleEpochOptions,
+                  method: str = "lambda") -> EpochProblem | None:
     """EpochProblem of epoch k of a StudySet for `signals` (a subset of ss.pobs.signals), or None when no
-    baseline has enough data.
+    baseline has enough data for ``method`` (its rule: ``opts.usability(method)``; only the baselines usable by
+    it enter the float solution).
 
     The reference satellite of every block is the satellite with the highest C/N0 (weakest of the antennas)
     among those with phase on every baseline and signal; if none is common, each block takes its own best.
@@ -127,6 +143,7 @@ def epoch_problem(ss, k: int, signals: list[str], opts: SingleEpochOptions) -> E
                       & ~(np.nan_to_num(cn, nan=np.inf) < opts.cn0_mask(signals[i]))
                       & ~((np.maximum(pobs.lli[:, k, :, f], 0) & 2).astype(bool)) & gv[None, :])
     ok &= pobs.present[:, k][:, None, None]
+    min_sats, min_dd = opts.usability(method)
     both = np.stack([ok[a] & ok[b] for a, b in ss.bl_idx])            # (q, n_sat, n_sig)
     common = both.all(axis=(0, 2))
     cn_min = np.nanmin(np.where(np.isfinite(pobs.cn0_dbhz[ants][:, k][..., sig_k]),
@@ -150,7 +167,7 @@ def epoch_problem(ss, k: int, signals: list[str], opts: SingleEpochOptions) -> E
         cand = []
         for i, f in enumerate(sig_k):
             sats = np.flatnonzero(both[j, :, i])
-            if sats.size < opts.min_sats:
+            if sats.size < min_sats:
                 continue
             if ref_common is not None and both[j, ref_common, i]:
                 r = ref_common
@@ -158,7 +175,7 @@ def epoch_problem(ss, k: int, signals: list[str], opts: SingleEpochOptions) -> E
                 r = int(sats[np.argmax(cn_min[sats])])
             cand.append((i, f, sats, r))
             n_dd_j += sats.size - 1
-        if n_dd_j < opts.min_dd or not cand:
+        if n_dd_j < min_dd or not cand:
             continue
         usable[j] = True
         for i, f, sats, r in cand:
@@ -253,7 +270,17 @@ def epoch_problem(ss, k: int, signals: list[str], opts: SingleEpochOptions) -> E
     b_true = None
     if ss.truth is not None and ss.truth.ok[k]:
         b_true = ss.body_baselines_m @ ss.truth.R_body_from_ecef[k]       # rows: R^T f_j (ECEF)
-    return EpochProblem(k, sol, rows, truth_dd, b_true, n_sats, usable)
+    return EpochProblem(k, sol, rows, truth_dd, b_true, n_sats, usable, method)
+
+
+def _usable_for(prob: EpochProblem, method: str, opts: SingleEpochOptions) -> np.ndarray:
+    """(q,) bool: baselines of ``prob`` that ``method`` may attempt (usable when built and enough DDs for its rule,
+    whichever method's rule built the problem)."""
+    _, min_dd = opts.usability(method)
+    n_dd = np.zeros(prob.usable.size, np.int64)
+    for blk in prob.sol.blocks:
+        n_dd[blk.baseline] += blk.n_dd
+    return prob.usable & (n_dd >= min_dd)
 
 
 def _angle_deg(u: np.ndarray, v: np.ndarray) -> float:
@@ -285,8 +312,9 @@ def solve_lambda(prob: EpochProblem, body_baselines_m: np.ndarray, opts: SingleE
     bfix = np.full((q, 3), np.nan)
     nodes = 0
     detail = [""] * q
+    usable = _usable_for(prob, "lambda", opts)
     for j in range(q):
-        if not prob.usable[j]:
+        if not usable[j]:
             detail[j] = "too few satellites"
             continue
         sub = prob.sol.baseline(j)
@@ -365,8 +393,9 @@ def solve_constrained(prob: EpochProblem, body_baselines_m: np.ndarray, opts: Si
     best_ok: list = [None] * q
     ratio = np.full(q, np.nan)
     bfix = np.full((q, 3), np.nan)
-    use = [j for j in range(q) if prob.usable[j]]
-    detail = ["too few satellites" if not prob.usable[j] else "" for j in range(q)]
+    usable = _usable_for(prob, "constrained", opts)
+    use = [j for j in range(q) if usable[j]]
+    detail = ["too few satellites" if not usable[j] else "" for j in range(q)]
     if not use:
         return EpochOutcome("constrained", acc, correct, best_ok, ratio, bfix, 0, detail)
     sol = prob.sol

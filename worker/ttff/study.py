@@ -176,10 +176,13 @@ def _epoch_runs(ss: StudySet, cfg: str, methods: list[str], opts: StudyOptions) 
     cache: dict = {}
     seconds = {m: 0.0 for m in methods}
 
-    def problem(k):
-        if k not in cache:
-            cache[k] = epoch_problem(ss, k, sigs, opts.single_epoch)
-        return cache[k]
+    def problem(k, m):
+        # each method's own usability rule (SingleEpochOptions.usability); one problem when the rules agree
+        kind = m.split("-", 1)[1]
+        key = (k, opts.single_epoch.usability(kind))
+        if key not in cache:
+            cache[key] = epoch_problem(ss, k, sigs, opts.single_epoch, kind)
+        return cache[key]
 
     out = []
     for m in methods:
@@ -193,7 +196,7 @@ def _epoch_runs(ss: StudySet, cfg: str, methods: list[str], opts: StudyOptions) 
         for k in range(n_ep):
             if (first >= 0).all():
                 break
-            p = problem(k)
+            p = problem(k, m)
             if p is None:
                 continue
             res = solver(p, body, opts.single_epoch)
@@ -203,7 +206,7 @@ def _epoch_runs(ss: StudySet, cfg: str, methods: list[str], opts: StudyOptions) 
                 first_right[j] = res.correct[j]
         # single-epoch success on the sampled epochs
         for k in sorted(sample):
-            p = problem(k)
+            p = problem(k, m)
             if p is None:
                 stats["n"] += 1                      # an epoch without a usable problem counts as a failure
                 continue
