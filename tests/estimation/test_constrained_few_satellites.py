@@ -138,3 +138,27 @@ def test_rotation_fit_is_global_on_short_imprecise_baselines():
         # the single Wahba start alone (the previous fit)
         worse += _gauss_newton_rotation(b_hat, W, body, rotation_starts(b_hat, W, body)[0], 8)[0] > ref * 1.001 + 1e-6
     assert worse >= 1        # the case the extra starts are for does occur in this family
+
+
+def test_compiled_sphere_dual_bound_equals_the_python_one():
+    """The C-LAMBDA node bound compiled (numba, scalars) gives the same floats as the plain-Python reference, and
+    both stay below the exact constrained minimum (weak duality), on random metrics, centres and lengths."""
+    from worker.estimation.constrained_search import _sphere_dual_bound, _sphere_dual_bound_nb, sphere_fit
+
+    rng = np.random.default_rng(7)
+    same = 0
+    for _ in range(2000):
+        A = rng.normal(size=(3, 3))
+        W = A @ A.T + rng.uniform(1e-3, 10.0) * np.eye(3)
+        w, V = np.linalg.eigh(W)
+        b = rng.normal(scale=rng.choice([0.05, 1.0, 5.0]), size=3)
+        length = float(rng.uniform(0.05, 2.0))
+        wl, Vt = [float(v) for v in w], [[float(v) for v in row] for row in V.T]
+        ref = _sphere_dual_bound([float(v) for v in b], wl, Vt, length)
+        got = _sphere_dual_bound_nb(float(b[0]), float(b[1]), float(b[2]), *wl, *[v for row in Vt for v in row],
+                                    length, 3.0)
+        assert got == pytest.approx(ref, rel=1e-12, abs=1e-300)
+        same += got == ref
+        exact, _ = sphere_fit(b, W, length)
+        assert got <= exact * (1 + 1e-9) + 1e-12
+    assert same >= 1990, same          # bit-identical but for rare last-bit differences

@@ -51,6 +51,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 from scipy.stats import chi2 as _chi2
 
 from worker.estimation.lambda_search import (
@@ -341,6 +342,48 @@ def _sphere_dual_bound(b: list, w: list, Vt: list, length_m: float, iterations: 
     if w[0] + mu <= 0.0:
         return 0.0
     g = sum(mu * w[i] * c[i] * c[i] / (w[i] + mu) for i in range(3)) - mu * length_m * length_m
+    return max(g, 0.0)
+
+
+@njit(cache=True, nogil=True)
+def _sphere_dual_bound_nb(b0: float, b1: float, b2: float, w0: float, w1: float, w2: float,
+                          v00: float, v01: float, v02: float, v10: float, v11: float, v12: float,
+                          v20: float, v21: float, v22: float, length_m: float, three: float,
+                          iterations: int = 10) -> float:
+    """``_sphere_dual_bound`` compiled, on scalars (Vt = [[v00, v01, v02], ...]); the same IEEE operations in
+    the same order, ``ny ** 3`` as pow(ny, three) with three = 3.0 given at run time, as Python computes it.
+    The C-LAMBDA DFS calls it at every node (~250,000 calls in a 200-start ttff job's 12 sets): ~25 us in
+    Python, ~1 us here. tests/estimation/test_constrained_few_satellites.py compares it with the Python one.
+
+    Implements: the Lagrangian dual bound of the trust-region problem (More & Sorensen 1983), as
+    ``_sphere_dual_bound``."""
+    c0 = v00 * b0 + v01 * b1 + v02 * b2
+    c1 = v10 * b0 + v11 * b1 + v12 * b2
+    c2 = v20 * b0 + v21 * b1 + v22 * b2
+    wc0, wc1, wc2 = w0 * c0, w1 * c1, w2 * c2
+    lo = -w0
+    hi = -w0 + math.sqrt(wc0 * wc0 + wc1 * wc1 + wc2 * wc2) / length_m + 1e-300
+    mu = 0.0 if lo < 0.0 < hi else 0.5 * (lo + hi)
+    for _ in range(iterations):
+        d0, d1, d2 = w0 + mu, w1 + mu, w2 + mu
+        if d0 <= 0.0:
+            mu = 0.5 * (lo + hi)
+            continue
+        y0, y1, y2 = wc0 / d0, wc1 / d1, wc2 / d2
+        ny = math.sqrt(y0 * y0 + y1 * y1 + y2 * y2)
+        if ny > length_m:
+            lo = mu
+        else:
+            hi = mu
+        if ny == 0.0:
+            break
+        dphi = (y0 * y0 / d0 + y1 * y1 / d1 + y2 * y2 / d2) / math.pow(ny, three)
+        mu_new = mu + (1.0 / ny - 1.0 / length_m) / dphi
+        mu = mu_new if lo < mu_new < hi else 0.5 * (lo + hi)
+    if w0 + mu <= 0.0:
+        return 0.0
+    g = (mu * w0 * c0 * c0 / (w0 + mu) + mu * w1 * c1 * c1 / (w1 + mu) + mu * w2 * c2 * c2 / (w2 + mu)
+         - mu * length_m * length_m)
     return max(g, 0.0)
 
 
@@ -659,14 +702,15 @@ def constrained_search(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_float_m: np.n
         def leaf_fn(b):
             return sphere_fit(np.array(b), W_leaf, float(lengths[0]))
 
-        eig_py = [None if e is None else ([float(v) for v in e[0]], [[float(v) for v in row] for row in e[1].T])
+        # per level: (w0, w1, w2, Vt row-major) as floats for the compiled bound
+        eig_py = [None if e is None else tuple(float(v) for v in e[0]) + tuple(float(v) for v in e[1].T.ravel())
                   for e in eig_k]
         l0 = float(lengths[0])
 
         def tight_fn(k, b):
             # a lower bound of min_{|b| = l} ||b_hat(z_{k:}) - b||^2_{Q_b|z_{k:}} (module docstring)
             e = eig_py[k]
-            return 0.0 if e is None else _sphere_dual_bound(b, e[0], e[1], l0)
+            return 0.0 if e is None else _sphere_dual_bound_nb(b[0], b[1], b[2], *e, l0, 3.0)
         dof = n + 1
     else:
         bound_fn = _bound_two_baselines(F) if q == 2 else _bound_lengths(lengths)
