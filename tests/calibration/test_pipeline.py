@@ -14,7 +14,7 @@ from tests.calibration._campaign import (compare_maps_mm, input_set, simulate_ca
                                          truth_split)
 from worker.context import JobContext
 from worker.errors import JobInputError
-from worker.jobs.calibration import CalibrationConfig
+from worker.jobs.calibration import HELD_OUT_ATTITUDE_DEFAULT, CalibrationConfig
 from worker.pipelines.calibration import run
 
 BENIGN = {"noise": False, "multipath": False, "cn0_jitter_db": 0.0}
@@ -168,7 +168,8 @@ def test_config_refuses_a_grid_that_does_not_divide():
 
 
 def test_held_out_comparison_is_the_attitude_filter_with_the_published_calibration(tmp_path, pcv_campaign):
-    """held_out_attitude.json comes from the attitude filter (dynamic mode, the attitude job's defaults) on the
+    """held_out_attitude.json comes from the attitude filter (dynamic mode, smoother, all phases: the default
+    held_out_attitude_config) on the
     held-out set, a priori vs calibrated baselines + maps, and is exactly what an attitude job with the published
     baselines.json and maps (pcv_map_ids) gives; on this noiseless campaign the calibration removes the
     attitude bias that the Table 3 offsets and the PCV put into the a priori solution."""
@@ -197,7 +198,9 @@ def test_held_out_comparison_is_the_attitude_filter_with_the_published_calibrati
     maps = [(name, json.loads(prod[name])) for name in sorted(prod) if name.startswith("pcv_") and
             name.endswith(".json")]
     inputs = load_inputs([(f.name, f.kind, f.path) for f in sets[-1].files])
-    settings = AttitudeConfig(calibrated_baselines=json.loads(prod["baselines.json"])).to_settings()
+    assert doc["attitude_config"] == HELD_OUT_ATTITUDE_DEFAULT
+    settings = AttitudeConfig(**HELD_OUT_ATTITUDE_DEFAULT,
+                              calibrated_baselines=json.loads(prod["baselines.json"])).to_settings()
     settings.pcv_maps = maps_for_settings(maps, list(inputs.platform.baselines))
     job = filter_errors(inputs, settings)
     for a in ("yaw", "pitch", "roll"):
@@ -212,6 +215,8 @@ def test_held_out_attitude_config_is_an_attitude_job_config():
 
     assert CalibrationConfig(held_out_attitude_config={"mode": "kinematic"}).held_out_attitude_config["mode"] == \
         "kinematic"
+    assert CalibrationConfig().held_out_attitude_config == HELD_OUT_ATTITUDE_DEFAULT
+    assert CalibrationConfig(held_out_attitude_config={}).held_out_attitude_config == {}
     for bad in ({"calibrated_baselines": {}}, {"pcv_map_ids": ["x"]}, {"no_such_setting": 1}, {"mode": "other"}):
         with pytest.raises(ValidationError) as exc:
             CalibrationConfig(held_out_attitude_config=bad)

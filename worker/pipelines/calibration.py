@@ -127,8 +127,9 @@ def held_out_attitude(payload: dict, s, calibrated: dict, maps: dict, options, e
     from worker.attitude.process import InputProblem, load_inputs
     from worker.calibration.held_out import filter_comparison, map_documents
     from worker.jobs.attitude import AttitudeConfig
+    from worker.jobs.calibration import HELD_OUT_ATTITUDE_DEFAULT
 
-    att_cfg = AttitudeConfig(**payload["config"].get("held_out_attitude_config", {}))
+    att_cfg = AttitudeConfig(**payload["config"].get("held_out_attitude_config", HELD_OUT_ATTITUDE_DEFAULT))
     out = {"set": _label(s),
            "method": f"attitude filter ({att_cfg.mode} mode, the attitude job's processing) against the set's "
                      "reference attitude, over the fixed epochs: a priori baselines without maps vs calibrated "
