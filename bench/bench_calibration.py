@@ -470,9 +470,10 @@ def main() -> None:
     ap.add_argument("--no-service", action="store_true")
     ap.add_argument("--ekf", action="store_true")
     ap.add_argument("--twin", action="store_true", help="also calibrate the noiseless twin campaign")
-    ap.add_argument("--held-out-config", default="{}",
+    ap.add_argument("--held-out-config", default=None,
                     help="JSON: the calibration's held_out_attitude_config (attitude job config of the held-out "
-                         "comparison), also used by --ekf and --budget")
+                         "comparison), also used by --ekf and --budget; default: the calibration's default "
+                         "(smoother, all phases); '{}' = the attitude job's defaults")
     ap.add_argument("--budget", action="store_true",
                     help="error budget of the held-out comparison: true/calibrated baselines and maps, twins "
                          "without multipath and noise (held_out_budget)")
@@ -505,7 +506,9 @@ def main() -> None:
                                        "reference_sigma_arcsec": 0.0}) if args.twin else None
     t_sim = time.perf_counter() - t0
     held = dirs[-1]
-    held_cfg = json.loads(args.held_out_config)
+    from worker.jobs.calibration import HELD_OUT_ATTITUDE_DEFAULT
+
+    held_cfg = HELD_OUT_ATTITUDE_DEFAULT if args.held_out_config is None else json.loads(args.held_out_config)
     cfg = {"held_out_set": "cal" + f"{n - 1:03d}", "held_out_attitude_config": held_cfg}
     prod, wall, ctx = run_inprocess(dirs, cfg, "cal", work / "jobs")
     cfg_twin = {"held_out_set": "twn" + f"{n - 1:03d}"}
