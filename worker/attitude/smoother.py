@@ -296,7 +296,8 @@ def adaptive_substate_smooth(sd: dict, start: np.ndarray, settings) -> tuple[np.
         xs, Ps = rts_smooth(xf, Pf, xp, Pp, Phi, start)
     sig = np.degrees(np.sqrt(np.linalg.eigvalsh(Qw)[:, -1]))
     run = ~start
-    info = {"method": "omega random walk per epoch from the smoothed angular acceleration, sub-state re-filtered",
+    info = {"method": "omega random walk per epoch from the smoothed angular acceleration; (omega, baselines) "
+                      "re-filtered from the recorded information (scaled by its misfit) and smoothed again",
             "floor_sigma_omega_deg_s": float(np.degrees(np.sqrt(settings.smoother_noise_floor * q1))),
             "max_sigma_omega_deg_s": float(sig[run].max()) if run.any() else None,
             "epochs_above_table1": int(np.sum(run & (sig > np.degrees(np.sqrt(q1)))))}
