@@ -5,8 +5,9 @@ bookkeeping masks, and the residual records.
 
 The filter did this with ~100 numpy calls per epoch on arrays of a few dozen elements; each kernel here does a
 stretch of it in one call and gives the same bits: the same element-wise IEEE operations in the same order,
-medians as worker.attitude.kernels.masked_median_axis1. Transcendental functions (arcsin, arctan2, log, exp, power)
-stay in numpy, whose SIMD loops differ from the C library's in the last bit. Rare events (clock jumps, phase
+medians as worker.attitude.kernels.masked_median_axis1 (of an insertion sort of the few values, no allocation).
+Transcendental functions (arcsin, arctan2, log, exp, power) stay in numpy, whose SIMD loops differ from the C
+library's in the last bit. Rare events (clock jumps, phase
 clock jumps, slips, gaps, states to add or drop) come back as masks and counts, so the filter only loops in
 Python when one happened. tests/attitude/test_qc_kernels.py compares every kernel with the numpy code it replaced.
 
@@ -18,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from worker.attitude.kernels import POW2, cn0_growth_update, masked_median_axis1, white_noise_update
+from worker.attitude.kernels import POW2, cn0_growth_update, white_noise_update
 from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 
 __all__ = ["reset_white_clocks", "propagate_dynamic", "propagate_kinematic", "clip_pair", "qc_epoch",
@@ -27,6 +28,20 @@ __all__ = ["reset_white_clocks", "propagate_dynamic", "propagate_kinematic", "cl
 #: reason codes set here (worker.attitude.filter.REASONS)
 R_ANTENNA, R_CN0, R_TD_CODE, R_TD_PHASE, R_HALF, R_PCV_EMPTY = 2, 3, 4, 5, 6, 10
 RAD2DEG = 180.0 / np.pi          # np.degrees multiplies by this constant
+
+
+@njit(cache=True, nogil=True)
+def _median_of(buf, n):
+    """Median of the n values buf[:n] (no NaN) as np.median / masked_median_axis1 give it: 0.5 (lo + hi) of the
+    middle ones after an insertion sort in place (a few dozen values; no allocation)."""
+    for a in range(1, n):
+        v = buf[a]
+        b = a - 1
+        while b >= 0 and buf[b] > v:
+            buf[b + 1] = buf[b]
+            b -= 1
+        buf[b + 1] = v
+    return 0.5 * (buf[(n - 1) // 2] + buf[n // 2])
 
 
 @njit(cache=True, nogil=True)
@@ -151,11 +166,7 @@ def qc_epoch(asn, az, mask_on, ever_fixed, el_mask_ant_rad, reason0, pcv_empty, 
                 if not np.isnan(v):
                     buf[n] = v
                     n += 1
-        if n == 0:
-            raw = np.nan
-        else:
-            srt = np.sort(buf[:n])
-            raw = 0.5 * (srt[(n - 1) // 2] + srt[n // 2])
+        raw = _median_of(buf, n) if n else np.nan
         have0 = np.isfinite(raw)
         pc, pt, rate = clk_state[0, j], clk_state[1, j], clk_state[2, j]
         pred = pc + rate * (t - pt)
@@ -200,13 +211,19 @@ def qc_epoch(asn, az, mask_on, ever_fixed, el_mask_ant_rad, reason0, pcv_empty, 
                     td_p_ok[j, s, f] = False
     n_common = 0
     if do_td:
-        mc = masked_median_axis1(td_c, td_c_ok)
-        mp = masked_median_axis1(td_p, td_p_ok)
+        # medians over the satellites (worker.attitude.kernels.masked_median_axis1 of td, td_ok)
         for j in range(n_bl):
             for f in range(n_sig):
-                mcp[0, j, f] = mc[j, f]
-                mcp[1, j, f] = mp[j, f]
-                d = mp[j, f] - mc[j, f]
+                for q in range(2):
+                    td = td_c if q == 0 else td_p
+                    ok = td_c_ok if q == 0 else td_p_ok
+                    n = 0
+                    for s in range(n_sat):
+                        if ok[j, s, f]:
+                            buf[n] = td[j, s, f]
+                            n += 1
+                    mcp[q, j, f] = _median_of(buf, n) if n else np.nan
+                d = mcp[1, j, f] - mcp[0, j, f]
                 if not np.isnan(d) and np.abs(d) > 1000.0:
                     n_common += 1
     else:
