@@ -317,6 +317,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     w_ev = np.zeros((2,) + shp, bool)          # TD slips without LLI, LLI slips to report
     w_bk = np.zeros((2,) + shp, bool)          # states to drop, phases needing a state
     w_lookup = np.zeros((2,) + shp)
+    # the per-epoch names are views of these arrays, made once (unpacked again every epoch: cheap, and a name
+    # rebound to another array further down the loop does not leak into the next epoch)
+    views = (*w_el, w_reason, *wb, *wf, *w_mcp)
     no_pcv = np.zeros(shp, bool)
     pcv_zero = np.zeros(shp)
     prev_ub = np.zeros((n_bl, n_sat))
@@ -394,12 +397,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         n_jump, n_common = qc_epoch(asn, az, R_mask is not None, ever_fixed, s.elevation_mask_antenna_deg * DEG,
                                     blk.reason[i], empty, pcv_on, blk.low_cn0[i], avail_p, sdc, sdp, cfac, ub,
                                     prev_ub, do_td, prev_sdc, prev_sdp, pa, lli, t, clk_state, CLOCK_JUMP_M,
-                                    TD_MAX_DT_S, w_el[0], w_el[1], w_el[2], w_reason, wb, wf, w_clk, w_jump, w_mcp)
-        el_w, el_ant, az_ant = w_el
-        reason = w_reason
-        use_c, use_p, slip, td_c_ok, td_p_ok = wb
-        sdc_c, sdp_c, td_c, td_p = wf
-        mc, mp = w_mcp
+                                    TD_MAX_DT_S, *views[:3], w_reason, wb, wf, w_clk, w_jump, w_mcp)
+        el_w, el_ant, az_ant, reason, use_c, use_p, slip, td_c_ok, td_p_ok, sdc_c, sdp_c, td_c, td_p, mc, mp = views
         if n_jump:
             clk0, clk_pred = w_clk
             for j in np.flatnonzero(w_jump):
