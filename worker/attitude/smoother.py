@@ -114,8 +114,11 @@ def smooth_filter_result(fr, settings=None) -> int:
 #
 # alpha from the smoothed omega over +-accel_window, q_1 Table 1's rate; the largest acceleration nearby sets the
 # noise so that it is raised at the onset of a manoeuvre (the jump of the angular jerk, where the spline's
-# shrinkage error is largest) and along the acceleration only. Then the (omega, baselines) sub-state is
-# re-filtered with Q_k and smoothed again.
+# shrinkage error is largest) and along the acceleration only. Each epoch's information is divided by the mean
+# misfit of the information within +-smoother_info_window_s to the smoothed state relative to the pass's median
+# (>= 1; the first ~20 s after the first fix show 2.5-3x: information gathered while omega had just been reset).
+# Then the (omega, baselines) sub-state is re-filtered with Q_k and smoothed again. Chosen on the slews of
+# bench/bench_attitude.py, seeds 0-3 (docs/attitude.md "Adaptive process noise of the smoother").
 #
 # The re-run needs no measurement: per epoch of a fixed run, the information the update added to the sub-state
 # is recovered from the recorded prior and posterior (information form, Maybeck 1979 sec. 5.7):
