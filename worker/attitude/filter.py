@@ -32,7 +32,7 @@ from worker.attitude.ambiguity import (
     first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
 )
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
-from worker.attitude.qc_kernels import (clip_pair, grow_square, growth_weights, propagate_dynamic,
+from worker.attitude.qc_kernels import (epoch_geometry, grow_square, growth_weights, propagate_dynamic,
                                         propagate_kinematic, qc_epoch, record_epoch, reset_white_clocks,
                                         take_square, td_checks)
 from worker.attitude.fastops import clip as _clip, nz as _nz
@@ -322,8 +322,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     pcv_zero = np.zeros(shp)
     prev_ub = np.zeros((n_bl, n_sat))
     Qw_iso = np.eye(3) * q_w
-    bs_a_T = np.ascontiguousarray(boresight_body[ia].T)
-    bs_b_T = np.ascontiguousarray(boresight_body[ib].T)
+    bs_a_T = np.asfortranarray(boresight_body[ia].T)        # (3, n_bl) boresights as columns (the layout of the
+    bs_b_T = np.asfortranarray(boresight_body[ib].T)        # former `@ boresight_body[ia].T`: same BLAS call)
     z_f, z_i = np.zeros(0), np.zeros(2 * n_sig + 1, np.int64)
     w_idx3 = np.arange(3)
     ix_b = np.ix_(all_b_idx, all_b_idx)
@@ -374,8 +374,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         el_loc = geom.elevation_local_rad[k]
         # antenna-frame elevation for the noise model: by the current attitude once known, else the initial one;
         # el_ant, az_ant (the antenna-frame mask, sec. 3.2 compromise) only once an attitude exists, else NaN
-        los_b = u @ (R_mask if R_mask is not None else R_body_from_ecef_0).T           # (n_sat, 3) body
-        clip_pair(los_b @ bs_a_T, los_b @ bs_b_T, w_asn)
+        # (n_sat, 3) body-frame lines of sight, the clipped boresight products and the predicted geometry b.u
+        R_los = R_mask if R_mask is not None else R_body_from_ecef_0
+        los_b, ub = epoch_geometry(u, R_los if R_los.flags.c_contiguous else np.ascontiguousarray(R_los), bs_a_T,
+                                   bs_b_T, st.x, b_idx, w_asn)
         asn = np.arcsin(w_asn)                                                 # (2, n_sat, n_bl)
         az = np.arctan2(los_b[:, 1], los_b[:, 0]) if R_mask is not None else z_f
         pcv_m, empty, pcv_on = pcv_zero, no_pcv, False
@@ -388,8 +390,6 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # to ~10 us/s relative to each other, so across an outage the change alone is no jump; no code this epoch:
         # the prediction, the phase clocks absorb the drift), and the triple differences (time differences of SDs
         # with the predicted geometry change, median-referenced)
-        b_pred = st.x[all_b_idx].reshape(n_bl, 3)
-        ub = b_pred @ u.T                                                   # (n_bl, n_sat)
         consecutive = prev_t is not None and (t - prev_t) <= TD_MAX_DT_S
         do_td = consecutive and prev_b is not None
         n_jump, n_common = qc_epoch(asn, az, R_mask is not None, ever_fixed, s.elevation_mask_antenna_deg * DEG,
@@ -690,10 +690,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # residual records (used and rejected): the epoch's code rows, then its phase rows; and the memory for the
         # triple differences (clock-corrected SDs where available)
         res_n = record_epoch(k, avail_c, avail_p, use_c, use_p, reason, el_ant, az_ant, cn0, post, m, jc, sc, fc, jp,
-                             sp, fp, w_lookup, res_i, res_f, res_n, sdc_c, sdp_c, prev_sdc, prev_sdp)
+                             sp, fp, w_lookup, res_i, res_f, res_n, sdc_c, sdp_c, prev_sdc, prev_sdp, out_b[k], u,
+                             prev_ub)                                   # prev_ub = out_b[k] @ u.T
         prev_t = t
-        prev_b = out_b[k].copy()
-        prev_ub = prev_b @ u.T
+        prev_b = out_b[k]
     if progress is not None:
         progress(1.0)
     residuals = {"epoch": res_i[0, :res_n].copy(), "bl": res_i[1, :res_n].copy(), "sat": res_i[2, :res_n].copy(),
