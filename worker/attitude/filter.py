@@ -696,11 +696,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         prev_b = out_b[k]
     if progress is not None:
         progress(1.0)
-    residuals = {"epoch": res_i[0, :res_n].copy(), "bl": res_i[1, :res_n].copy(), "sat": res_i[2, :res_n].copy(),
-                 "sig": res_i[3, :res_n].copy(), "el_ant_deg": res_f[0, :res_n].copy(),
-                 "az_ant_deg": res_f[1, :res_n].copy(), "cn0_dbhz": res_f[2, :res_n].copy(),
-                 "kind": res_i[4, :res_n].copy(), "residual_m": res_f[3, :res_n].copy(),
-                 "reason": res_i[5, :res_n].copy()}
+    # column arrays for residuals.csv (contiguous views of the record rows)
+    residuals = {"epoch": res_i[0, :res_n], "bl": res_i[1, :res_n], "sat": res_i[2, :res_n], "sig": res_i[3, :res_n],
+                 "el_ant_deg": res_f[0, :res_n], "az_ant_deg": res_f[1, :res_n], "cn0_dbhz": res_f[2, :res_n],
+                 "kind": res_i[4, :res_n], "residual_m": res_f[3, :res_n], "reason": res_i[5, :res_n]}
     arcs = np.array(st.arcs, dtype=np.int64).reshape(-1, 5)
     arcs[arcs[:, 4] < 0, 4] = n_ep - 1
     fl = np.array(fix_rows, dtype=np.float64).reshape(-1, 4)
