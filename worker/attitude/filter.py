@@ -37,10 +37,11 @@ from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update
                                      masked_median_axis1, measurement_rows, white_noise_update)
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from worker.attitude.settings import AttitudeSettings, cn0_mask_of
-from worker.attitude.update_kernels import measurement_update, phase_row_stats, white_variances
+from worker.attitude.update_kernels import (measurement_update, phase_row_stats, round_newcomers_rows,
+                                            white_variances)
 from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
 from worker.estimation.ekf import joseph_update_sparse
-from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
+from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel, sequential_update_sparse
 from worker.gnss.constants import C_M_S
 
 __all__ = ["FilterResult", "run_filter", "REASONS"]
@@ -543,10 +544,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             fixed_j = st.amb_fixed[idx_j - st.n_fixed_part]
             el_j = el_loc[sp[sel_j]]
             sig_j = fp[sel_j]
-            has_group = np.zeros((n_bl, n_sig), bool)              # signals of baseline j with a fixed ambiguity
-            has_group[st.amb_key[st.amb_fixed, 0], st.amb_key[st.amb_fixed, 2]] = True
-            has_group = has_group[j].tolist()
-            if not any(has_group):
+            if not (st.amb_fixed & (st.amb_key[:, 0] == j)).any():      # no signal of baseline j fixed yet
                 groups = first_fix_groups(idx_j, sig_j, el_j, n_sig)
                 if not groups or sum(g.size - 1 for g, _ in groups) < s.ar_min_dd:
                     continue
@@ -604,33 +602,15 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 else:
                     ev(k, "fix_rejected", j, detail=f"ratio {outcome.ratio:.2f}, {outcome.reason}")
             else:
-                Ds, vs = [], []
-                for f in range(n_sig):
-                    grp = np.flatnonzero((st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f) & st.amb_fixed)
-                    cand = idx_j[(sig_j == f) & ~fixed_j]
-                    if cand.size == 0:
-                        continue
-                    if grp.size:
-                        ref = st.n_fixed_part + grp[0]
-                    else:
-                        # first fix on this signal for a fixed baseline: the highest newcomer is the reference
-                        sel_f = (sig_j == f) & ~fixed_j
-                        ref = idx_j[sel_f][int(np.argmax(el_j[sel_f]))]
-                        cand = cand[cand != ref]
-                        var_ref = st.P[ref, ref]
-                        if cand.size == 0:
-                            continue
-                    D, v, okm = round_newcomers(st.x, st.P, cand, ref, s.new_amb_round_sigma_cyc,
-                                                s.new_amb_round_frac_cyc)
-                    if okm.any():
-                        Ds.append(D)
-                        vs.append(v)
-                        st.amb_fixed[cand[okm] - st.n_fixed_part] = True
-                        st.amb_fixed[ref - st.n_fixed_part] = True
-                if Ds:
-                    log_fix(np.concatenate(Ds), np.concatenate(vs))
-                    _pseudo_update(st, np.concatenate(Ds), np.concatenate(vs))
-                    ev(k, "fix_added", j, detail=f"{sum(len(v) for v in vs)} newcomers fixed by rounding")
+                # newcomers on a fixed baseline: DD to the fixed reference of their signal rounded (compiled)
+                nw, rf, vals = round_newcomers_rows(st.x, st.P, st.amb_key, st.amb_fixed, st.n_fixed_part, idx_j,
+                                                   sig_j, el_j, n_sig, j, s.new_amb_round_sigma_cyc,
+                                                   s.new_amb_round_frac_cyc)
+                if nw.size:
+                    fix_rows.extend(zip([k] * nw.size, st.amb_arc[nw - st.n_fixed_part].tolist(),
+                                        st.amb_arc[rf - st.n_fixed_part].tolist(), vals.tolist()))
+                    _pseudo_update_dd(st, nw, rf, vals)
+                    ev(k, "fix_added", j, detail=f"{nw.size} newcomers fixed by rounding")
         # fix monitor: post-fit phase residuals of fixed ambiguities far above the noise for FIX_CHECK_EPOCHS in a
         # row mean a wrong fix (or an undetected slip): restart every ambiguity of that baseline as float
         if mp_n:
@@ -750,6 +730,17 @@ def _residual_records(blocks: list[tuple]) -> dict:
     order = np.argsort(2 * np.concatenate([code["epoch"], phase["epoch"]])
                        + np.concatenate([code["kind"], phase["kind"]]), kind="stable")
     return {k: np.concatenate([code[k], phase[k]])[order] for k in code}
+
+
+def _pseudo_update_dd(st: _State, new_idx: np.ndarray, ref_idx: np.ndarray, a_fix: np.ndarray) -> None:
+    """Constrain the DD ambiguities x[new] - x[ref] = a_fix as `_pseudo_update` does, the rows given by their two
+    state indices: scalar updates in turn, each in the Joseph form (worker.estimation.ekf_kernels
+    .sequential_update_sparse with joseph_ratio 0), in place."""
+    cols = np.stack([new_idx, ref_idx], axis=1).astype(np.int64)
+    coef = np.empty(cols.shape)
+    coef[:, 0], coef[:, 1] = 1.0, -1.0
+    sequential_update_sparse(st.x, st.P, cols, coef, np.full(cols.shape[0], 1e-6), np.asarray(a_fix, np.float64),
+                             0.0)
 
 
 def _pseudo_update(st: _State, D: np.ndarray, a_fix: np.ndarray) -> None:

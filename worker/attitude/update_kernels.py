@@ -22,7 +22,7 @@ from worker.attitude.kernels import measurement_rows, np_sum
 from worker.estimation.ekf_kernels import sequential_update_sparse
 
 __all__ = ["cn0_factor", "mp_var", "measurement_variances", "white_variances", "measurement_update",
-           "phase_row_stats", "quest_dcm", "warm_up"]
+           "phase_row_stats", "round_newcomers_rows", "quest_dcm", "warm_up"]
 
 _HALF_PI = np.pi / 2
 
@@ -193,6 +193,73 @@ def phase_row_stats(jp, sp, cols, mc_n, amb_fixed, n_fixed_part, post, n_bl, n_s
 
 
 @njit(cache=True, nogil=True)
+def round_newcomers_rows(x, P, amb_key, amb_fixed, n_fixed_part, idx_j, sig_j, el_j, n_sig, j, max_sigma_cyc,
+                         max_frac_cyc):
+    """(new (r,), ref (r,), integers (r,)) of the DD ambiguities new - ref of baseline j fixed by rounding, and
+    amb_fixed set in place for them and their references: run_filter's "newcomers" branch with
+    worker.attitude.ambiguity.round_newcomers, per signal f in turn.
+
+    idx_j, sig_j, el_j: state index, signal and local elevation of baseline j's phase rows. Per signal: the
+    reference is the first fixed ambiguity state of (j, f), else the unfixed newcomer at the highest elevation
+    (first of equals; NaN counts as highest, as np.argmax); a DD is rounded when its sigma < max_sigma_cyc and its
+    float lies within max_frac_cyc of the integer (bootstrapping, Teunissen 1998).
+    """
+    nr = idx_j.size
+    fixed_j = np.empty(nr, np.bool_)
+    for i in range(nr):
+        fixed_j[i] = amb_fixed[idx_j[i] - n_fixed_part]
+    out_new = np.empty(nr, np.int64)
+    out_ref = np.empty(nr, np.int64)
+    out_v = np.empty(nr)
+    n_out = 0
+    for f in range(n_sig):
+        n_cand = 0
+        for i in range(nr):
+            if sig_j[i] == f and not fixed_j[i]:
+                n_cand += 1
+        if n_cand == 0:
+            continue
+        ref = -1
+        for a in range(amb_key.shape[0]):
+            if amb_key[a, 0] == j and amb_key[a, 2] == f and amb_fixed[a]:
+                ref = n_fixed_part + a
+                break
+        if ref < 0:
+            best = -1
+            for i in range(nr):
+                if sig_j[i] == f and not fixed_j[i]:
+                    if best < 0:
+                        best = i
+                    elif not np.isnan(el_j[best]) and (np.isnan(el_j[i]) or el_j[i] > el_j[best]):
+                        best = i
+            ref = idx_j[best]
+            if n_cand == 1:
+                continue
+        any_ok = False
+        for i in range(nr):
+            if sig_j[i] != f or fixed_j[i]:
+                continue
+            c = idx_j[i]
+            if c == ref:
+                continue
+            d = x[c] - x[ref]
+            var = (P[c, c] - P[ref, c]) - (P[c, ref] - P[ref, ref])
+            r = np.round(d)
+            if np.sqrt(max(var, 0.0)) < max_sigma_cyc and np.abs(d - r) < max_frac_cyc:
+                out_new[n_out] = c
+                out_ref[n_out] = ref
+                out_v[n_out] = r
+                n_out += 1
+                any_ok = True
+        if any_ok:
+            for q in range(n_out):
+                if out_ref[q] == ref:
+                    amb_fixed[out_new[q] - n_fixed_part] = True
+            amb_fixed[ref - n_fixed_part] = True
+    return out_new[:n_out], out_ref[:n_out], out_v[:n_out]
+
+
+@njit(cache=True, nogil=True)
 def quest_dcm(b_ref, b_body, w):
     """R_body_from_ref (3, 3) minimising sum_i w_i |b_body_i - R b_ref_i|^2 over directions (n, 3) of one epoch;
     NaN if fewer than two usable non-parallel directions (information matrix condition >= 1e12). Vectors with a
@@ -276,4 +343,6 @@ def warm_up() -> None:
         np.array([[-1, 6]], np.int64), amb, np.ones(2), td, td, td, vf, vf, td, np.ones((2, 2)), True,
         np.ones((1, 3)), False, np.ones((1, 3)), True, np.ones(4), 1.0, np.ones(1, np.bool_), 8, np.zeros(1), 0.0, 1e3)
     phase_row_stats(i0, i0, cols, 1, np.ones(1, np.bool_), 8, post, 1, 3)
+    round_newcomers_rows(x, P, np.zeros((1, 3), np.int64), np.zeros(1, np.bool_), 8, np.array([8], np.int64), i0,
+                         np.ones(1), 2, 0, 0.1, 0.2)
     quest_dcm(np.eye(3)[:2].copy(), np.eye(3)[:2].copy(), np.ones(2))
