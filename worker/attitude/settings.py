@@ -180,7 +180,7 @@ class AttitudeSettings:
     initial_attitude: str = "earth-pointing"    # earth-pointing (spacecraft) / level (terrestrial) | given
     initial_q_body_from_ecef: list | None = None
     # --- attitude ---
-    attitude_method: str = "quest"              # quest (weights by baseline length) | triad
+    attitude_method: str = "quest"              # quest (weights by baseline length) | triad | ml (full covariance)
     pcv_maps: dict = field(default_factory=dict)   # (first, second, freq) -> map dict (CONVENTIONS layout)
     pcv_empty_bins: str = "exclude"             # a fixed baseline's phase in an empty map bin: "exclude" (seed 000
                                                 # sec. 3.2: observations without PCV correction leave once fixed)
