@@ -242,13 +242,13 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
         R0 = R_ref_from_ecef[k0]                 # Earth pointing (orbital frame) or level, heading north
     attitude_fn = None
     if len(baselines) >= 2:
-        if settings.attitude_method == "quest":
+        if settings.attitude_method != "triad":
             w_len = np.linalg.norm(body, axis=1)
             w_len = w_len / w_len.sum()
             body_c = np.ascontiguousarray(body, dtype=np.float64)
 
             def attitude_fn(b, fixed):
-                # attitude_quaternion's QUEST (weights by length) for one epoch, compiled
+                # attitude_quaternion's QUEST (weights by length; also for "ml") for one epoch, compiled
                 return quest_dcm(np.ascontiguousarray(b, dtype=np.float64), body_c, w_len)
         else:
             def attitude_fn(b, fixed):
