@@ -37,11 +37,11 @@ from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update
                                      masked_median_axis1, measurement_rows, white_noise_update)
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from worker.attitude.settings import AttitudeSettings, cn0_mask_of
-from worker.attitude.update_kernels import (measurement_update, phase_row_stats, round_newcomers_rows,
-                                            white_variances)
+from worker.attitude.update_kernels import (fix_newcomers, measurement_update, phase_row_stats, store_outputs,
+                                            white_variances_cp)
 from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
 from worker.estimation.ekf import joseph_update_sparse
-from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel, sequential_update_sparse
+from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 from worker.gnss.constants import C_M_S
 
 __all__ = ["FilterResult", "run_filter", "REASONS"]
@@ -63,6 +63,7 @@ NOISE_MIN_EPOCHS = 10  # epochs of triple differences before the estimate replac
 CLOCK_JUMP_M = 0.5e-3 * C_M_S * 0.5   # a change of the epoch clock estimate above 75 km (0.25 ms) is a jump
 JOSEPH_RATIO = 1e3   # measurement rows with H P H^T above this many R are applied in the Joseph form (the others
                      # in the short form P - P h h P / s, worker.estimation.ekf_kernels.sequential_update_sparse)
+PSEUDO_VAR_CYC2 = 1e-6   # variance of the integer pseudo-measurements (keeps S positive definite in float64)
 PCV_ATTITUDE_AGE_S = 10.0   # PCV maps are looked up with an attitude at most this old (else not applied)
 
 
@@ -225,6 +226,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     mp_infl = s.multipath_correlation_factor if dynamic else 1.0
     mp_sig = np.array([*s.sigma_multipath_code_m, *s.sigma_multipath_phase_m], dtype=np.float64)
     elev_w = s.weighting == "elevation"
+    var_c_floor, var_p_floor = s.sigma_code_m ** 2, s.sigma_phase_m ** 2
     # C/N0 growth exponent per (code, phase) and signal, estimated from the triple differences (starts at 1)
     gamma = np.ones((2, n_sig)) if cn0_growth else np.zeros((2, n_sig))
     gam_n = np.zeros((2, n_sig))
@@ -491,17 +493,19 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             # antenna-frame elevation once an attitude exists, else the local horizon], plus the time-correlated
             # errors (multipath, uncalibrated PCV) growing with the off-boresight angle, scaled adaptively; the
             # update as scalar updates in turn; the post-fit residuals and the sums of the multipath scale
-            vc_f = white_variances(est_var_c, est_n, s.sigma_code_m ** 2, NOISE_MIN_EPOCHS, s.noise_estimation)
-            vp_f = white_variances(est_var_p, est_n, s.sigma_phase_m ** 2, NOISE_MIN_EPOCHS, s.noise_estimation)
+            vc_f, vp_f = white_variances_cp(est_var_c, est_var_p, est_n, var_c_floor, var_p_floor, NOISE_MIN_EPOCHS,
+                                            s.noise_estimation)
             watch_w = adapter is not None and ever_fixed.all() and prev_t is not None
             if watch_w:
                 w_prior, Pw_prior = st.x[0:3].copy(), st.P[0:3, 0:3].copy()
-            el_e = el_w if not elev_w else (el_ant if R_mask is not None else np.repeat(el_loc[None, :], n_bl, 0))
+            el_wc = np.ascontiguousarray(el_w)          # one compiled signature whatever the layout
+            el_e = el_wc if not elev_w else (el_ant if R_mask is not None else np.repeat(el_loc[None, :], n_bl, 0))
             mp_mult = mp_infl * mp_scale
-            cols, coef, z, var, v_mp, post, good, mp_num, mp_den, n_mp = measurement_update(
+            (cols, coef, z, var, v_mp, post, good, mp_num, mp_den, n_mp, n_used, n_fixed_used, n_unfixed, n_fix_rows,
+             ms_fix, has_fix) = measurement_update(
                 st.x, st.P, jc, sc, fc, jp, sp, fp, b_idx, u, cfac, st.clk, st.pclk, st.bias, st.amb_index, lam,
-                sdc_c, sdp_c, pcv_m, vc_f, vp_f, cn0, gamma, cn0_growth, el_e, elev_w, el_w, mp_model, mp_sig,
-                mp_mult, st.amb_fixed, st.n_fixed_part, st.amb_last_t, t, JOSEPH_RATIO)
+                sdc_c, sdp_c, pcv_m, vc_f, vp_f, cn0, gamma, cn0_growth, el_e, elev_w, el_wc, mp_model, mp_sig,
+                mp_mult, st.amb_fixed, st.n_fixed_part, st.amb_last_t, t, JOSEPH_RATIO, st.amb_key, n_bl, n_sat)
             if mp_model and record and mp_n:
                 w_p = 1.0 / var[mc_n:]
                 sm_corr[k] = float(np.sum(v_mp[mc_n:] * mp_mult * w_p * w_p) / np.sum(w_p))
@@ -517,13 +521,11 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         else:
             post = np.zeros(0)
         # ---------------- ambiguity resolution ----------------
-        if mp_n:
-            # satellites used / with a fixed ambiguity, unfixed rows and the fix monitor's post-fit mean squares
-            n_used, n_fixed_used, n_unfixed, n_fix_rows, ms_fix = phase_row_stats(
-                jp, sp, cols, mc_n, st.amb_fixed, st.n_fixed_part, post, n_bl, n_sat)
-        else:
+        # with phase rows, measurement_update gave the satellites used / with a fixed ambiguity per baseline, the
+        # unfixed rows and the fix monitor's post-fit mean squares (phase_row_stats)
+        if not mp_n:
             n_used = np.zeros(n_bl, np.int64)
-            n_fixed_used = n_used
+            n_fixed_used = n_unfixed = n_used
         ar_changed = False     # the AR below changed st.amb_fixed (the stats above are then recomputed)
         joint_ar = {}          # ambiguity_search "constrained": one MC-LAMBDA first fix of all baselines together
         if s.ambiguity_search == "constrained" and n_bl >= 2 and mp_n and not st.amb_fixed.any():
@@ -544,7 +546,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             fixed_j = st.amb_fixed[idx_j - st.n_fixed_part]
             el_j = el_loc[sp[sel_j]]
             sig_j = fp[sel_j]
-            if not (st.amb_fixed & (st.amb_key[:, 0] == j)).any():      # no signal of baseline j fixed yet
+            if not has_fix[j]:                                  # no signal of baseline j fixed yet
                 groups = first_fix_groups(idx_j, sig_j, el_j, n_sig)
                 if not groups or sum(g.size - 1 for g, _ in groups) < s.ar_min_dd:
                     continue
@@ -603,13 +605,13 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                     ev(k, "fix_rejected", j, detail=f"ratio {outcome.ratio:.2f}, {outcome.reason}")
             else:
                 # newcomers on a fixed baseline: DD to the fixed reference of their signal rounded (compiled)
-                nw, rf, vals = round_newcomers_rows(st.x, st.P, st.amb_key, st.amb_fixed, st.n_fixed_part, idx_j,
-                                                   sig_j, el_j, n_sig, j, s.new_amb_round_sigma_cyc,
-                                                   s.new_amb_round_frac_cyc)
+                # and constrained in place (DD pseudo-measurements as in _pseudo_update, as scalar Joseph updates)
+                nw, rf, vals = fix_newcomers(st.x, st.P, st.amb_key, st.amb_fixed, st.n_fixed_part, idx_j, sig_j,
+                                             el_j, n_sig, j, s.new_amb_round_sigma_cyc, s.new_amb_round_frac_cyc,
+                                             PSEUDO_VAR_CYC2)
                 if nw.size:
                     fix_rows.extend(zip([k] * nw.size, st.amb_arc[nw - st.n_fixed_part].tolist(),
                                         st.amb_arc[rf - st.n_fixed_part].tolist(), vals.tolist()))
-                    _pseudo_update_dd(st, nw, rf, vals)
                     ev(k, "fix_added", j, detail=f"{nw.size} newcomers fixed by rounding")
         # fix monitor: post-fit phase residuals of fixed ambiguities far above the noise for FIX_CHECK_EPOCHS in a
         # row mean a wrong fix (or an undetected slip): restart every ambiguity of that baseline as float
@@ -617,7 +619,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             if ar_changed:
                 n_fix_rows, ms_fix = phase_row_stats(jp, sp, cols, mc_n, st.amb_fixed, st.n_fixed_part, post, n_bl,
                                                      n_sat)[3:]
-            lim = max(FIX_CHECK_SIGMAS * np.sqrt(vp_f.max()), FIX_CHECK_MIN_M)
+            lim = max(FIX_CHECK_SIGMAS * np.sqrt(max(vp_f.tolist())), FIX_CHECK_MIN_M)
             for j in range(n_bl):
                 if n_fix_rows[j] >= 4:
                     rms = np.sqrt(ms_fix[j])
@@ -634,8 +636,11 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         pending_reset.clear()
         # recount fixed after AR
         had_fix = ever_fixed
-        ever_fixed = np.zeros(n_bl, bool)
-        ever_fixed[st.amb_key[st.amb_fixed, 0]] = True
+        if mp_n and not ar_changed:
+            ever_fixed = has_fix                    # st.amb_fixed as measurement_update saw it
+        else:
+            ever_fixed = np.zeros(n_bl, bool)
+            ever_fixed[st.amb_key[st.amb_fixed, 0]] = True
         lost = had_fix & ~ever_fixed
         if lost.any():
             for j in np.flatnonzero(lost):
@@ -645,16 +650,13 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # ---------------- outputs ----------------
         okb = pa & (n_used >= 3)
         out_ok[k] = okb
-        out_b[k] = st.x[all_b_idx].reshape(n_bl, 3)
-        out_P[k] = st.P[ix_b]
+        store_outputs(st.x, st.P, all_b_idx, k, out_b, out_P, out_w, dynamic)   # out_b[k], out_P[k], out_w[k]
         fixed_now = ever_fixed & (n_fixed_used >= s.fixed_min_sats)
         out_fixed[k] = fixed_now & okb
         out_n[k] = n_used
-        if dynamic:
-            out_w[k] = st.x[0:3]
         if record:
             sm_xf[k], sm_Pf[k] = st.x[sub_w_b], st.P[ix_sub]
-        if attitude_fn is not None and np.all(fixed_now) and k % (1 if pcv_tables else 10) == 0:
+        if attitude_fn is not None and k % (1 if pcv_tables else 10) == 0 and fixed_now.all():
             R_mask = attitude_fn(out_b[k], fixed_now)
             R_mask_t = t
         # residual records (used and rejected): one (rows, 10) block per epoch
@@ -730,17 +732,6 @@ def _residual_records(blocks: list[tuple]) -> dict:
     order = np.argsort(2 * np.concatenate([code["epoch"], phase["epoch"]])
                        + np.concatenate([code["kind"], phase["kind"]]), kind="stable")
     return {k: np.concatenate([code[k], phase[k]])[order] for k in code}
-
-
-def _pseudo_update_dd(st: _State, new_idx: np.ndarray, ref_idx: np.ndarray, a_fix: np.ndarray) -> None:
-    """Constrain the DD ambiguities x[new] - x[ref] = a_fix as `_pseudo_update` does, the rows given by their two
-    state indices: scalar updates in turn, each in the Joseph form (worker.estimation.ekf_kernels
-    .sequential_update_sparse with joseph_ratio 0), in place."""
-    cols = np.stack([new_idx, ref_idx], axis=1).astype(np.int64)
-    coef = np.empty(cols.shape)
-    coef[:, 0], coef[:, 1] = 1.0, -1.0
-    sequential_update_sparse(st.x, st.P, cols, coef, np.full(cols.shape[0], 1e-6), np.asarray(a_fix, np.float64),
-                             0.0)
 
 
 def _pseudo_update(st: _State, D: np.ndarray, a_fix: np.ndarray) -> None:

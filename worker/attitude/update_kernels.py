@@ -22,7 +22,8 @@ from worker.attitude.kernels import measurement_rows, np_sum
 from worker.estimation.ekf_kernels import sequential_update_sparse
 
 __all__ = ["cn0_factor", "mp_var", "measurement_variances", "white_variances", "measurement_update",
-           "phase_row_stats", "round_newcomers_rows", "quest_dcm", "warm_up"]
+           "white_variances_cp", "phase_row_stats", "round_newcomers_rows", "fix_newcomers", "store_outputs",
+           "quest_dcm", "warm_up"]
 
 _HALF_PI = np.pi / 2
 
@@ -97,7 +98,7 @@ def measurement_variances(jc, sc, fc, jp, sp, fp, vc_f, vp_f, cn0, gamma, cn0_gr
 @njit(cache=True, nogil=True)
 def measurement_update(x, P, jc, sc, fc, jp, sp, fp, b_idx, u, cfac, clk, pclk, bias, amb_index, lam, sdc_c, sdp_c,
                        pcv_m, vc_f, vp_f, cn0, gamma, cn0_growth, el_e, elevation_weighting, el_w, mp_model, mp_sig,
-                       mp_mult, amb_fixed, n_fixed_part, amb_last_t, t, joseph_ratio):
+                       mp_mult, amb_fixed, n_fixed_part, amb_last_t, t, joseph_ratio, amb_key, n_bl, n_sat):
     """One epoch's measurement update of run_filter, x and P in place (unchanged if an innovation variance is not
     positive; good = False).
 
@@ -106,7 +107,8 @@ def measurement_update(x, P, jc, sc, fc, jp, sp, fp, b_idx, u, cfac, clk, pclk, 
     the post-fit residuals z - H x+, and over the phase rows of fixed ambiguities the sums of the adaptive
     multipath scale: mp_num = sum(post^2 / (1 - h) - v_white), mp_den = sum(v_mp), n_mp rows, with the leverage
     h = clip(H P+ H^T / var, 0, 0.95) (E[r^2] = R_true (1 - h)); amb_last_t of the ambiguities in the update
-    is set to t.
+    is set to t. Then phase_row_stats of the phase rows (n_used, n_fixed_used, n_unfixed, n_fix_rows, ms_fix) and
+    (n_bl,) has_fix: the baselines with a fixed ambiguity state (amb_key (n_amb, 3) rows (bl, sat, sig)).
     """
     cols, coef, z = measurement_rows(jc, sc, fc, jp, sp, fp, b_idx, u, cfac, clk, pclk, bias, amb_index, lam,
                                      sdc_c, sdp_c, pcv_m)
@@ -149,7 +151,14 @@ def measurement_update(x, P, jc, sc, fc, jp, sp, fp, b_idx, u, cfac, clk, pclk, 
         n_mp += 1
     mp_num = np_sum(bn[:n_mp])
     mp_den = np_sum(bd[:n_mp])
-    return cols, coef, z, var, v_mp, post, good, mp_num, mp_den, n_mp
+    n_used, n_fixed, n_unfixed, n_fix_rows, ms = phase_row_stats(jp, sp, cols, mc_n, amb_fixed, n_fixed_part, post,
+                                                                 n_bl, n_sat)
+    has_fix = np.zeros(n_bl, np.bool_)
+    for a in range(amb_key.shape[0]):
+        if amb_fixed[a]:
+            has_fix[amb_key[a, 0]] = True
+    return (cols, coef, z, var, v_mp, post, good, mp_num, mp_den, n_mp, n_used, n_fixed, n_unfixed, n_fix_rows, ms,
+            has_fix)
 
 
 @njit(cache=True, nogil=True)
@@ -260,6 +269,47 @@ def round_newcomers_rows(x, P, amb_key, amb_fixed, n_fixed_part, idx_j, sig_j, e
 
 
 @njit(cache=True, nogil=True)
+def fix_newcomers(x, P, amb_key, amb_fixed, n_fixed_part, idx_j, sig_j, el_j, n_sig, j, max_sigma_cyc,
+                  max_frac_cyc, var_cyc2):
+    """round_newcomers_rows, then x, P constrained in place to its DDs x[new] - x[ref] = integer by scalar
+    pseudo-measurements of variance var_cyc2, each in the Joseph form (filter._pseudo_update's constraint for
+    these two-term rows, as scalar updates in turn); returns
+    (new, ref, integers) as round_newcomers_rows."""
+    nw, rf, vals = round_newcomers_rows(x, P, amb_key, amb_fixed, n_fixed_part, idx_j, sig_j, el_j, n_sig, j,
+                                        max_sigma_cyc, max_frac_cyc)
+    r = nw.size
+    if r:
+        cols = np.empty((r, 2), np.int64)
+        coef = np.empty((r, 2))
+        for i in range(r):
+            cols[i, 0], cols[i, 1] = nw[i], rf[i]
+            coef[i, 0], coef[i, 1] = 1.0, -1.0
+        sequential_update_sparse(x, P, cols, coef, np.full(r, var_cyc2), vals, 0.0)
+    return nw, rf, vals
+
+
+@njit(cache=True, nogil=True)
+def white_variances_cp(est_var_c, est_var_p, est_n, floor_c, floor_p, min_epochs, estimate):
+    """(vc_f, vp_f): white_variances of code and phase."""
+    return (white_variances(est_var_c, est_n, floor_c, min_epochs, estimate),
+            white_variances(est_var_p, est_n, floor_p, min_epochs, estimate))
+
+
+@njit(cache=True, nogil=True)
+def store_outputs(x, P, all_b_idx, k, out_b, out_P, out_w, dynamic):
+    """run_filter's per-epoch outputs: out_b[k] = baselines (n_bl, 3), out_P[k] = their joint covariance, and
+    out_w[k] = omega (dynamic mode)."""
+    nb = all_b_idx.size
+    for a in range(nb):
+        out_b[k, a // 3, a % 3] = x[all_b_idx[a]]
+        for c in range(nb):
+            out_P[k, a, c] = P[all_b_idx[a], all_b_idx[c]]
+    if dynamic:
+        for a in range(3):
+            out_w[k, a] = x[a]
+
+
+@njit(cache=True, nogil=True)
 def quest_dcm(b_ref, b_body, w):
     """R_body_from_ref (3, 3) minimising sum_i w_i |b_body_i - R b_ref_i|^2 over directions (n, 3) of one epoch;
     NaN if fewer than two usable non-parallel directions (information matrix condition >= 1e12). Vectors with a
@@ -328,21 +378,30 @@ def quest_dcm(b_ref, b_body, w):
 
 
 def warm_up() -> None:
-    """Compile (or load from the cache) every kernel once on tiny inputs."""
-    i0 = np.zeros(1, np.int64)
-    i1 = np.ones(1, np.int64)
+    """Compile (or load from the cache) every kernel once on tiny inputs with the array layouts of run_filter
+    (index arrays from np.nonzero and the per-epoch C/N0 are strided views)."""
+    use = np.zeros((1, 3, 2), np.bool_)
+    use[0, :2, 0] = True
+    jc, sc, fc = np.nonzero(use)
     td = np.ones((1, 3, 2))
-    x, P = np.zeros(9), np.eye(9)
+    cn0 = np.full((1, 3, 4), 45.0)[:, :, ::2]
+    x, P = np.zeros(10), np.eye(10)
     b_idx = np.arange(3, dtype=np.int64).reshape(1, 3)
-    idx2 = np.array([[4, 5]], np.int64)
     amb = np.full((1, 3, 2), -1, np.int64)
-    amb[0, 0, 0] = 8
-    vf = white_variances(np.ones(2), np.zeros(2), 1.0, 10, True)
-    cols, coef, z, var, v_mp, post, good, a, b, n = measurement_update(
-        x, P, i0, i0, i0, i0, i0, i0, b_idx, np.ones((3, 3)), np.ones(3), np.array([3], np.int64), idx2,
-        np.array([[-1, 6]], np.int64), amb, np.ones(2), td, td, td, vf, vf, td, np.ones((2, 2)), True,
-        np.ones((1, 3)), False, np.ones((1, 3)), True, np.ones(4), 1.0, np.ones(1, np.bool_), 8, np.zeros(1), 0.0, 1e3)
-    phase_row_stats(i0, i0, cols, 1, np.ones(1, np.bool_), 8, post, 1, 3)
-    round_newcomers_rows(x, P, np.zeros((1, 3), np.int64), np.zeros(1, np.bool_), 8, np.array([8], np.int64), i0,
-                         np.ones(1), 2, 0, 0.1, 0.2)
+    amb[0, 0, 0], amb[0, 1, 0] = 8, 9
+    amb_key = np.array([[0, 0, 0], [0, 1, 0]], np.int64)
+    amb_fixed = np.array([True, False])
+    vc_f, vp_f = white_variances_cp(np.ones(2), np.ones(2), np.zeros(2), 1.0, 1.0, 10, True)
+    out = measurement_update(
+        x, P, jc, sc, fc, jc, sc, fc, b_idx, np.eye(3), np.ones(3), np.array([3], np.int64),
+        np.array([[4, 5]], np.int64), np.array([[-1, 6]], np.int64), amb, np.ones(2), td, td, td, vc_f, vp_f, cn0,
+        np.ones((2, 2)), True, np.ones((1, 3)), False, np.ones((1, 3)), True, np.ones(4), 1.0, amb_fixed, 8,
+        np.zeros(2), 0.0, 1e3, amb_key, 1, 3)
+    cols, post = out[0], out[5]
+    phase_row_stats(jc, sc, cols, 2, amb_fixed, 8, post, 1, 3)
+    idx_j, sig_j = np.array([8, 9], np.int64), np.zeros(2, np.int64)
+    round_newcomers_rows(x, P, amb_key, amb_fixed.copy(), 8, idx_j, sig_j, np.ones(2), 2, 0, 0.1, 0.2)
+    fix_newcomers(x, P, amb_key, amb_fixed.copy(), 8, idx_j, sig_j, np.ones(2), 2, 0, 0.1, 0.2, 1e-6)
     quest_dcm(np.eye(3)[:2].copy(), np.eye(3)[:2].copy(), np.ones(2))
+    store_outputs(x, P, np.arange(3, dtype=np.int64), 0, np.zeros((1, 1, 3)), np.zeros((1, 3, 3)), np.zeros((1, 3)),
+                  True)
