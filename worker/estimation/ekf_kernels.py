@@ -302,7 +302,7 @@ def warm_up() -> None:
     # the layouts of joseph_update_sparse with several rows: P H^T in Fortran order, R a read-only broadcast
     cols2 = np.array([[0, 1, -1], [2, -1, -1]], dtype=np.int64)
     S2 = gather_HA(gather_AHt(P, cols2, np.ones((2, 3))), cols2, np.ones((2, 3)))
-    symmetric_plus_diag(S2, np.broadcast_to(np.ones(1), (2,)))
+    symmetric_plus_diag(S2, np.broadcast_to(np.ones(2), (2,)))
     joseph_combine(P, P, P)
     y, pbb, pbw = rotation_rk4_stm_kernel(np.ones((2, 3)), np.full(3, 1e-3), 1.0, 1.0)
     propagate_rotation_cov(P, np.arange(3), np.arange(3, 9).reshape(2, 3), pbb, pbw, np.eye(3), y, 1.0)
