@@ -175,9 +175,11 @@ def _filter_epoch(rng, n_sig=2, n_bl=2, n_sat=10):
     cn0 = rng.uniform(30, 50, (n_bl, n_sat, n_sig))
     el_w = rng.uniform(0.1, 1.5, (n_bl, n_sat))
     amb_fixed = rng.random(n_amb) < 0.7
+    amb_key = np.zeros((n_amb, 3), np.int64)
+    amb_key[amb_index[use_p] - nfp] = np.stack(np.nonzero(use_p), 1)
     args = (x, P, jc, sc, fc, jp, sp, fp, b_idx, u, cfac, clk, pclk, bias, amb_index, lam, sdc_c, sdp_c, pcv_m,
             np.full(n_sig, 0.09), np.full(n_sig, 1e-5), cn0, np.ones((2, n_sig)), True, el_w, False, el_w, True,
-            np.array([0.15, 0.9, 0.0015, 0.006]), 1.3, amb_fixed, nfp, np.zeros(n_amb), 7.0, 1e3)
+            np.array([0.15, 0.9, 0.0015, 0.006]), 1.3, amb_fixed, nfp, np.zeros(n_amb), 7.0, 1e3, amb_key, n_bl, n_sat)
     return args
 
 
@@ -209,6 +211,12 @@ def test_measurement_update_equals_rows_variances_batch_update_and_postfit():
         assert np.isclose(out[7], np.sum(post_ref[rows] ** 2 / one_h - v_white[rows]), rtol=1e-7)
         assert np.isclose(out[8], np.sum(v_mp[rows]), rtol=1e-13)
         assert np.all(last_t[cols[mc_n:, 4] - nfp] == 7.0)
+        stats = phase_row_stats(args[5], args[6], cols, mc_n, amb_fixed, nfp, out[5], args[36], args[37])
+        for a, b in zip(out[10:15], stats):
+            assert np.array_equal(a, b, equal_nan=True)
+        has_fix = np.zeros(args[36], bool)
+        has_fix[args[35][amb_fixed, 0]] = True
+        assert np.array_equal(out[15], has_fix)
 
 
 def test_phase_row_stats_equal_numpy_counts():
@@ -307,3 +315,52 @@ def test_quest_dcm_equals_rotations_quest():
 
 def test_warm_up_runs():
     warm_up()
+
+
+def test_fix_newcomers_constrains_like_the_batch_joseph_pseudo_update():
+    """fix_newcomers = round_newcomers_rows + the DD pseudo-measurements of filter._pseudo_update (batch Joseph)."""
+    from worker.attitude.update_kernels import fix_newcomers
+
+    rng = np.random.default_rng(8)
+    n_checked = 0
+    for _ in range(100):
+        nfp, n_amb = 5, 12
+        n = nfp + n_amb
+        A = rng.normal(size=(n, n)) * 0.03
+        P = A @ A.T + np.eye(n) * 1e-4
+        x = np.round(rng.normal(size=n) * 20) + rng.normal(size=n) * 0.03
+        amb_key = np.stack([np.zeros(n_amb, np.int64), np.arange(n_amb), rng.integers(0, 2, n_amb)], 1)
+        amb_fixed = rng.random(n_amb) < 0.4
+        idx_j, sig_j, el_j = nfp + np.arange(n_amb), amb_key[:, 2].copy(), rng.uniform(0, 1.5, n_amb)
+        af1, af2 = amb_fixed.copy(), amb_fixed.copy()
+        nw, rf, vals = round_newcomers_rows(x, P, amb_key, af1, nfp, idx_j, sig_j, el_j, 2, 0, 0.3, 0.3)
+        x1, P1 = x.copy(), P.copy()
+        nw2, rf2, vals2 = fix_newcomers(x1, P1, amb_key, af2, nfp, idx_j, sig_j, el_j, 2, 0, 0.3, 0.3, 1e-6)
+        assert np.array_equal(nw, nw2) and np.array_equal(rf, rf2) and np.array_equal(vals, vals2)
+        assert np.array_equal(af1, af2)
+        if not nw.size:
+            assert np.array_equal(x1, x) and np.array_equal(P1, P)
+            continue
+        n_checked += 1
+        cols = np.stack([nw, rf], 1)
+        coef = np.tile([1.0, -1.0], (nw.size, 1))
+        x_ref, P_ref, _, ok = joseph_update_sparse(x, P, cols, coef, np.full(nw.size, 1e-6), vals - (x[nw] - x[rf]))
+        assert ok
+        assert np.allclose(x1, x_ref, rtol=0, atol=1e-9) and np.allclose(P1, P_ref, rtol=0, atol=1e-11)
+        assert np.all(np.abs(x1[nw] - x1[rf] - vals) < 1e-3)
+    assert n_checked > 20
+
+
+def test_store_outputs():
+    from worker.attitude.update_kernels import store_outputs
+
+    rng = np.random.default_rng(9)
+    x, P = rng.normal(size=20), rng.normal(size=(20, 20))
+    all_b_idx = np.array([3, 4, 5, 11, 12, 13], np.int64)
+    out_b, out_P, out_w = np.full((4, 2, 3), np.nan), np.full((4, 6, 6), np.nan), np.full((4, 3), np.nan)
+    store_outputs(x, P, all_b_idx, 2, out_b, out_P, out_w, True)
+    assert np.array_equal(out_b[2], x[all_b_idx].reshape(2, 3)) and np.array_equal(out_P[2], P[np.ix_(all_b_idx,
+                                                                                                      all_b_idx)])
+    assert np.array_equal(out_w[2], x[:3]) and np.isnan(out_b[[0, 1, 3]]).all()
+    store_outputs(x, P, all_b_idx, 3, out_b, out_P, out_w, False)
+    assert np.isnan(out_w[3]).all() and np.array_equal(out_b[3], out_b[2])
