@@ -333,9 +333,18 @@ def test_fix_newcomers_constrains_like_the_batch_joseph_pseudo_update():
         amb_fixed = rng.random(n_amb) < 0.4
         idx_j, sig_j, el_j = nfp + np.arange(n_amb), amb_key[:, 2].copy(), rng.uniform(0, 1.5, n_amb)
         af1, af2 = amb_fixed.copy(), amb_fixed.copy()
-        nw, rf, vals = round_newcomers_rows(x, P, amb_key, af1, nfp, idx_j, sig_j, el_j, 2, 0, 0.3, 0.3)
         x1, P1 = x.copy(), P.copy()
-        nw2, rf2, vals2 = fix_newcomers(x1, P1, amb_key, af2, nfp, idx_j, sig_j, el_j, 2, 0, 0.3, 0.3, 1e-6)
+        # the same rows as the filter passes them: phase rows of the update (cols[:, 4], jp, sp, fp), local elevations
+        order = rng.permutation(n_amb)
+        mc_n = 3
+        cols = np.full((mc_n + n_amb, 5), -1, np.int64)
+        cols[mc_n:, 4] = idx_j[order]
+        jp = np.zeros(n_amb, np.int64)
+        el_loc = el_j.copy()                       # row i: satellite sp[i] = order[i], state nfp + order[i]
+        idx_j, sig_j, el_j = idx_j[order], sig_j[order], el_j[order]      # the row order fix_newcomers sees
+        nw, rf, vals = round_newcomers_rows(x, P, amb_key, af1, nfp, idx_j, sig_j, el_j, 2, 0, 0.3, 0.3)
+        nw2, rf2, vals2 = fix_newcomers(x1, P1, amb_key, af2, nfp, cols, mc_n, jp, order, sig_j, el_loc, 2, 0, 0.3,
+                                        0.3, 1e-6)
         assert np.array_equal(nw, nw2) and np.array_equal(rf, rf2) and np.array_equal(vals, vals2)
         assert np.array_equal(af1, af2)
         if not nw.size:
@@ -358,9 +367,19 @@ def test_store_outputs():
     x, P = rng.normal(size=20), rng.normal(size=(20, 20))
     all_b_idx = np.array([3, 4, 5, 11, 12, 13], np.int64)
     out_b, out_P, out_w = np.full((4, 2, 3), np.nan), np.full((4, 6, 6), np.nan), np.full((4, 3), np.nan)
-    store_outputs(x, P, all_b_idx, 2, out_b, out_P, out_w, True)
+    out_ok, out_fixed, out_n = np.zeros((4, 2), bool), np.zeros((4, 2), bool), np.zeros((4, 2), np.int64)
+    for pa, n_used, ever, n_fix in (([True, True], [5, 2], [True, True], [4, 3]),
+                                    ([True, False], [3, 6], [True, False], [5, 6]),
+                                    ([False, True], [7, 8], [False, True], [2, 4])):
+        pa, n_used, ever, n_fix = np.array(pa), np.array(n_used), np.array(ever), np.array(n_fix)
+        fixed_now = store_outputs(x, P, all_b_idx, 2, out_b, out_P, out_w, True, pa, n_used, ever, n_fix, 4, out_ok,
+                                  out_fixed, out_n)
+        assert np.array_equal(fixed_now, ever & (n_fix >= 4))
+        assert np.array_equal(out_ok[2], pa & (n_used >= 3))
+        assert np.array_equal(out_fixed[2], fixed_now & pa & (n_used >= 3)) and np.array_equal(out_n[2], n_used)
     assert np.array_equal(out_b[2], x[all_b_idx].reshape(2, 3)) and np.array_equal(out_P[2], P[np.ix_(all_b_idx,
                                                                                                       all_b_idx)])
-    assert np.array_equal(out_w[2], x[:3]) and np.isnan(out_b[[0, 1, 3]]).all()
-    store_outputs(x, P, all_b_idx, 3, out_b, out_P, out_w, False)
+    assert np.array_equal(out_w[2], x[:3]) and np.isnan(out_b[[0, 1, 3]]).all() and not out_ok[[0, 1, 3]].any()
+    store_outputs(x, P, all_b_idx, 3, out_b, out_P, out_w, False, pa, n_used, ever, n_fix, 4, out_ok, out_fixed,
+                  out_n)
     assert np.isnan(out_w[3]).all() and np.array_equal(out_b[3], out_b[2])

@@ -22,6 +22,7 @@ common master antenna's noise (each SD is treated as independent, as in the pape
 """
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, field
 
@@ -540,13 +541,11 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 first_data[j] = k
             if not pa[j] or n_used[j] < s.ar_min_sats or not n_unfixed[j]:
                 continue
-            ar_changed = True
-            sel_j = jp == j
-            idx_j = cols[mc_n:, 4][sel_j]
-            fixed_j = st.amb_fixed[idx_j - st.n_fixed_part]
-            el_j = el_loc[sp[sel_j]]
-            sig_j = fp[sel_j]
             if not has_fix[j]:                                  # no signal of baseline j fixed yet
+                sel_j = jp == j
+                idx_j = cols[mc_n:, 4][sel_j]
+                el_j = el_loc[sp[sel_j]]
+                sig_j = fp[sel_j]
                 groups = first_fix_groups(idx_j, sig_j, el_j, n_sig)
                 if not groups or sum(g.size - 1 for g, _ in groups) < s.ar_min_dd:
                     continue
@@ -597,6 +596,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                             adapter.reset()
                     for g, _ in outcome.groups or groups:
                         st.amb_fixed[g - st.n_fixed_part] = True
+                    ar_changed = True
                     ev(k, "fix", j, detail=f"{outcome.n_dd} DD ambiguities, ratio {outcome.ratio:.2f}, "
                                          f"length {outcome.length_m:.4f} m")
                     if first_fix[j] < 0:
@@ -606,10 +606,11 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             else:
                 # newcomers on a fixed baseline: DD to the fixed reference of their signal rounded (compiled)
                 # and constrained in place (DD pseudo-measurements as in _pseudo_update, as scalar Joseph updates)
-                nw, rf, vals = fix_newcomers(st.x, st.P, st.amb_key, st.amb_fixed, st.n_fixed_part, idx_j, sig_j,
-                                             el_j, n_sig, j, s.new_amb_round_sigma_cyc, s.new_amb_round_frac_cyc,
-                                             PSEUDO_VAR_CYC2)
+                nw, rf, vals = fix_newcomers(st.x, st.P, st.amb_key, st.amb_fixed, st.n_fixed_part, cols, mc_n, jp,
+                                             sp, fp, el_loc, n_sig, j, s.new_amb_round_sigma_cyc,
+                                             s.new_amb_round_frac_cyc, PSEUDO_VAR_CYC2)
                 if nw.size:
+                    ar_changed = True
                     fix_rows.extend(zip([k] * nw.size, st.amb_arc[nw - st.n_fixed_part].tolist(),
                                         st.amb_arc[rf - st.n_fixed_part].tolist(), vals.tolist()))
                     ev(k, "fix_added", j, detail=f"{nw.size} newcomers fixed by rounding")
@@ -617,9 +618,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # row mean a wrong fix (or an undetected slip): restart every ambiguity of that baseline as float
         if mp_n:
             if ar_changed:
-                n_fix_rows, ms_fix = phase_row_stats(jp, sp, cols, mc_n, st.amb_fixed, st.n_fixed_part, post, n_bl,
-                                                     n_sat)[3:]
-            lim = max(FIX_CHECK_SIGMAS * np.sqrt(max(vp_f.tolist())), FIX_CHECK_MIN_M)
+                _, n_fixed_post, _, n_fix_rows, ms_fix = phase_row_stats(jp, sp, cols, mc_n, st.amb_fixed,
+                                                                         st.n_fixed_part, post, n_bl, n_sat)
+            lim = max(FIX_CHECK_SIGMAS * math.sqrt(max(vp_f.tolist())), FIX_CHECK_MIN_M)
             for j in range(n_bl):
                 if n_fix_rows[j] >= 4:
                     rms = np.sqrt(ms_fix[j])
@@ -646,14 +647,12 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             for j in np.flatnonzero(lost):
                 ev(k, "fix_lost", j, detail="no fixed ambiguity left (slips, gaps or setting satellites)")
         if mp_n and ar_changed:
-            n_fixed_used = phase_row_stats(jp, sp, cols, mc_n, st.amb_fixed, st.n_fixed_part, post, n_bl, n_sat)[1]
+            n_fixed_used = n_fixed_post             # after AR (a reset above leaves the count before AR)
         # ---------------- outputs ----------------
-        okb = pa & (n_used >= 3)
-        out_ok[k] = okb
-        store_outputs(st.x, st.P, all_b_idx, k, out_b, out_P, out_w, dynamic)   # out_b[k], out_P[k], out_w[k]
-        fixed_now = ever_fixed & (n_fixed_used >= s.fixed_min_sats)
-        out_fixed[k] = fixed_now & okb
-        out_n[k] = n_used
+        # out_b[k], out_P[k], out_w[k]; out_ok[k] = pa & (n_used >= 3), out_fixed[k] = fixed_now & out_ok[k],
+        # out_n[k] = n_used; fixed_now = ever_fixed & (n_fixed_used >= fixed_min_sats)
+        fixed_now = store_outputs(st.x, st.P, all_b_idx, k, out_b, out_P, out_w, dynamic, pa, n_used, ever_fixed,
+                                  n_fixed_used, s.fixed_min_sats, out_ok, out_fixed, out_n)
         if record:
             sm_xf[k], sm_Pf[k] = st.x[sub_w_b], st.P[ix_sub]
         if attitude_fn is not None and k % (1 if pcv_tables else 10) == 0 and fixed_now.all():

@@ -269,22 +269,37 @@ def round_newcomers_rows(x, P, amb_key, amb_fixed, n_fixed_part, idx_j, sig_j, e
 
 
 @njit(cache=True, nogil=True)
-def fix_newcomers(x, P, amb_key, amb_fixed, n_fixed_part, idx_j, sig_j, el_j, n_sig, j, max_sigma_cyc,
+def fix_newcomers(x, P, amb_key, amb_fixed, n_fixed_part, cols, mc_n, jp, sp, fp, el_loc, n_sig, j, max_sigma_cyc,
                   max_frac_cyc, var_cyc2):
-    """round_newcomers_rows, then x, P constrained in place to its DDs x[new] - x[ref] = integer by scalar
-    pseudo-measurements of variance var_cyc2, each in the Joseph form (filter._pseudo_update's constraint for
-    these two-term rows, as scalar updates in turn); returns
-    (new, ref, integers) as round_newcomers_rows."""
+    """round_newcomers_rows over baseline j's phase rows of the update (rows mc_n + i of cols with jp[i] == j:
+    ambiguity state cols[., 4], signal fp[i], local elevation el_loc[sp[i]]), then x, P constrained in place to
+    its DDs x[new] - x[ref] = integer by scalar pseudo-measurements of variance var_cyc2, each in the Joseph form
+    (filter._pseudo_update's constraint for these two-term rows, as scalar updates in turn); returns (new, ref,
+    integers) as round_newcomers_rows."""
+    nr = 0
+    for i in range(jp.size):
+        if jp[i] == j:
+            nr += 1
+    idx_j = np.empty(nr, np.int64)
+    sig_j = np.empty(nr, np.int64)
+    el_j = np.empty(nr)
+    q = 0
+    for i in range(jp.size):
+        if jp[i] == j:
+            idx_j[q] = cols[mc_n + i, 4]
+            sig_j[q] = fp[i]
+            el_j[q] = el_loc[sp[i]]
+            q += 1
     nw, rf, vals = round_newcomers_rows(x, P, amb_key, amb_fixed, n_fixed_part, idx_j, sig_j, el_j, n_sig, j,
                                         max_sigma_cyc, max_frac_cyc)
     r = nw.size
     if r:
-        cols = np.empty((r, 2), np.int64)
+        c2 = np.empty((r, 2), np.int64)
         coef = np.empty((r, 2))
         for i in range(r):
-            cols[i, 0], cols[i, 1] = nw[i], rf[i]
+            c2[i, 0], c2[i, 1] = nw[i], rf[i]
             coef[i, 0], coef[i, 1] = 1.0, -1.0
-        sequential_update_sparse(x, P, cols, coef, np.full(r, var_cyc2), vals, 0.0)
+        sequential_update_sparse(x, P, c2, coef, np.full(r, var_cyc2), vals, 0.0)
     return nw, rf, vals
 
 
@@ -296,9 +311,11 @@ def white_variances_cp(est_var_c, est_var_p, est_n, floor_c, floor_p, min_epochs
 
 
 @njit(cache=True, nogil=True)
-def store_outputs(x, P, all_b_idx, k, out_b, out_P, out_w, dynamic):
-    """run_filter's per-epoch outputs: out_b[k] = baselines (n_bl, 3), out_P[k] = their joint covariance, and
-    out_w[k] = omega (dynamic mode)."""
+def store_outputs(x, P, all_b_idx, k, out_b, out_P, out_w, dynamic, pa, n_used, ever_fixed, n_fixed_used,
+                  fixed_min_sats, out_ok, out_fixed, out_n):
+    """run_filter's per-epoch outputs, row k: out_b = baselines (n_bl, 3), out_P = their joint covariance, out_w =
+    omega (dynamic mode), out_ok = pa & (n_used >= 3), out_fixed = fixed_now & out_ok, out_n = n_used; returns
+    fixed_now = ever_fixed & (n_fixed_used >= fixed_min_sats) (n_bl,)."""
     nb = all_b_idx.size
     for a in range(nb):
         out_b[k, a // 3, a % 3] = x[all_b_idx[a]]
@@ -307,6 +324,15 @@ def store_outputs(x, P, all_b_idx, k, out_b, out_P, out_w, dynamic):
     if dynamic:
         for a in range(3):
             out_w[k, a] = x[a]
+    n_bl = pa.size
+    fixed_now = np.empty(n_bl, np.bool_)
+    for j in range(n_bl):
+        ok = pa[j] and n_used[j] >= 3
+        fixed_now[j] = ever_fixed[j] and n_fixed_used[j] >= fixed_min_sats
+        out_ok[k, j] = ok
+        out_fixed[k, j] = fixed_now[j] and ok
+        out_n[k, j] = n_used[j]
+    return fixed_now
 
 
 @njit(cache=True, nogil=True)
@@ -401,7 +427,9 @@ def warm_up() -> None:
     phase_row_stats(jc, sc, cols, 2, amb_fixed, 8, post, 1, 3)
     idx_j, sig_j = np.array([8, 9], np.int64), np.zeros(2, np.int64)
     round_newcomers_rows(x, P, amb_key, amb_fixed.copy(), 8, idx_j, sig_j, np.ones(2), 2, 0, 0.1, 0.2)
-    fix_newcomers(x, P, amb_key, amb_fixed.copy(), 8, idx_j, sig_j, np.ones(2), 2, 0, 0.1, 0.2, 1e-6)
+    fix_newcomers(x, P, amb_key, amb_fixed.copy(), 8, cols, 2, jc, sc, fc, np.ones(3), 2, 0, 0.1, 0.2, 1e-6)
     quest_dcm(np.eye(3)[:2].copy(), np.eye(3)[:2].copy(), np.ones(2))
+    one = np.ones(1, np.bool_)
     store_outputs(x, P, np.arange(3, dtype=np.int64), 0, np.zeros((1, 1, 3)), np.zeros((1, 3, 3)), np.zeros((1, 3)),
-                  True)
+                  True, one, out[10], one, out[11], 4, np.zeros((1, 1), np.bool_), np.zeros((1, 1), np.bool_),
+                  np.zeros((1, 1), np.int64))
