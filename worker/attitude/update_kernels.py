@@ -429,8 +429,8 @@ def warm_up() -> None:
     round_newcomers_rows(x, P, amb_key, amb_fixed.copy(), 8, idx_j, sig_j, np.ones(2), 2, 0, 0.1, 0.2)
     fix_newcomers(x, P, amb_key, amb_fixed.copy(), 8, cols, 2, jc, sc, fc, np.ones(3), 2, 0, 0.1, 0.2, 1e-6)
     quest_dcm(np.eye(3)[:2].copy(), np.eye(3)[:2].copy(), np.ones(2))
-    one = np.ones(1, np.bool_)
-    for pa in (one, np.ones((1, 2), np.bool_)[:, 0]):           # the SD block's pa[i] is a strided view
-        store_outputs(x, P, np.arange(3, dtype=np.int64), 0, np.zeros((1, 1, 3)), np.zeros((1, 3, 3)),
-                      np.zeros((1, 3)), True, pa, out[10], one, out[11], 4, np.zeros((1, 1), np.bool_),
-                      np.zeros((1, 1), np.bool_), np.zeros((1, 1), np.int64))
+    two, n2 = np.ones(2, np.bool_), np.zeros(2, np.int64)
+    for pa in (two, np.ones((2, 2), np.bool_)[:, 0]):           # the SD block's pa[i] is a strided view
+        store_outputs(x, P, np.arange(6, dtype=np.int64), 0, np.zeros((1, 2, 3)), np.zeros((1, 6, 6)),
+                      np.zeros((1, 3)), True, pa, n2, two, n2, 4, np.zeros((1, 2), np.bool_),
+                      np.zeros((1, 2), np.bool_), np.zeros((1, 2), np.int64))
