@@ -496,8 +496,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             (cols, coef, z, var, v_mp, post, good, mp_num, mp_den, n_mp, n_used, n_fixed_used, n_unfixed, n_fix_rows,
              ms_fix, has_fix) = measurement_update(
                 st.x, st.P, jc, sc, fc, jp, sp, fp, b_idx, u, cfac, st.clk, st.pclk, st.bias, st.amb_index, lam,
-                sdc_c, sdp_c, pcv_m, vc_f, vp_f, cn0, gamma, cn0_growth, el_e, elev_w, el_wc, mp_model, mp_sig,
-                mp_mult, st.amb_fixed, st.n_fixed_part, st.amb_last_t, t, JOSEPH_RATIO, st.amb_key, n_bl, n_sat)
+                sdc_c, sdp_c, pcv_m, vc_f, vp_f, np.ascontiguousarray(cn0), gamma, cn0_growth, el_e, elev_w, el_wc,
+                mp_model, mp_sig, mp_mult, st.amb_fixed, st.n_fixed_part, st.amb_last_t, t, JOSEPH_RATIO, st.amb_key,
+                n_bl, n_sat)
             if mp_model and record and mp_n:
                 w_p = 1.0 / var[mc_n:]
                 sm_corr[k] = float(np.sum(v_mp[mc_n:] * mp_mult * w_p * w_p) / np.sum(w_p))

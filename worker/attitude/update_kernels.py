@@ -405,12 +405,12 @@ def quest_dcm(b_ref, b_body, w):
 
 def warm_up() -> None:
     """Compile (or load from the cache) every kernel once on tiny inputs with the array layouts of run_filter
-    (index arrays from np.nonzero and the per-epoch C/N0 are strided views)."""
+    (index arrays from np.nonzero are strided views)."""
     use = np.zeros((1, 3, 2), np.bool_)
     use[0, :2, 0] = True
     jc, sc, fc = np.nonzero(use)
     td = np.ones((1, 3, 2))
-    cn0 = np.full((1, 3, 4), 45.0)[:, :, ::2]
+    cn0 = np.full((1, 3, 2), 45.0)
     x, P = np.zeros(10), np.eye(10)
     b_idx = np.arange(3, dtype=np.int64).reshape(1, 3)
     amb = np.full((1, 3, 2), -1, np.int64)
