@@ -29,14 +29,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from worker.attitude.adaptive import OmegaNoiseAdapter
-from worker.attitude.ambiguity import (
-    first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
-)
+from worker.attitude.ambiguity import first_fix_groups, resolve_first_fix, resolve_joint_constrained
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
 from worker.attitude.qc_kernels import (clip_pair, growth_weights, propagate_dynamic, propagate_kinematic,
                                         qc_epoch, record_epoch, reset_white_clocks, td_checks)
 from worker.attitude.fastops import clip as _clip, nz as _nz
-from worker.attitude.kernels import cn0_growth_samples, count_pairs_masked, measurement_rows
+from worker.attitude.kernels import cn0_growth_samples
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from worker.attitude.settings import AttitudeSettings, cn0_mask_of
 from worker.attitude.update_kernels import (fix_newcomers, measurement_update, phase_row_stats, store_outputs,
@@ -175,7 +173,8 @@ def _cn0_factor(cn0_dbhz: np.ndarray) -> np.ndarray:
 
 def _mp_var(off_boresight_rad: np.ndarray, sigma_boresight_m: float, sigma_horizon_m: float) -> np.ndarray:
     """Variance (m^2) of the time-correlated error of one SD: sigma grows from the boresight value with the square
-    of the off-boresight angle, reaching sigma_horizon_m at the antenna horizon (90 deg); capped at 120 deg."""
+    of the off-boresight angle, reaching sigma_horizon_m at the antenna horizon (90 deg); capped at 120 deg.
+    (The filter uses the compiled update_kernels.mp_var; this is its numpy reference in the tests.)"""
     x = _clip(_nz(off_boresight_rad, np.pi / 2) / (np.pi / 2), 0.0, 4.0 / 3.0)
     return (sigma_boresight_m + (sigma_horizon_m - sigma_boresight_m) * x * x) ** 2
 
