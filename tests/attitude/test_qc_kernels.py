@@ -339,3 +339,17 @@ def test_record_epoch_equals_the_former_records():
     for key in ref:
         assert np.array_equal(ref[key], got[key], equal_nan=True), key
     assert np.isfinite(got["residual_m"]).sum() > 100
+
+
+def test_take_and_grow_square_are_the_numpy_indexing():
+    from worker.attitude.qc_kernels import grow_square, take_square
+
+    rng = np.random.default_rng(10)
+    for n in (1, 5, 40):
+        P = rng.normal(size=(n, n))
+        keep = rng.random(n) < 0.6
+        assert np.array_equal(take_square(P, np.flatnonzero(keep)), P[np.ix_(keep, keep)])
+        ref = np.zeros((n + 3, n + 3))
+        ref[:n, :n] = P
+        ref[np.arange(n, n + 3), np.arange(n, n + 3)] = 0.25
+        assert np.array_equal(grow_square(P, 3, 0.25), ref)

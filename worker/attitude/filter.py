@@ -31,8 +31,9 @@ import numpy as np
 from worker.attitude.adaptive import OmegaNoiseAdapter
 from worker.attitude.ambiguity import first_fix_groups, resolve_first_fix, resolve_joint_constrained
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
-from worker.attitude.qc_kernels import (clip_pair, growth_weights, propagate_dynamic, propagate_kinematic,
-                                        qc_epoch, record_epoch, reset_white_clocks, td_checks)
+from worker.attitude.qc_kernels import (clip_pair, grow_square, growth_weights, propagate_dynamic,
+                                        propagate_kinematic, qc_epoch, record_epoch, reset_white_clocks,
+                                        take_square, td_checks)
 from worker.attitude.fastops import clip as _clip, nz as _nz
 from worker.attitude.kernels import cn0_growth_samples
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
@@ -135,10 +136,7 @@ class _State:
         n0 = self.n
         k = keys.shape[0]
         self.x = np.concatenate([self.x, values])
-        P = np.zeros((n0 + k, n0 + k))
-        P[:n0, :n0] = self.P
-        P[np.arange(n0, n0 + k), np.arange(n0, n0 + k)] = sigma0 ** 2
-        self.P = P
+        self.P = grow_square(self.P, k, sigma0 ** 2)
         self.amb_key = np.concatenate([self.amb_key, keys])
         self.amb_fixed = np.concatenate([self.amb_fixed, np.zeros(k, bool)])
         self.amb_last_t = np.concatenate([self.amb_last_t, np.full(k, t)])
@@ -154,7 +152,7 @@ class _State:
         for a in self.amb_arc[~keep[self.n_fixed_part:]]:
             self.arcs[a][4] = last_epoch
         self.x = self.x[keep]
-        self.P = self.P[np.ix_(keep, keep)]
+        self.P = take_square(self.P, np.flatnonzero(keep))         # P[np.ix_(keep, keep)]
         ka = keep[self.n_fixed_part:]
         gone = self.amb_key[~ka]
         self.amb_index[gone[:, 0], gone[:, 1], gone[:, 2]] = -1

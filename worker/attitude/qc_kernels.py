@@ -23,7 +23,7 @@ from worker.attitude.kernels import POW2, cn0_growth_update, white_noise_update
 from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 
 __all__ = ["reset_white_clocks", "propagate_dynamic", "propagate_kinematic", "clip_pair", "qc_epoch",
-           "growth_weights", "td_checks", "record_epoch", "warm_up"]
+           "growth_weights", "td_checks", "record_epoch", "take_square", "grow_square", "warm_up"]
 
 #: reason codes set here (worker.attitude.filter.REASONS)
 R_ANTENNA, R_CN0, R_TD_CODE, R_TD_PHASE, R_HALF, R_PCV_EMPTY = 2, 3, 4, 5, 6, 10
@@ -367,6 +367,31 @@ def record_epoch(k, avail_c, avail_p, use_c, use_p, reason, el_ant, az_ant, cn0,
     return pos
 
 
+@njit(cache=True, nogil=True)
+def take_square(P, idx):
+    """P[np.ix_(idx, idx)] (a new C-contiguous array): the covariance of the states kept when ambiguities go."""
+    n = idx.size
+    out = np.empty((n, n))
+    for a in range(n):
+        ra = idx[a]
+        for b in range(n):
+            out[a, b] = P[ra, idx[b]]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def grow_square(P, k, var):
+    """(n + k, n + k) covariance: P, then k new uncorrelated states of variance var (new ambiguities)."""
+    n0 = P.shape[0]
+    out = np.zeros((n0 + k, n0 + k))
+    for a in range(n0):
+        for b in range(n0):
+            out[a, b] = P[a, b]
+    for a in range(n0, n0 + k):
+        out[a, a] = var
+    return out
+
+
 def warm_up() -> None:
     """Compile (or load from the cache) every kernel once on tiny inputs of the types run_filter passes (contiguous
     epoch slices of the SdBlock; np.nonzero's index arrays both contiguous and strided)."""
@@ -395,6 +420,8 @@ def warm_up() -> None:
     td_checks(True, True, np.ones((2,) + sh), np.ones(n_sig), np.ones(n_sig), np.zeros(n_sig), 300.0, 1.0, 0.5,
               np.ones(n_sig), b3, lli, i3.copy(), wb, wf, mcp, True, f3, i3 - 1, z, 8, t, 10.0,
               np.zeros((2,) + sh, np.bool_), np.zeros((2,) + sh, np.bool_))
+    take_square(P, np.arange(3, dtype=np.int64))
+    grow_square(P, 2, 1.0)
     ibuf, fbuf = np.zeros((6, 8), np.int64), np.zeros((4, 8))
     for idx in (np.zeros(1, np.int64), np.nonzero(np.ones((2, 2)))[0]):      # contiguous, strided
         record_epoch(0, b3, b3, b3, b3, i3, f2, f2, f3, z, 0, idx, idx, idx, idx, idx, idx, np.zeros((2,) + sh),
