@@ -7,9 +7,9 @@ import numpy as np
 
 from tests.attitude.test_attitude_kernels import _numpy_noise
 from worker.attitude.fastops import clip as _clip, nanmedian1, nz as _nz
-from worker.attitude.qc_kernels import (clip_pair, epoch_geometry, growth_weights, propagate_dynamic, propagate_kinematic,
-                                        qc_epoch, record_epoch, reset_white_clocks, td_checks)
 from worker.attitude.kernels import cn0_growth_samples
+from worker.attitude.qc_kernels import (clip_pair, epoch_geometry, growth_weights, propagate_dynamic,
+                                        propagate_kinematic, qc_epoch, record_epoch, reset_white_clocks, td_checks)
 from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 
 DEG = np.pi / 180.0
