@@ -7,9 +7,9 @@ import numpy as np
 
 from tests.attitude.test_attitude_kernels import _numpy_noise
 from worker.attitude.fastops import clip as _clip, nanmedian1, nz as _nz
-from worker.attitude.qc_kernels import (clip_pair, growth_weights, propagate_dynamic, propagate_kinematic,
-                                        qc_epoch, record_epoch, reset_white_clocks, td_checks)
 from worker.attitude.kernels import cn0_growth_samples
+from worker.attitude.qc_kernels import (clip_pair, epoch_geometry, growth_weights, propagate_dynamic,
+                                        propagate_kinematic, qc_epoch, record_epoch, reset_white_clocks, td_checks)
 from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 
 DEG = np.pi / 180.0
@@ -65,6 +65,31 @@ def test_clip_pair_is_np_clip():
     out = np.empty((2, 7, 3))
     clip_pair(a, b, out)
     assert np.array_equal(out[0], np.clip(a, -1, 1), equal_nan=True) and np.array_equal(out[1], np.clip(b, -1, 1))
+
+
+def test_epoch_geometry_equals_the_numpy_products():
+    """np.dot in the kernel gives the bits of numpy's @ (both OpenBLAS) for the filter's shapes and layouts."""
+    rng = np.random.default_rng(11)
+    for _ in range(3000):
+        n_sat, n_bl = int(rng.integers(0, 100)), int(rng.integers(1, 4))
+        u = rng.normal(size=(n_sat, 3))
+        R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+        bs = rng.normal(size=(n_bl + 1, 3))
+        ia, ib = np.zeros(n_bl, int), np.arange(1, n_bl + 1)
+        bs_a_T, bs_b_T = bs[ia].T, bs[ib].T            # Fortran order, as run_filter passes (and used) them
+        x = rng.normal(size=5 + 6 * n_bl)
+        b_idx = 3 + 6 * np.arange(n_bl)[:, None] + np.arange(3)[None, :]
+        asn = np.empty((2, n_sat, n_bl))
+        los, ub = epoch_geometry(u, R, bs_a_T, bs_b_T, x, b_idx, asn)
+        los_ref = u @ R.T
+        assert np.array_equal(los, los_ref)
+        assert np.array_equal(ub, x[b_idx.ravel()].reshape(n_bl, 3) @ u.T)
+        assert np.array_equal(asn[0], _clip(los_ref @ boresight_T(bs, ia), -1, 1))
+        assert np.array_equal(asn[1], _clip(los_ref @ boresight_T(bs, ib), -1, 1))
+
+
+def boresight_T(bs, idx):
+    return bs[idx].T
 
 
 def _epoch(rng, n_bl, n_sat, n_sig, t, clk_true, amb_m, ub):
@@ -295,7 +320,7 @@ def test_record_epoch_equals_the_former_records():
     blocks = []
     ibuf, fbuf, pos = np.zeros((6, 4000), np.int64), np.zeros((4, 4000)), 0
     lookup = np.zeros((2,) + sh)
-    prev_sdc, prev_sdp = np.zeros(sh), np.zeros(sh)
+    prev_sdc, prev_sdp, prev_ub = np.zeros(sh), np.zeros(sh), np.zeros((n_bl, n_sat))
     for k in range(60):
         avail_c = rng.random(sh) < 0.8
         avail_p = avail_c & (rng.random(sh) < 0.9)
@@ -308,6 +333,7 @@ def test_record_epoch_equals_the_former_records():
             el_ant[:], az_ant[:] = np.nan, np.nan
         cn0 = rng.uniform(25, 50, sh)
         sdc_c, sdp_c = rng.normal(size=sh), rng.normal(size=sh)
+        b_out, u = rng.normal(size=(n_bl, 3)), rng.normal(size=(n_sat, 3))
         jc, sc, fc = np.nonzero(use_c)
         jp, sp, fp = np.nonzero(use_p)
         mc_n = jc.size
@@ -328,7 +354,8 @@ def test_record_epoch_equals_the_former_records():
                            cn0[jr, sr, fr_], lk[0, jr, sr, fr_], rsn_c, lk[1, jr, sr, fr_], rsn_p,
                            avail_p[jr, sr, fr_]))
         pos = record_epoch(k, avail_c, avail_p, use_c, use_p, reason, el_ant, az_ant, cn0, post, m, jc, sc, fc, jp,
-                           sp, fp, lookup, ibuf, fbuf, pos, sdc_c, sdp_c, prev_sdc, prev_sdp)
+                           sp, fp, lookup, ibuf, fbuf, pos, sdc_c, sdp_c, prev_sdc, prev_sdp, b_out, u, prev_ub)
+        assert np.array_equal(prev_ub, b_out @ u.T)
         assert np.array_equal(prev_sdc, np.where(avail_c, sdc_c, np.nan), equal_nan=True)
         assert np.array_equal(prev_sdp, np.where(avail_p, sdp_c, np.nan), equal_nan=True)
     ref = _residual_records(blocks)

@@ -22,23 +22,24 @@ common master antenna's noise (each SD is treated as independent, as in the pape
 """
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from worker.attitude.adaptive import OmegaNoiseAdapter
-from worker.attitude.ambiguity import (
-    first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
-)
+from worker.attitude.ambiguity import first_fix_groups, resolve_first_fix, resolve_joint_constrained
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
-from worker.attitude.qc_kernels import (clip_pair, grow_square, growth_weights, propagate_dynamic,
+from worker.attitude.qc_kernels import (epoch_geometry, grow_square, growth_weights, propagate_dynamic,
                                         propagate_kinematic, qc_epoch, record_epoch, reset_white_clocks,
                                         take_square, td_checks)
 from worker.attitude.fastops import clip as _clip, nz as _nz
-from worker.attitude.kernels import cn0_growth_samples, count_pairs_masked, measurement_rows
+from worker.attitude.kernels import cn0_growth_samples
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from worker.attitude.settings import AttitudeSettings, cn0_mask_of
+from worker.attitude.update_kernels import (fix_newcomers, measurement_update, phase_row_stats, store_outputs,
+                                            white_variances_cp)
 from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
 from worker.estimation.ekf import joseph_update_sparse
 from worker.gnss.constants import C_M_S
@@ -60,6 +61,9 @@ ANGLE_FAIL_RESET = 10    # first-fix candidates in a row failing the angle test 
 NOISE_EPOCHS = 300.0  # memory of the noise estimator (epochs)
 NOISE_MIN_EPOCHS = 10  # epochs of triple differences before the estimate replaces the configured sigma
 CLOCK_JUMP_M = 0.5e-3 * C_M_S * 0.5   # a change of the epoch clock estimate above 75 km (0.25 ms) is a jump
+JOSEPH_RATIO = 1e3   # measurement rows with H P H^T above this many R are applied in the Joseph form (the others
+                     # in the short form P - P h h P / s, worker.estimation.ekf_kernels.sequential_update_sparse)
+PSEUDO_VAR_CYC2 = 1e-6   # variance of the integer pseudo-measurements (keeps S positive definite in float64)
 PCV_ATTITUDE_AGE_S = 10.0   # PCV maps are looked up with an attitude at most this old (else not applied)
 
 
@@ -167,7 +171,8 @@ def _cn0_factor(cn0_dbhz: np.ndarray) -> np.ndarray:
 
 def _mp_var(off_boresight_rad: np.ndarray, sigma_boresight_m: float, sigma_horizon_m: float) -> np.ndarray:
     """Variance (m^2) of the time-correlated error of one SD: sigma grows from the boresight value with the square
-    of the off-boresight angle, reaching sigma_horizon_m at the antenna horizon (90 deg); capped at 120 deg."""
+    of the off-boresight angle, reaching sigma_horizon_m at the antenna horizon (90 deg); capped at 120 deg.
+    (The filter uses the compiled update_kernels.mp_var; this is its numpy reference in the tests.)"""
     x = _clip(_nz(off_boresight_rad, np.pi / 2) / (np.pi / 2), 0.0, 4.0 / 3.0)
     return (sigma_boresight_m + (sigma_horizon_m - sigma_boresight_m) * x * x) ** 2
 
@@ -217,6 +222,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     cn0_growth = s.weighting == "cn0" or s.noise_cn0_growth
     mp_model = max(s.sigma_multipath_phase_m) > 0 or max(s.sigma_multipath_code_m) > 0
     mp_infl = s.multipath_correlation_factor if dynamic else 1.0
+    mp_sig = np.array([*s.sigma_multipath_code_m, *s.sigma_multipath_phase_m], dtype=np.float64)
+    elev_w = s.weighting == "elevation"
+    var_c_floor, var_p_floor = s.sigma_code_m ** 2, s.sigma_phase_m ** 2
     # C/N0 growth exponent per (code, phase) and signal, estimated from the triple differences (starts at 1)
     gamma = np.ones((2, n_sig)) if cn0_growth else np.zeros((2, n_sig))
     gam_n = np.zeros((2, n_sig))
@@ -323,8 +331,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     pcv_zero = np.zeros(shp)
     prev_ub = np.zeros((n_bl, n_sat))
     Qw_iso = np.eye(3) * q_w
-    bs_a_T = np.ascontiguousarray(boresight_body[ia].T)
-    bs_b_T = np.ascontiguousarray(boresight_body[ib].T)
+    bs_a_T = np.asfortranarray(boresight_body[ia].T)        # (3, n_bl) boresights as columns (the layout of the
+    bs_b_T = np.asfortranarray(boresight_body[ib].T)        # former `@ boresight_body[ia].T`: same BLAS call)
     z_f, z_i = np.zeros(0), np.zeros(2 * n_sig + 1, np.int64)
     w_idx3 = np.arange(3)
     ix_b = np.ix_(all_b_idx, all_b_idx)
@@ -375,8 +383,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         el_loc = geom.elevation_local_rad[k]
         # antenna-frame elevation for the noise model: by the current attitude once known, else the initial one;
         # el_ant, az_ant (the antenna-frame mask, sec. 3.2 compromise) only once an attitude exists, else NaN
-        los_b = u @ (R_mask if R_mask is not None else R_body_from_ecef_0).T           # (n_sat, 3) body
-        clip_pair(los_b @ bs_a_T, los_b @ bs_b_T, w_asn)
+        # (n_sat, 3) body-frame lines of sight, the clipped boresight products and the predicted geometry b.u
+        R_los = R_mask if R_mask is not None else R_body_from_ecef_0
+        los_b, ub = epoch_geometry(u, R_los if R_los.flags.c_contiguous else np.ascontiguousarray(R_los), bs_a_T,
+                                   bs_b_T, st.x, b_idx, w_asn)
         asn = np.arcsin(w_asn)                                                 # (2, n_sat, n_bl)
         az = np.arctan2(los_b[:, 1], los_b[:, 0]) if R_mask is not None else z_f
         pcv_m, empty, pcv_on = pcv_zero, no_pcv, False
@@ -389,8 +399,6 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # to ~10 us/s relative to each other, so across an outage the change alone is no jump; no code this epoch:
         # the prediction, the phase clocks absorb the drift), and the triple differences (time differences of SDs
         # with the predicted geometry change, median-referenced)
-        b_pred = st.x[all_b_idx].reshape(n_bl, 3)
-        ub = b_pred @ u.T                                                   # (n_bl, n_sat)
         consecutive = prev_t is not None and (t - prev_t) <= TD_MAX_DT_S
         do_td = consecutive and prev_b is not None
         n_jump, n_common = qc_epoch(asn, az, R_mask is not None, ever_fixed, s.elevation_mask_antenna_deg * DEG,
@@ -467,74 +475,49 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         jp, sp, fp = np.nonzero(use_p)
         mc_n, mp_n = jc.size, jp.size
         m = mc_n + mp_n
-        vp_f = np.full(n_sig, s.sigma_phase_m ** 2)
         if m:
-            # sparse rows (baseline, clock, code bias / ambiguity) and observations, code rows then phase rows
-            cols, coef, z = measurement_rows(jc, sc, fc, jp, sp, fp, b_idx, u, cfac, st.clk, st.pclk, st.bias,
-                                             st.amb_index, lam, sdc_c, sdp_c, pcv_m)
-            if s.noise_estimation:
-                # the configured sigmas are floors: receivers smooth their code (tiny code TDs), and time-
-                # correlated errors (multipath) never show in a triple difference
-                vc_f = np.where(est_n >= NOISE_MIN_EPOCHS, np.maximum(est_var_c, s.sigma_code_m ** 2),
-                                s.sigma_code_m ** 2)
-                vp_f = np.where(est_n >= NOISE_MIN_EPOCHS, np.maximum(est_var_p, s.sigma_phase_m ** 2),
-                                s.sigma_phase_m ** 2)
-                var = np.concatenate([vc_f[fc], vp_f[fp]])
-            else:
-                var = np.concatenate([np.full(mc_n, s.sigma_code_m ** 2), np.full(mp_n, s.sigma_phase_m ** 2)])
-            if cn0_growth:
-                var *= np.concatenate([_cn0_factor(cn0[jc, sc, fc]) ** gamma[0, fc],
-                                       _cn0_factor(cn0[jp, sp, fp]) ** gamma[1, fp]])
-            if s.weighting == "elevation":
-                # antenna-frame elevation once an attitude exists, else the local horizon (ground platforms)
-                el_e = el_ant if R_mask is not None else np.broadcast_to(el_loc, (n_bl, n_sat))
-                e = np.concatenate([el_e[jc, sc], el_e[jp, sp]])
-                var *= _clip(1.0 / np.sin(_clip(_nz(e, 0.5), 0.05, None)) ** 2, 1.0, 16.0)
-            if mp_model:
-                # time-correlated errors (multipath, uncalibrated PCV) growing with the off-boresight angle
-                th_c = np.pi / 2 - el_w[jc, sc]
-                th_p = np.pi / 2 - el_w[jp, sp]
-                v_mp = np.concatenate([_mp_var(th_c, *s.sigma_multipath_code_m),
-                                       _mp_var(th_p, *s.sigma_multipath_phase_m)])
-                v_white = var.copy()
-                var += v_mp * (mp_infl * mp_scale)
-                if record and mp_n:
-                    w_p = 1.0 / var[mc_n:]
-                    sm_corr[k] = float(np.sum(v_mp[mc_n:] * (mp_infl * mp_scale) * w_p * w_p) / np.sum(w_p))
-            ok_cols = np.where(cols >= 0, cols, 0)
-            hx = np.einsum("mk,mk->m", np.where(cols >= 0, coef, 0.0), st.x[ok_cols])
-            innov = z - hx
-            x1, P1, S, good = joseph_update_sparse(st.x, st.P, cols, coef, var, innov)
-            if good and adapter is not None and ever_fixed.all() and prev_t is not None:
-                adapter.observe(x1[0:3] - st.x[0:3], st.P[0:3, 0:3], P1[0:3, 0:3], t - prev_t)
-            if good:
-                st.x, st.P = x1, P1
-            st.amb_last_t[cols[mc_n:, 4] - st.n_fixed_part] = t
-            cz = np.where(cols >= 0, coef, 0.0)
-            post = z - np.einsum("mk,mk->m", cz, st.x[ok_cols])
-            if mp_model and s.multipath_adaptive and good:
+            # worker.attitude.update_kernels.measurement_update, x and P in place: sparse rows (baseline, clock,
+            # code bias / ambiguity) and observations, code rows then phase rows; variances: the white noise
+            # (the configured sigmas are floors: receivers smooth their code (tiny code TDs), and time-correlated
+            # errors (multipath) never show in a triple difference) x C/N0 factor^gamma [x elevation factor: the
+            # antenna-frame elevation once an attitude exists, else the local horizon], plus the time-correlated
+            # errors (multipath, uncalibrated PCV) growing with the off-boresight angle, scaled adaptively; the
+            # update as scalar updates in turn; the post-fit residuals and the sums of the multipath scale
+            vc_f, vp_f = white_variances_cp(est_var_c, est_var_p, est_n, var_c_floor, var_p_floor, NOISE_MIN_EPOCHS,
+                                            s.noise_estimation)
+            watch_w = adapter is not None and ever_fixed.all() and prev_t is not None
+            if watch_w:
+                w_prior, Pw_prior = st.x[0:3].copy(), st.P[0:3, 0:3].copy()
+            el_wc = np.ascontiguousarray(el_w)          # one compiled signature whatever the layout
+            el_e = el_wc if not elev_w else (el_ant if R_mask is not None else np.repeat(el_loc[None, :], n_bl, 0))
+            mp_mult = mp_infl * mp_scale
+            (cols, coef, z, var, v_mp, post, good, mp_num, mp_den, n_mp, n_used, n_fixed_used, n_unfixed, n_fix_rows,
+             ms_fix, has_fix) = measurement_update(
+                st.x, st.P, jc, sc, fc, jp, sp, fp, b_idx, u, cfac, st.clk, st.pclk, st.bias, st.amb_index, lam,
+                sdc_c, sdp_c, pcv_m, vc_f, vp_f, np.ascontiguousarray(cn0), gamma, cn0_growth, el_e, elev_w, el_wc,
+                mp_model, mp_sig, mp_mult, st.amb_fixed, st.n_fixed_part, st.amb_last_t, t, JOSEPH_RATIO, st.amb_key,
+                n_bl, n_sat)
+            if mp_model and record and mp_n:
+                w_p = 1.0 / var[mc_n:]
+                sm_corr[k] = float(np.sum(v_mp[mc_n:] * mp_mult * w_p * w_p) / np.sum(w_p))
+            if good and watch_w:
+                adapter.observe(st.x[0:3] - w_prior, Pw_prior, st.P[0:3, 0:3], t - prev_t)
+            if mp_model and s.multipath_adaptive and good and n_mp >= 6:
                 # scale of the multipath variance from the post-fit residuals of fixed phases:
                 # E[r^2] = R_true (1 - h), h = (H P+ H^T)_ii / R_model (leverage); R_true = white + scale * mp
-                rows = mc_n + np.flatnonzero(st.amb_fixed[cols[mc_n:, 4] - st.n_fixed_part])
-                if rows.size >= 6:
-                    c_r, z_r = ok_cols[rows], cz[rows]
-                    hph = np.einsum("mi,mij,mj->m", z_r, st.P[c_r[:, :, None], c_r[:, None, :]], z_r)
-                    one_h = _clip(1.0 - hph / var[rows], 0.05, 1.0)
-                    num = np.sum(post[rows] ** 2 / one_h - v_white[rows])
-                    den = np.sum(v_mp[rows])
-                    a = 1.0 / min(mp_n_ep + 1.0, NOISE_EPOCHS)
-                    mp_scale = float(_clip(mp_scale + a * (num / den - mp_scale), MP_SCALE_MIN, MP_SCALE_MAX))
-                    mp_n_ep += 1
+                a = 1.0 / min(mp_n_ep + 1.0, NOISE_EPOCHS)
+                ratio = mp_num / mp_den if mp_den else np.float64(mp_num) / 0.0
+                mp_scale = float(min(max(mp_scale + a * (ratio - mp_scale), MP_SCALE_MIN), MP_SCALE_MAX))
+                mp_n_ep += 1
         else:
             post = np.zeros(0)
         # ---------------- ambiguity resolution ----------------
-        n_used = np.zeros(n_bl, np.int64)
-        n_fixed_used = np.zeros(n_bl, np.int64)
-        if mp_n:
-            used_amb = cols[mc_n:, 4]
-            afix = st.amb_fixed[used_amb - st.n_fixed_part]
-            n_used = count_pairs_masked(jp, sp, np.ones(jp.size, bool), n_bl, n_sat)
-            n_fixed_used = count_pairs_masked(jp, sp, afix, n_bl, n_sat)
+        # with phase rows, measurement_update gave the satellites used / with a fixed ambiguity per baseline, the
+        # unfixed rows and the fix monitor's post-fit mean squares (phase_row_stats)
+        if not mp_n:
+            n_used = np.zeros(n_bl, np.int64)
+            n_fixed_used = n_unfixed = n_used
+        ar_changed = False     # the AR below changed st.amb_fixed (the stats above are then recomputed)
         joint_ar = {}          # ambiguity_search "constrained": one MC-LAMBDA first fix of all baselines together
         if s.ambiguity_search == "constrained" and n_bl >= 2 and mp_n and not st.amb_fixed.any():
             gb = {j: first_fix_groups(cols[mc_n:, 4][jp == j], fp[jp == j], el_loc[sp[jp == j]], n_sig)
@@ -546,19 +529,13 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         for j in range(n_bl):
             if n_used[j] and first_data[j] < 0:
                 first_data[j] = k
-            if not pa[j] or n_used[j] < s.ar_min_sats:
+            if not pa[j] or n_used[j] < s.ar_min_sats or not n_unfixed[j]:
                 continue
-            sel_j = jp == j
-            idx_j = cols[mc_n:, 4][sel_j]
-            fixed_j = st.amb_fixed[idx_j - st.n_fixed_part]
-            if fixed_j.all():
-                continue
-            el_j = el_loc[sp[sel_j]]
-            sig_j = fp[sel_j]
-            has_group = np.zeros((n_bl, n_sig), bool)              # signals of baseline j with a fixed ambiguity
-            has_group[st.amb_key[st.amb_fixed, 0], st.amb_key[st.amb_fixed, 2]] = True
-            has_group = has_group[j].tolist()
-            if not any(has_group):
+            if not has_fix[j]:                                  # no signal of baseline j fixed yet
+                sel_j = jp == j
+                idx_j = cols[mc_n:, 4][sel_j]
+                el_j = el_loc[sp[sel_j]]
+                sig_j = fp[sel_j]
                 groups = first_fix_groups(idx_j, sig_j, el_j, n_sig)
                 if not groups or sum(g.size - 1 for g, _ in groups) < s.ar_min_dd:
                     continue
@@ -609,6 +586,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                             adapter.reset()
                     for g, _ in outcome.groups or groups:
                         st.amb_fixed[g - st.n_fixed_part] = True
+                    ar_changed = True
                     ev(k, "fix", j, detail=f"{outcome.n_dd} DD ambiguities, ratio {outcome.ratio:.2f}, "
                                          f"length {outcome.length_m:.4f} m")
                     if first_fix[j] < 0:
@@ -616,43 +594,26 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 else:
                     ev(k, "fix_rejected", j, detail=f"ratio {outcome.ratio:.2f}, {outcome.reason}")
             else:
-                Ds, vs = [], []
-                for f in range(n_sig):
-                    grp = np.flatnonzero((st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f) & st.amb_fixed)
-                    cand = idx_j[(sig_j == f) & ~fixed_j]
-                    if cand.size == 0:
-                        continue
-                    if grp.size:
-                        ref = st.n_fixed_part + grp[0]
-                    else:
-                        # first fix on this signal for a fixed baseline: the highest newcomer is the reference
-                        sel_f = (sig_j == f) & ~fixed_j
-                        ref = idx_j[sel_f][int(np.argmax(el_j[sel_f]))]
-                        cand = cand[cand != ref]
-                        var_ref = st.P[ref, ref]
-                        if cand.size == 0:
-                            continue
-                    D, v, okm = round_newcomers(st.x, st.P, cand, ref, s.new_amb_round_sigma_cyc,
-                                                s.new_amb_round_frac_cyc)
-                    if okm.any():
-                        Ds.append(D)
-                        vs.append(v)
-                        st.amb_fixed[cand[okm] - st.n_fixed_part] = True
-                        st.amb_fixed[ref - st.n_fixed_part] = True
-                if Ds:
-                    log_fix(np.concatenate(Ds), np.concatenate(vs))
-                    _pseudo_update(st, np.concatenate(Ds), np.concatenate(vs))
-                    ev(k, "fix_added", j, detail=f"{sum(len(v) for v in vs)} newcomers fixed by rounding")
+                # newcomers on a fixed baseline: DD to the fixed reference of their signal rounded (compiled)
+                # and constrained in place (DD pseudo-measurements as in _pseudo_update, as scalar Joseph updates)
+                nw, rf, vals = fix_newcomers(st.x, st.P, st.amb_key, st.amb_fixed, st.n_fixed_part, cols, mc_n, jp,
+                                             sp, fp, el_loc, n_sig, j, s.new_amb_round_sigma_cyc,
+                                             s.new_amb_round_frac_cyc, PSEUDO_VAR_CYC2)
+                if nw.size:
+                    ar_changed = True
+                    fix_rows.extend(zip([k] * nw.size, st.amb_arc[nw - st.n_fixed_part].tolist(),
+                                        st.amb_arc[rf - st.n_fixed_part].tolist(), vals.tolist()))
+                    ev(k, "fix_added", j, detail=f"{nw.size} newcomers fixed by rounding")
         # fix monitor: post-fit phase residuals of fixed ambiguities far above the noise for FIX_CHECK_EPOCHS in a
         # row mean a wrong fix (or an undetected slip): restart every ambiguity of that baseline as float
         if mp_n:
-            fixed_rows = st.amb_fixed[cols[mc_n:, 4] - st.n_fixed_part]
-            vp_now = vp_f if s.noise_estimation else np.full(n_sig, s.sigma_phase_m ** 2)
+            if ar_changed:
+                _, n_fixed_post, _, n_fix_rows, ms_fix = phase_row_stats(jp, sp, cols, mc_n, st.amb_fixed,
+                                                                         st.n_fixed_part, post, n_bl, n_sat)
+            lim = max(FIX_CHECK_SIGMAS * math.sqrt(max(vp_f.tolist())), FIX_CHECK_MIN_M)
             for j in range(n_bl):
-                sel = (jp == j) & fixed_rows
-                if sel.sum() >= 4:
-                    rms = np.sqrt(np.mean(post[mc_n:][sel] ** 2))
-                    lim = max(FIX_CHECK_SIGMAS * np.sqrt(np.max(vp_now)), FIX_CHECK_MIN_M)
+                if n_fix_rows[j] >= 4:
+                    rms = np.sqrt(ms_fix[j])
                     bad_fix[j] = bad_fix[j] + 1 if rms > lim else 0
                     if bad_fix[j] >= FIX_CHECK_EPOCHS:
                         reset_baseline(j, f"post-fit phase RMS {rms * 1e3:.1f} mm > {lim * 1e3:.1f} mm "
@@ -666,42 +627,40 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         pending_reset.clear()
         # recount fixed after AR
         had_fix = ever_fixed
-        ever_fixed = np.zeros(n_bl, bool)
-        ever_fixed[st.amb_key[st.amb_fixed, 0]] = True
-        for j in np.flatnonzero(had_fix & ~ever_fixed):
-            ev(k, "fix_lost", j, detail="no fixed ambiguity left (slips, gaps or setting satellites)")
-        if mp_n:
-            afix = st.amb_fixed[cols[mc_n:, 4] - st.n_fixed_part]
-            n_fixed_used = count_pairs_masked(jp, sp, afix, n_bl, n_sat)
+        if mp_n and not ar_changed:
+            ever_fixed = has_fix                    # st.amb_fixed as measurement_update saw it
+        else:
+            ever_fixed = np.zeros(n_bl, bool)
+            ever_fixed[st.amb_key[st.amb_fixed, 0]] = True
+        lost = had_fix & ~ever_fixed
+        if lost.any():
+            for j in np.flatnonzero(lost):
+                ev(k, "fix_lost", j, detail="no fixed ambiguity left (slips, gaps or setting satellites)")
+        if mp_n and ar_changed:
+            n_fixed_used = n_fixed_post             # after AR (a reset above leaves the count before AR)
         # ---------------- outputs ----------------
-        okb = pa & (n_used >= 3)
-        out_ok[k] = okb
-        out_b[k] = st.x[all_b_idx].reshape(n_bl, 3)
-        out_P[k] = st.P[ix_b]
-        fixed_now = ever_fixed & (n_fixed_used >= s.fixed_min_sats)
-        out_fixed[k] = fixed_now & okb
-        out_n[k] = n_used
-        if dynamic:
-            out_w[k] = st.x[0:3]
+        # out_b[k], out_P[k], out_w[k]; out_ok[k] = pa & (n_used >= 3), out_fixed[k] = fixed_now & out_ok[k],
+        # out_n[k] = n_used; fixed_now = ever_fixed & (n_fixed_used >= fixed_min_sats)
+        fixed_now = store_outputs(st.x, st.P, all_b_idx, k, out_b, out_P, out_w, dynamic, pa, n_used, ever_fixed,
+                                  n_fixed_used, s.fixed_min_sats, out_ok, out_fixed, out_n)
         if record:
             sm_xf[k], sm_Pf[k] = st.x[sub_w_b], st.P[ix_sub]
-        if attitude_fn is not None and np.all(fixed_now) and k % (1 if pcv_tables else 10) == 0:
+        if attitude_fn is not None and k % (1 if pcv_tables else 10) == 0 and fixed_now.all():
             R_mask = attitude_fn(out_b[k], fixed_now)
             R_mask_t = t
         # residual records (used and rejected): the epoch's code rows, then its phase rows; and the memory for the
         # triple differences (clock-corrected SDs where available)
         res_n = record_epoch(k, avail_c, avail_p, use_c, use_p, reason, el_ant, az_ant, cn0, post, m, jc, sc, fc, jp,
-                             sp, fp, w_lookup, res_i, res_f, res_n, sdc_c, sdp_c, prev_sdc, prev_sdp)
+                             sp, fp, w_lookup, res_i, res_f, res_n, sdc_c, sdp_c, prev_sdc, prev_sdp, out_b[k], u,
+                             prev_ub)                                   # prev_ub = out_b[k] @ u.T
         prev_t = t
-        prev_b = out_b[k].copy()
-        prev_ub = prev_b @ u.T
+        prev_b = out_b[k]
     if progress is not None:
         progress(1.0)
-    residuals = {"epoch": res_i[0, :res_n].copy(), "bl": res_i[1, :res_n].copy(), "sat": res_i[2, :res_n].copy(),
-                 "sig": res_i[3, :res_n].copy(), "el_ant_deg": res_f[0, :res_n].copy(),
-                 "az_ant_deg": res_f[1, :res_n].copy(), "cn0_dbhz": res_f[2, :res_n].copy(),
-                 "kind": res_i[4, :res_n].copy(), "residual_m": res_f[3, :res_n].copy(),
-                 "reason": res_i[5, :res_n].copy()}
+    # column arrays for residuals.csv (contiguous views of the record rows)
+    residuals = {"epoch": res_i[0, :res_n], "bl": res_i[1, :res_n], "sat": res_i[2, :res_n], "sig": res_i[3, :res_n],
+                 "el_ant_deg": res_f[0, :res_n], "az_ant_deg": res_f[1, :res_n], "cn0_dbhz": res_f[2, :res_n],
+                 "kind": res_i[4, :res_n], "residual_m": res_f[3, :res_n], "reason": res_i[5, :res_n]}
     arcs = np.array(st.arcs, dtype=np.int64).reshape(-1, 5)
     arcs[arcs[:, 4] < 0, 4] = n_ep - 1
     fl = np.array(fix_rows, dtype=np.float64).reshape(-1, 4)

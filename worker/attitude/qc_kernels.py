@@ -22,7 +22,7 @@ from numba import njit
 from worker.attitude.kernels import POW2, cn0_growth_update, white_noise_update
 from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 
-__all__ = ["reset_white_clocks", "propagate_dynamic", "propagate_kinematic", "clip_pair", "qc_epoch",
+__all__ = ["reset_white_clocks", "propagate_dynamic", "propagate_kinematic", "clip_pair", "epoch_geometry", "qc_epoch",
            "growth_weights", "td_checks", "record_epoch", "take_square", "grow_square", "warm_up"]
 
 #: reason codes set here (worker.attitude.filter.REASONS)
@@ -96,6 +96,22 @@ def clip_pair(da, db, out):
                 if v > 1.0:
                     v = 1.0
                 out[q, i, j] = v
+
+
+@njit(cache=True, nogil=True)
+def epoch_geometry(u, R, bs_a_T, bs_b_T, x, b_idx, asn_in):
+    """(los_b (n_sat, 3) = u R^T: lines of sight in the body frame, ub (n_bl, n_sat) = b u^T with b = x[b_idx]:
+    the predicted SD geometry); asn_in (2, n_sat, n_bl) = clip(los_b bs_a_T), clip(los_b bs_b_T) (boresights of
+    the first / second antennas as columns), for np.arcsin. np.dot (BLAS) where run_filter used @: the same bits
+    (tests/attitude/test_qc_kernels.py)."""
+    los = np.dot(u, R.T)
+    clip_pair(np.dot(los, bs_a_T), np.dot(los, bs_b_T), asn_in)
+    nb = b_idx.shape[0]
+    b = np.empty((nb, 3))
+    for j in range(nb):
+        for a in range(3):
+            b[j, a] = x[b_idx[j, a]]
+    return los, np.dot(b, u.T)
 
 
 @njit(cache=True, nogil=True)
@@ -320,13 +336,14 @@ def td_checks(do_td, noise_on, wfac, est_var_c, est_var_p, est_n, noise_epochs, 
 
 @njit(cache=True, nogil=True)
 def record_epoch(k, avail_c, avail_p, use_c, use_p, reason, el_ant, az_ant, cn0, post, m, jc, sc, fc, jp, sp, fp,
-                 lookup, ibuf, fbuf, pos, sdc_c, sdp_c, prev_sdc, prev_sdp):
+                 lookup, ibuf, fbuf, pos, sdc_c, sdp_c, prev_sdc, prev_sdp, b_out, u, prev_ub):
     """The residual rows of epoch k written from row pos of ibuf (6, cap) = epoch, bl, sat, sig, kind, reason and
     fbuf (4, cap) = el_ant_deg, az_ant_deg (of az mod 2 pi), cn0_dbhz, residual_m: its code rows (kind 0, every
     available code in (bl, sat, sig) order, residual (when m rows were used) post[r] of code row r (jc, sc, fc),
     post[jc.size + r] of phase row r (jp, sp, fp), else NaN, reason 0 if
     used), then its phase rows (kind 1, where a phase exists; reason 0 if used, else the code's or 5 (td_phase));
-    and the memory of the triple differences prev_sdc / prev_sdp = sdc_c / sdp_c where available, else NaN.
+    and the memory of the triple differences prev_sdc / prev_sdp = sdc_c / sdp_c where available, else NaN,
+    prev_ub = b_out u^T (the epoch's output baselines, np.dot as run_filter's @).
     Returns the next free row (run_filter's former per-epoch records and _residual_records, same values)."""
     n_bl, n_sat, n_sig = avail_c.shape
     lookup[:] = np.nan
@@ -364,6 +381,7 @@ def record_epoch(k, avail_c, avail_p, use_c, use_p, reason, el_ant, az_ant, cn0,
             for f in range(n_sig):
                 prev_sdc[j, s, f] = sdc_c[j, s, f] if avail_c[j, s, f] else np.nan
                 prev_sdp[j, s, f] = sdp_c[j, s, f] if avail_p[j, s, f] else np.nan
+    prev_ub[:] = np.dot(b_out, u.T)
     return pos
 
 
@@ -404,6 +422,10 @@ def warm_up() -> None:
     reset_white_clocks(x, P, white, 1.0)
     asn = np.zeros((2, n_sat, n_bl))
     clip_pair(np.zeros((n_sat, n_bl)), np.zeros((n_sat, n_bl)), asn)
+    u = np.ones((n_sat, 3))
+    for nb in (1, n_bl):           # boresight columns (3, n_bl) in Fortran order; C too for one baseline
+        bs_T = np.ones((nb, 3)).T
+        epoch_geometry(u, np.eye(3), bs_T, bs_T, x, b_idx[:nb], np.zeros((2, n_sat, nb)))
     f2, f3, b3 = np.zeros((n_bl, n_sat)), np.zeros(sh), np.zeros(sh, np.bool_)
     i3, lli = np.zeros(sh, np.int64), np.zeros(sh, np.int8)
     wb, wf = np.zeros((5,) + sh, np.bool_), np.zeros((4,) + sh)
@@ -425,4 +447,4 @@ def warm_up() -> None:
     ibuf, fbuf = np.zeros((6, 8), np.int64), np.zeros((4, 8))
     for idx in (np.zeros(1, np.int64), np.nonzero(np.ones((2, 2)))[0]):      # contiguous, strided
         record_epoch(0, b3, b3, b3, b3, i3, f2, f2, f3, z, 0, idx, idx, idx, idx, idx, idx, np.zeros((2,) + sh),
-                     ibuf, fbuf, 0, f3, f3, f3.copy(), f3.copy())
+                     ibuf, fbuf, 0, f3, f3, f3.copy(), f3.copy(), np.zeros((n_bl, 3)), u, f2.copy())
