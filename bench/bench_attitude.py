@@ -152,8 +152,8 @@ def run_slews(tmp: Path, seeds=(SEED,)) -> list[str]:
              f"{', '.join(map(str, seeds))}, dynamic mode, \"all phases\"; Table 1 = default settings; adaptive = "
              "`adaptive_omega_noise` with its defaults: window 5 epochs, gain 4, chi-square gate 0.5; smoother = "
              "`smoother`, the fixed-interval RTS smoother after the forward pass; smoother, adaptive noise = "
-             "`smoother_adaptive_noise`, the smoother's omega random walk per epoch from the smoothed angular "
-             "acceleration, docs/attitude.md). Lag = max over fixed epochs after "
+             "`smoother_adaptive_noise`, the omega random walk per epoch from the smoothed angular "
+             "acceleration of a first pass, then the whole filter again with it and smoothed, docs/attitude.md). Lag = max over fixed epochs after "
              "the first 30 s of the 15-s running mean of the yaw/pitch/roll errors (noise averages out, a lag does "
              "not); max error: over all fixed epochs, with its time after the first fix and its predicted "
              "(1-sigma) tilt; z = std(error / predicted sigma) after 30 s, yaw / pitch / roll:", "",

@@ -179,7 +179,7 @@ def _mp_var(off_boresight_rad: np.ndarray, sigma_boresight_m: float, sigma_horiz
 
 def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: np.ndarray,
                boresight_body: np.ndarray, settings: AttitudeSettings, R_body_from_ecef_0: np.ndarray,
-               attitude_fn=None, progress=None) -> FilterResult:
+               attitude_fn=None, progress=None, q_omega: np.ndarray = None) -> FilterResult:
     """FilterResult of the EKF over all epochs of `pobs` (PlatformObs) with `geom` (EpochGeometry).
 
     Args:
@@ -190,6 +190,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         attitude_fn: callable (b_ecef (n_bl, 3), fixed (n_bl,)) -> R_body_from_ecef (3, 3) or None; used for
             the antenna-frame mask once every baseline is fixed. None: no antenna-frame mask.
         progress: callable(fraction) called every ~200 epochs.
+        q_omega: dynamic mode, (n_ep, 3, 3) omega random-walk rate (rad^2/s^3) of the propagation into each epoch,
+            in place of Table 1's (and of the adapter's); None: Table 1's (smoother_adaptive_noise's second pass).
     """
     s = settings
     n_ant, n_ep, n_sat, n_sig = pobs.code_m.shape
@@ -331,6 +333,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     pcv_zero = np.zeros(shp)
     prev_ub = np.zeros((n_bl, n_sat))
     Qw_iso = np.eye(3) * q_w
+    if q_omega is not None:
+        q_omega = np.ascontiguousarray(q_omega, dtype=np.float64)       # one compiled signature
     bs_a_T = np.asfortranarray(boresight_body[ia].T)        # (3, n_bl) boresights as columns (the layout of the
     bs_b_T = np.asfortranarray(boresight_body[ib].T)        # former `@ boresight_body[ia].T`: same BLAS call)
     z_f, z_i = np.zeros(0), np.zeros(2 * n_sig + 1, np.int64)
@@ -349,7 +353,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             if dynamic:
                 # b by RK4 rotation; P <- Phi P Phi^T + Q: the omega random walk's discrete noise and its effect on b
                 # over dt; then the white-noise clocks are reset (worker.attitude.qc_kernels)
-                Qw = adapter.q_rate() if adapter is not None else Qw_iso       # (3, 3) rad^2/s^3
+                Qw = q_omega[k] if q_omega is not None else (adapter.q_rate() if adapter is not None
+                                                              else Qw_iso)       # (3, 3) rad^2/s^3
                 Pbb, Pbw = propagate_dynamic(st.x, st.P, w_idx3, b_idx, Qw, float(dt), s.rk4_step_s, st.white,
                                              var_clk)
                 if record:

@@ -255,8 +255,18 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
                 q, _ = attitude_quaternion(b[None], body, settings.attitude_method)
                 return rot.quat_to_dcm(q[0])
     prog(0.15, "filtering")
+    two_pass = settings.mode == "dynamic" and settings.smoother_adaptive_noise
+    span = 0.375 if two_pass else 0.75
     fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
-                    progress=lambda f: prog(0.15 + 0.75 * f))
+                    progress=lambda f: prog(0.15 + span * f))
+    if two_pass:
+        # smoother_adaptive_noise: the omega random walk per epoch from the smoothed first pass, then the whole
+        # filter again with it (worker/attitude/smoother.py adaptive_noise_profile); products from the second pass
+        from worker.attitude.smoother import adaptive_noise_profile
+        q_omega, info = adaptive_noise_profile(fr, settings)
+        fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
+                        progress=lambda f: prog(0.15 + span * (1 + f)), q_omega=q_omega)
+        fr.smoother_data["adaptive_noise"] = info
     if fr.smoother_data is not None:
         from worker.attitude.smoother import smooth_filter_result
         smooth_filter_result(fr, settings)

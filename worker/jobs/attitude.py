@@ -64,7 +64,8 @@ class AttitudeConfig(BaseModel):
                                               "'Where the slew errors come from'). Off: the forward filter's output.")
     smoother_adaptive_noise: bool = Field(False, description="Dynamic mode, implies `smoother`: the angular "
                                           "velocity's random walk per epoch from the smoothed angular acceleration "
-                                          "(low when steady, raised around manoeuvres), then smoothed again (docs/"
+                                          "of a first pass (low when steady, raised around manoeuvres), then the "
+                                          "whole filter run again with it and smoothed: about twice the CPU (docs/"
                                           "attitude.md 'Adaptive process noise of the smoother'). Off: Table 1's.")
     attitude_method: Literal["quest", "triad", "ml"] = Field(
         "quest", description="quest: QUEST with weights by baseline length (seed 000); triad: the first baseline "
