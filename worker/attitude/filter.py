@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from worker.attitude.adaptive import OmegaNoiseAdapter
+from worker.attitude.adaptive import ManoeuvreDetector
 from worker.attitude.ambiguity import (
     first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
 )
@@ -211,9 +211,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     if dynamic:
         st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
     q_w = (s.sigma_omega_deg_s * DEG) ** 2 / s.tau_omega_s          # rad^2/s^2 per s
-    adapter = OmegaNoiseAdapter(q_w, s.adaptive_omega_window, s.adaptive_omega_gain,
-                                s.adaptive_omega_gate) \
-        if dynamic and s.adaptive_omega_noise else None
+    adapter = ManoeuvreDetector(q_w, (s.adaptive_omega_sigma_deg_s * DEG) ** 2 / s.tau_omega_s, n_bl,
+                                s.adaptive_omega_threshold, s.adaptive_omega_mix_at,
+                                s.adaptive_omega_sigma_acc_deg_s2 * DEG, s.adaptive_omega_hold_epochs,
+                                s.rk4_step_s) if dynamic and s.adaptive_omega_noise else None
     q_b = s.sigma_baseline_kinematic_m ** 2 / s.tau_baseline_s       # m^2 per s
     var_clk = (s.sigma_clock_s * C_M_S) ** 2
     cn0_growth = s.weighting == "cn0" or s.noise_cn0_growth
@@ -320,7 +321,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 b1, Pbb, Pbw = rotation_rk4_stm_kernel(bb, w, dt, s.rk4_step_s)
                 st.x[all_b_idx] = b1.ravel()
                 # P <- Phi P Phi^T + Q: the omega random walk's discrete noise and its effect on b over dt
-                Qw = adapter.q_rate() if adapter is not None else np.eye(3) * q_w       # (3, 3) rad^2/s^3
+                Qw = adapter.q_rate(dt) if adapter is not None else np.eye(3) * q_w       # (3, 3) rad^2/s^3
                 propagate_rotation_cov(st.P, w_idx3, b_idx, Pbb, Pbw, np.ascontiguousarray(Qw, np.float64), b1,
                                        float(dt))
                 if record:
@@ -516,7 +517,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             innov = z - hx
             x1, P1, S, good = joseph_update_sparse(st.x, st.P, cols, coef, var, innov)
             if good and adapter is not None and ever_fixed.all() and prev_t is not None:
-                adapter.observe(x1[0:3] - st.x[0:3], st.P[0:3, 0:3], P1[0:3, 0:3], t - prev_t)
+                rep = adapter.observe(st.x[sub_w_b], st.P[ix_sub], x1[sub_w_b], P1[ix_sub], t)
+                if rep is not None:        # a manoeuvre: the (omega, baselines) sub-state the detector gives
+                    x1[sub_w_b], P1[ix_sub] = rep
             if good:
                 st.x, st.P = x1, P1
             st.amb_last_t[cols[mc_n:, 4] - st.n_fixed_part] = t
