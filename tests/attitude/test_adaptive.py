@@ -155,3 +155,12 @@ def test_adaptive_noise_leaves_a_slow_manoeuvre_alone(slews):
     f0, f1 = sols[False].att_fixed, sols[True].att_fixed
     assert f1[int(np.argmax(f1)):].mean() > 0.99 and "fix_lost" not in sols[True].summary["events"]
     assert np.percentile(a1[f1], 95) < 1.05 * np.percentile(a0[f0], 95)
+
+
+def test_job_config_passes_the_option_and_defaults_to_table_1():
+    from worker.jobs.attitude import AttitudeConfig
+
+    assert AttitudeConfig().to_settings().adaptive_omega_noise is False
+    s = AttitudeConfig(adaptive_omega_noise=True, adaptive_omega_threshold=6.0, adaptive_omega_hold_epochs=20)
+    s = s.to_settings()
+    assert s.adaptive_omega_noise and s.adaptive_omega_threshold == 6.0 and s.adaptive_omega_hold_epochs == 20

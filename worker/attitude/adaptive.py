@@ -23,7 +23,8 @@ estimation, Bar-Shalom, Li & Kirubarajan 2001 sec. 11.6):
   empties, and for `hold` updates the main filter's random walk is raised to sigma_hi along the estimated
   acceleration axis (Table 1's on the other two). A continuing acceleration is detected again and extends it.
 
-Everything at update k uses the data up to k (causal). The models run only while every baseline is fixed (the
+Everything at update k uses the data up to k (causal). With the smoother on, only the raised random walk is applied
+(the smoother's model must explain every change of the state). The models run only while every baseline is fixed (the
 caller's condition); a gap of more than MAX_GAP_S or a reset of omega / the fix restarts them.
 """
 from __future__ import annotations
@@ -95,16 +96,20 @@ def equivalent_measurement(xp: np.ndarray, Pp: np.ndarray, xf: np.ndarray, Pf: n
 
 class ManoeuvreDetector:
     """Bank of constant-acceleration hypotheses against Table 1's random walk (module doc). State order of the
-    sub-state: omega (3), then the baselines (3 each); q rates in rad^2/s^3, sigma_acc in rad/s^2."""
+    sub-state: omega (3), then the baselines (3 each); q rates in rad^2/s^3, sigma_acc in rad/s^2. replace_state
+    False: only the raised random walk after a detection (no mixing, no state taken over), for the fixed-interval
+    smoother, whose backward pass needs every change of the state to come from the dynamics and the measurements."""
 
     def __init__(self, q0_rate: float, q_hi_rate: float, n_bl: int, threshold: float = 5.0, mix_at: float = 0.0,
-                 sigma_acc_rad_s2: float = 0.05 * np.pi / 180, hold_updates: int = 30, rk4_step_s: float = 1.0):
+                 sigma_acc_rad_s2: float = 0.05 * np.pi / 180, hold_updates: int = 30, rk4_step_s: float = 1.0,
+                 replace_state: bool = True):
         self.q0, self.q_hi = float(q0_rate), float(q_hi_rate)
         self.n_bl = int(n_bl)
         self.threshold, self.mix_at = float(threshold), float(mix_at)
         self.var_acc = float(sigma_acc_rad_s2) ** 2
         self.hold_updates = int(hold_updates)
         self.rk4 = float(rk4_step_s)
+        self.replace_state = bool(replace_state)
         self.w_idx = np.arange(3)
         self.b_idx = 3 + np.arange(3 * self.n_bl).reshape(self.n_bl, 3)
         self.detections: list = []          # times (as given to observe) of the detected manoeuvres
@@ -209,4 +214,4 @@ class ManoeuvreDetector:
             P[np.ix_(sub, sub)] = self.Pq
             P[3:6, 3:6] = np.eye(3) * self.var_acc
             self.bank.append([x, P, 0.0, 0])
-        return out
+        return out if self.replace_state else None

@@ -214,7 +214,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     adapter = ManoeuvreDetector(q_w, (s.adaptive_omega_sigma_deg_s * DEG) ** 2 / s.tau_omega_s, n_bl,
                                 s.adaptive_omega_threshold, s.adaptive_omega_mix_at,
                                 s.adaptive_omega_sigma_acc_deg_s2 * DEG, s.adaptive_omega_hold_epochs,
-                                s.rk4_step_s) if dynamic and s.adaptive_omega_noise else None
+                                s.rk4_step_s, not s.smoother) if dynamic and s.adaptive_omega_noise else None
     q_b = s.sigma_baseline_kinematic_m ** 2 / s.tau_baseline_s       # m^2 per s
     var_clk = (s.sigma_clock_s * C_M_S) ** 2
     cn0_growth = s.weighting == "cn0" or s.noise_cn0_growth
