@@ -134,7 +134,8 @@ SLEWS = {"yaw/roll slew (17 min)": {"duration_s": 1020.0},
 
 #: settings compared on the slews (dynamic mode, "all phases"); Table 1 = the defaults
 SLEW_SETTINGS = {"Table 1": {}, "adaptive": {"adaptive_omega_noise": True}, "Table 1 + smoother": {"smoother": True},
-                 "adaptive + smoother": {"adaptive_omega_noise": True, "smoother": True}}
+                 "adaptive + smoother": {"adaptive_omega_noise": True, "smoother": True},
+                 "smoother, adaptive noise": {"smoother": True, "smoother_adaptive_noise": True}}
 
 
 def run_slews(tmp: Path, seeds=(SEED,)) -> list[str]:
@@ -153,7 +154,9 @@ def run_slews(tmp: Path, seeds=(SEED,)) -> list[str]:
              "hypotheses (prior 0.05 deg/s^2) against Table 1's random walk, estimate mixed by their weight "
              "(half-way at log-likelihood ratio 0), detection at 5 raises the random walk to 0.3 deg/s per sqrt(s) "
              "along the acceleration axis for 30 updates; smoother = "
-             "`smoother`, the fixed-interval RTS smoother after the forward pass). Lag = max over fixed epochs after "
+             "`smoother`, the fixed-interval RTS smoother after the forward pass; smoother, adaptive noise = "
+             "`smoother_adaptive_noise`, the smoother's omega random walk per epoch from the smoothed angular "
+             "acceleration, docs/attitude.md). Lag = max over fixed epochs after "
              "the first 30 s of the 15-s running mean of the yaw/pitch/roll errors (noise averages out, a lag does "
              "not); max error: over all fixed epochs, with its time after the first fix and its predicted "
              "(1-sigma) tilt; z = std(error / predicted sigma) after 30 s, yaw / pitch / roll:", "",

@@ -64,10 +64,14 @@ def _warm_up_kernels() -> None:
     so the first job does not pay it (docs/attitude.md "Speed")."""
     try:
         from worker.attitude.kernels import warm_up as warm_up_attitude
+        from worker.attitude.qc_kernels import warm_up as warm_up_qc
+        from worker.attitude.update_kernels import warm_up as warm_up_update
         from worker.estimation.ekf_kernels import warm_up as warm_up_ekf
 
         warm_up_ekf()
         warm_up_attitude()
+        warm_up_qc()
+        warm_up_update()
     except Exception:                       # a job would report the same error; the worker still serves others
         log.exception("numba kernels failed to compile at start")
 

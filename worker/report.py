@@ -35,7 +35,9 @@ def _esc(value: Any) -> str:
     return html.escape(str(value), quote=True)
 
 
-def _fmt(value: Any) -> str:
+def format_value(value: Any) -> str:
+    """Text of a summary value: "–" for None and NaN, yes/no, 6 significant digits, short lists joined, other
+    containers as (truncated) JSON. Shared by report.html and the job pages (app/routes/pages.py)."""
     if value is None:
         return "–"
     if isinstance(value, bool):
@@ -45,7 +47,7 @@ def _fmt(value: Any) -> str:
             return "–"
         return f"{value:.6g}"
     if isinstance(value, (list, tuple)) and all(not isinstance(v, (dict, list, tuple)) for v in value):
-        return ", ".join(_fmt(v) for v in value)
+        return ", ".join(format_value(v) for v in value)
     if isinstance(value, (dict, list, tuple)):
         return json.dumps(value, default=str)[:500]
     return str(value)
@@ -75,8 +77,8 @@ def _table_html(name: str, table: Any) -> str:
         columns = list(dict.fromkeys(k for r in rows_d for k in r))
         rows, footer = [[r.get(c) for c in columns] for r in rows_d], []
     head = "".join(f"<th>{_esc(c)}</th>" for c in columns)
-    body = "".join("<tr>" + "".join(f"<td>{_esc(_fmt(v))}</td>" for v in row) + "</tr>" for row in rows)
-    foot = "".join("<tr>" + "".join(f"<td>{_esc(_fmt(v))}</td>" for v in row) + "</tr>" for row in footer)
+    body = "".join("<tr>" + "".join(f"<td>{_esc(format_value(v))}</td>" for v in row) + "</tr>" for row in rows)
+    foot = "".join("<tr>" + "".join(f"<td>{_esc(format_value(v))}</td>" for v in row) + "</tr>" for row in footer)
     return (f"<h2>{_esc(name)}</h2><table><thead><tr>{head}</tr></thead><tbody>{body}</tbody>"
             + (f"<tfoot>{foot}</tfoot>" if foot else "") + "</table>")
 
@@ -101,7 +103,7 @@ def html_report(title: str, summary: Mapping[str, Any] | None, plots: Mapping[st
              f"<title>{_esc(title)}</title><style>{_CSS}</style></head><body>",
              f"<h1>{_esc(title)}</h1><div class=\"meta\">gnssatt report · generated {when} · times in GPS time</div>"]
     if summary:
-        rows = "".join(f"<tr><td class=\"k\">{_esc(k)}</td><td>{_esc(_fmt(v))}</td></tr>"
+        rows = "".join(f"<tr><td class=\"k\">{_esc(k)}</td><td>{_esc(format_value(v))}</td></tr>"
                        for k, v in flatten_summary(summary))
         parts.append(f"<h2>Summary</h2><table class=\"summary\"><tbody>{rows}</tbody></table>")
     items = tables.items() if isinstance(tables, Mapping) else (tables or [])

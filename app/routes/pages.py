@@ -31,6 +31,7 @@ from app.deps import SessionDep
 from app.keys import team_for_key
 from app.models import Job, JobSet, ObservationSet, PcvMap, Product, Team
 from app.problems import ProblemError, problem_response
+from worker.report import format_value
 
 APP_DIR = Path(__file__).resolve().parents[1]
 TEMPLATES = Jinja2Templates(directory=str(APP_DIR / "templates"))
@@ -183,22 +184,12 @@ def summary_items(summary: Any, prefix: str = "", depth: int = 3) -> list[tuple[
                 items.extend(summary_items(value, name + ".", depth - 1))
         elif isinstance(value, list):
             if all(not isinstance(v, (dict, list)) for v in value) and len(value) <= 12:
-                items.append((name, ", ".join(_fmt(v) for v in value)))
+                items.append((name, ", ".join(format_value(v) for v in value)))
             else:
                 items.append((name, f"{len(value)} entries"))
         else:
-            items.append((name, _fmt(value)))
+            items.append((name, format_value(value)))
     return items
-
-
-def _fmt(value: Any) -> str:
-    if value is None:
-        return "–"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    return str(value)
 
 
 # --- sign-in ---------------------------------------------------------------------------------------------------

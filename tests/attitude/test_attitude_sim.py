@@ -215,3 +215,17 @@ def test_realistic_pass_right_integers_and_honest_sigma(realistic_pass, mode):
     for i, name in enumerate(("yaw", "pitch", "roll")):
         std, pred = de[f, i].std(), np.sqrt(np.mean(sol.sigma_euler_deg[f, i] ** 2))
         assert 0.65 < std / pred < 1.35, f"{mode} {name}: actual {std:.3f} vs predicted {pred:.3f} deg"
+
+
+def test_ml_attitude_is_more_accurate_than_quest_in_kinematic_mode(clean_pass, clean_solutions):
+    """attitude_method "ml" on the same filter run: lower error rms than QUEST, and its predicted sigmas honest."""
+    sol_q = clean_solutions["kinematic"]
+    sol_m = process(load_inputs(set_files(clean_pass)), AttitudeSettings(mode="kinematic", attitude_method="ml"))
+    assert np.array_equal(sol_q.att_fixed, sol_m.att_fixed)
+    f = sol_q.att_fixed
+    ang_q, _ = errors(clean_pass, sol_q)
+    ang_m, de_m = errors(clean_pass, sol_m)
+    rms = lambda a: float(np.sqrt(np.mean(a[f] ** 2)))  # noqa: E731
+    assert rms(ang_m) < 0.97 * rms(ang_q), (rms(ang_m), rms(ang_q))
+    ratio = de_m[f].std(0) / np.sqrt(np.mean(sol_m.sigma_euler_deg[f] ** 2, 0))
+    assert np.all((0.6 < ratio) & (ratio < 1.3)), ratio

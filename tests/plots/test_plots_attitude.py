@@ -100,7 +100,7 @@ def test_status_spans_split_on_change_and_gap():
 def test_fix_status_figure_lanes_counts_events():
     att, _, _, truth = attitude_case(n=60, float_epochs=range(0, 4))
     fig = A.fix_status_figure(att, baselines_case(n=50), events_case(), CTX)
-    lanes, counts = fig.axes[:2]
+    lanes, events, counts = fig.axes[:3]
     assert [t.get_text() for t in lanes.get_yticklabels()] == ["attitude", "baseline GPS-2>GPS-0",
                                                                "baseline GPS-2>GPS-1"]
     # the attitude lane: one float bar of 4 s then one fixed bar of 56 s (in days on the date axis)
@@ -109,8 +109,10 @@ def test_fix_status_figure_lanes_counts_events():
     assert len(widths) == 2
     np.testing.assert_allclose(_line(counts, "attitude").get_ydata(), truth["n_sats"])
     np.testing.assert_allclose(_line(counts, "baseline GPS-2>GPS-1").get_ydata(), 8)
-    labels = lanes.get_legend_handles_labels()[1]
-    assert {"fixed", "float", "fix (1)", "cycle_slip (2)", "clock_jump (1)"} <= set(labels)
+    assert set(lanes.get_legend_handles_labels()[1]) == {"fixed", "float"}
+    # events in their own rows, labelled with their counts, so the lanes stay readable
+    assert {"fix (1)", "cycle_slip (2)", "clock_jump (1)"} <= {t.get_text() for t in events.get_yticklabels()}
+    assert {"fix (1)", "cycle_slip (2)", "clock_jump (1)"} <= set(events.get_legend_handles_labels()[1])
     assert counts.get_ylabel() == "satellites used"
 
 

@@ -4,11 +4,11 @@ attempts baselines with 3-5 DDs that the paper's MLAMBDA + length rule leaves ou
 the simulator's truth integers, with every epoch that has 4 or more satellites on both baselines fixed right."""
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests.attitude.conftest import set_files
 from worker.sim import simulate_scenario
 from worker.ttff.data import load_study_set
 from worker.ttff.single_epoch import SingleEpochOptions, epoch_problem, solve_constrained, solve_lambda
@@ -17,20 +17,13 @@ DURATION_S = 120.0
 STEP_S = 5.0
 
 
-def _files(d: Path) -> list:
-    return ([(p.name, "rinex_obs", p) for p in sorted((d / "obs").glob("*.rnx"))]
-            + [("brdc.rnx", "rinex_nav", d / "nav" / "brdc.rnx"), ("platform.sp3", "sp3", d / "platform.sp3"),
-               ("platform.json", "platform", d / "platform.json"),
-               ("reference_attitude.csv", "reference_attitude", d / "reference_attitude.csv")])
-
-
 @pytest.fixture(scope="module")
 def cubesat_set(tmp_path_factory):
     d = tmp_path_factory.mktemp("cubesat_set")
     simulate_scenario("cubesat", d, seed=1000, overrides={"count": 1, "duration_s": DURATION_S,
                                                           "truth_components": False,
                                                           "start_gps": "2019-01-10T00:00:00"})
-    return load_study_set(_files(d), "cubesat 0", truth_dir=d / "truth")
+    return load_study_set(set_files(d), "cubesat 0", truth_dir=d / "truth")
 
 
 def _sampled(ss):

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.attitude.conftest import set_files
 from worker.context import JobContext
 from worker.errors import JobInputError
 from worker.jobs.ttff import TtffConfig
@@ -20,13 +21,6 @@ from worker.ttff.starts import BENIGN_OVERRIDES, random_starts, start_overrides
 from worker.ttff.study import StudyOptions, run_set, runs_csv, summarize, table5_rows
 
 DURATION_S = 20.0
-
-
-def _files(d: Path) -> list:
-    return ([(p.name, "rinex_obs", p) for p in sorted((d / "obs").glob("*.rnx"))]
-            + [("brdc.rnx", "rinex_nav", d / "nav" / "brdc.rnx"), ("platform.sp3", "sp3", d / "platform.sp3"),
-               ("platform.json", "platform", d / "platform.json"),
-               ("reference_attitude.csv", "reference_attitude", d / "reference_attitude.csv")])
 
 
 @pytest.fixture(scope="module")
@@ -41,7 +35,7 @@ def sim_set(tmp_path_factory):
 @pytest.fixture(scope="module")
 def study_set(sim_set):
     d, _ = sim_set
-    return load_study_set(_files(d), "start 3", truth_dir=d / "truth")
+    return load_study_set(set_files(d), "start 3", truth_dir=d / "truth")
 
 
 def test_random_starts_ranges_and_determinism():
@@ -163,7 +157,7 @@ def _ctx(tmp: Path, sets) -> JobContext:
 def test_pipeline_simulated_and_uploaded(tmp_path, sim_set):
     from worker.context import InputFile, InputSet
     d, _ = sim_set
-    up = InputSet("set-1", "uploaded start", [InputFile(n, k, p, {}) for n, k, p in _files(d)], {})
+    up = InputSet("set-1", "uploaded start", [InputFile(n, k, p, {}) for n, k, p in set_files(d)], {})
     cfg = TtffConfig.model_validate({"simulate": {"count": 2, "seed": 4}, "duration_s": 15.0,
                                      "configurations": ["L1"], "methods": ["filter", "epoch-constrained"],
                                      "single_epoch_step_s": 5.0})

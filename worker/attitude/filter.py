@@ -22,24 +22,33 @@ common master antenna's noise (each SD is treated as independent, as in the pape
 """
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
+<<<<<<< HEAD
 from worker.attitude.adaptive import ManoeuvreDetector
 from worker.attitude.ambiguity import (
     first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
 )
+=======
+from worker.attitude.adaptive import OmegaNoiseAdapter
+from worker.attitude.ambiguity import first_fix_groups, resolve_first_fix, resolve_joint_constrained
+>>>>>>> main
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
+from worker.attitude.qc_kernels import (epoch_geometry, grow_square, growth_weights, propagate_dynamic,
+                                        propagate_kinematic, qc_epoch, record_epoch, reset_white_clocks,
+                                        take_square, td_checks)
 from worker.attitude.fastops import clip as _clip, nz as _nz
-from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, count_pairs_masked,
-                                     masked_median_axis1, measurement_rows, white_noise_update)
+from worker.attitude.kernels import cn0_growth_samples
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from worker.attitude.settings import AttitudeSettings, cn0_mask_of
+from worker.attitude.update_kernels import (fix_newcomers, measurement_update, phase_row_stats, store_outputs,
+                                            white_variances_cp)
 from worker.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
 from worker.estimation.ekf import joseph_update_sparse
-from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 from worker.gnss.constants import C_M_S
 
 __all__ = ["FilterResult", "run_filter", "REASONS"]
@@ -59,6 +68,9 @@ ANGLE_FAIL_RESET = 10    # first-fix candidates in a row failing the angle test 
 NOISE_EPOCHS = 300.0  # memory of the noise estimator (epochs)
 NOISE_MIN_EPOCHS = 10  # epochs of triple differences before the estimate replaces the configured sigma
 CLOCK_JUMP_M = 0.5e-3 * C_M_S * 0.5   # a change of the epoch clock estimate above 75 km (0.25 ms) is a jump
+JOSEPH_RATIO = 1e3   # measurement rows with H P H^T above this many R are applied in the Joseph form (the others
+                     # in the short form P - P h h P / s, worker.estimation.ekf_kernels.sequential_update_sparse)
+PSEUDO_VAR_CYC2 = 1e-6   # variance of the integer pseudo-measurements (keeps S positive definite in float64)
 PCV_ATTITUDE_AGE_S = 10.0   # PCV maps are looked up with an attitude at most this old (else not applied)
 
 
@@ -131,10 +143,7 @@ class _State:
         n0 = self.n
         k = keys.shape[0]
         self.x = np.concatenate([self.x, values])
-        P = np.zeros((n0 + k, n0 + k))
-        P[:n0, :n0] = self.P
-        P[np.arange(n0, n0 + k), np.arange(n0, n0 + k)] = sigma0 ** 2
-        self.P = P
+        self.P = grow_square(self.P, k, sigma0 ** 2)
         self.amb_key = np.concatenate([self.amb_key, keys])
         self.amb_fixed = np.concatenate([self.amb_fixed, np.zeros(k, bool)])
         self.amb_last_t = np.concatenate([self.amb_last_t, np.full(k, t)])
@@ -150,7 +159,7 @@ class _State:
         for a in self.amb_arc[~keep[self.n_fixed_part:]]:
             self.arcs[a][4] = last_epoch
         self.x = self.x[keep]
-        self.P = self.P[np.ix_(keep, keep)]
+        self.P = take_square(self.P, np.flatnonzero(keep))         # P[np.ix_(keep, keep)]
         ka = keep[self.n_fixed_part:]
         gone = self.amb_key[~ka]
         self.amb_index[gone[:, 0], gone[:, 1], gone[:, 2]] = -1
@@ -169,7 +178,8 @@ def _cn0_factor(cn0_dbhz: np.ndarray) -> np.ndarray:
 
 def _mp_var(off_boresight_rad: np.ndarray, sigma_boresight_m: float, sigma_horizon_m: float) -> np.ndarray:
     """Variance (m^2) of the time-correlated error of one SD: sigma grows from the boresight value with the square
-    of the off-boresight angle, reaching sigma_horizon_m at the antenna horizon (90 deg); capped at 120 deg."""
+    of the off-boresight angle, reaching sigma_horizon_m at the antenna horizon (90 deg); capped at 120 deg.
+    (The filter uses the compiled update_kernels.mp_var; this is its numpy reference in the tests.)"""
     x = _clip(_nz(off_boresight_rad, np.pi / 2) / (np.pi / 2), 0.0, 4.0 / 3.0)
     return (sigma_boresight_m + (sigma_horizon_m - sigma_boresight_m) * x * x) ** 2
 
@@ -214,12 +224,16 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     adapter = ManoeuvreDetector(q_w, (s.adaptive_omega_sigma_deg_s * DEG) ** 2 / s.tau_omega_s, n_bl,
                                 s.adaptive_omega_threshold, s.adaptive_omega_mix_at,
                                 s.adaptive_omega_sigma_acc_deg_s2 * DEG, s.adaptive_omega_hold_epochs,
-                                s.rk4_step_s, not s.smoother) if dynamic and s.adaptive_omega_noise else None
+                                s.rk4_step_s, not (s.smoother or s.smoother_adaptive_noise)) \
+        if dynamic and s.adaptive_omega_noise else None
     q_b = s.sigma_baseline_kinematic_m ** 2 / s.tau_baseline_s       # m^2 per s
     var_clk = (s.sigma_clock_s * C_M_S) ** 2
     cn0_growth = s.weighting == "cn0" or s.noise_cn0_growth
     mp_model = max(s.sigma_multipath_phase_m) > 0 or max(s.sigma_multipath_code_m) > 0
     mp_infl = s.multipath_correlation_factor if dynamic else 1.0
+    mp_sig = np.array([*s.sigma_multipath_code_m, *s.sigma_multipath_phase_m], dtype=np.float64)
+    elev_w = s.weighting == "elevation"
+    var_c_floor, var_p_floor = s.sigma_code_m ** 2, s.sigma_phase_m ** 2
     # C/N0 growth exponent per (code, phase) and signal, estimated from the triple differences (starts at 1)
     gamma = np.ones((2, n_sig)) if cn0_growth else np.zeros((2, n_sig))
     gam_n = np.zeros((2, n_sig))
@@ -234,14 +248,17 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     out_ratio = np.full((n_ep, n_bl), np.nan)
     out_w = np.full((n_ep, 3), np.nan)
     n_sub = 3 + 3 * n_bl
-    record = dynamic and s.smoother
+    record = dynamic and (s.smoother or s.smoother_adaptive_noise)
     if record:
         sm_xp, sm_xf = np.full((n_ep, n_sub), np.nan), np.full((n_ep, n_sub), np.nan)
         sm_Pp, sm_Pf = np.full((n_ep, n_sub, n_sub), np.nan), np.full((n_ep, n_sub, n_sub), np.nan)
         sm_Phi = np.full((n_ep, n_sub, n_sub), np.nan)
         sm_start = np.ones(n_ep, bool)
         sm_corr = np.zeros(n_ep)          # information-weighted share of time-correlated variance in the phases
-    res_blocks: list[tuple] = []          # per epoch: see _residual_records
+        sm_dt = np.zeros(n_ep)            # propagation interval into the epoch (s)
+    # residual records, rows appended per epoch by record_epoch: ints epoch, bl, sat, sig, kind, reason and floats
+    # el_ant_deg, az_ant_deg, cn0_dbhz, residual_m (capacity grown per SdBlock)
+    res_i, res_f, res_n = np.zeros((6, 0), np.int64), np.zeros((4, 0)), 0
     events: list[dict] = []
     first_fix = np.full(n_bl, -1)
     first_data = np.full(n_bl, -1)
@@ -250,9 +267,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     prev_t = None
     prev_sdc = np.full((n_bl, n_sat, n_sig), np.nan)       # clock-corrected SD of the previous epoch
     prev_sdp = np.full((n_bl, n_sat, n_sig), np.nan)
-    prev_clk0 = np.full(n_bl, np.nan)        # last estimated epoch clock c dt0 (m), its time and drift (m/s)
-    prev_clk0_t = np.zeros(n_bl)
-    clk_rate = np.zeros(n_bl)
+    # per baseline: last estimated epoch clock c dt0 (m), its time and drift (m/s) (qc_epoch updates them)
+    clk_state = np.stack([np.full(n_bl, np.nan), np.zeros(n_bl), np.zeros(n_bl)])
     prev_b = None
     prev_ub = None
     R_mask = None                                           # attitude for the antenna-frame mask
@@ -303,6 +319,30 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         events.append({"epoch": k, "event": kind, "baseline": j, "sat": sat, "signal": sig, "detail": detail})
 
     blk = None                                              # SdBlock of the current epochs
+    # per-epoch work arrays of the compiled QC (worker.attitude.qc_kernels), overwritten every epoch
+    shp = (n_bl, n_sat, n_sig)
+    wb = np.zeros((5,) + shp, bool)            # use_c, use_p, slip, td_c_ok, td_p_ok
+    wf = np.zeros((4,) + shp)                  # sdc_c, sdp_c, td_c, td_p
+    w_reason = np.zeros(shp, np.int64)
+    w_el = np.zeros((3, n_bl, n_sat))          # el_w, el_ant, az_ant
+    w_clk = np.zeros((2, n_bl))                # epoch clock estimate, its prediction
+    w_jump = np.zeros(n_bl, bool)
+    w_mcp = np.zeros((2, n_bl, n_sig))         # medians of the code / phase triple differences
+    w_asn = np.zeros((2, n_sat, n_bl))
+    w_glw = np.zeros((2,) + shp)
+    w_ev = np.zeros((2,) + shp, bool)          # TD slips without LLI, LLI slips to report
+    w_bk = np.zeros((2,) + shp, bool)          # states to drop, phases needing a state
+    w_lookup = np.zeros((2,) + shp)
+    # the per-epoch names are views of these arrays, made once (unpacked again every epoch: cheap, and a name
+    # rebound to another array further down the loop does not leak into the next epoch)
+    views = (*w_el, w_reason, *wb, *wf, *w_mcp)
+    no_pcv = np.zeros(shp, bool)
+    pcv_zero = np.zeros(shp)
+    prev_ub = np.zeros((n_bl, n_sat))
+    Qw_iso = np.eye(3) * q_w
+    bs_a_T = np.asfortranarray(boresight_body[ia].T)        # (3, n_bl) boresights as columns (the layout of the
+    bs_b_T = np.asfortranarray(boresight_body[ib].T)        # former `@ boresight_body[ia].T`: same BLAS call)
+    z_f, z_i = np.zeros(0), np.zeros(2 * n_sig + 1, np.int64)
     w_idx3 = np.arange(3)
     ix_b = np.ix_(all_b_idx, all_b_idx)
     sub_w_b = np.concatenate([w_idx3, all_b_idx])            # omega and baselines (the smoother's sub-state)
@@ -316,6 +356,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         if prev_t is not None:
             dt = t - prev_t
             if dynamic:
+<<<<<<< HEAD
                 w = st.x[0:3]
                 bb = st.x[all_b_idx].reshape(n_bl, 3)
                 b1, Pbb, Pbw = rotation_rk4_stm_kernel(bb, w, dt, s.rk4_step_s)
@@ -324,91 +365,74 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 Qw = adapter.q_rate(dt) if adapter is not None else np.eye(3) * q_w       # (3, 3) rad^2/s^3
                 propagate_rotation_cov(st.P, w_idx3, b_idx, Pbb, Pbw, np.ascontiguousarray(Qw, np.float64), b1,
                                        float(dt))
+=======
+                # b by RK4 rotation; P <- Phi P Phi^T + Q: the omega random walk's discrete noise and its effect on b
+                # over dt; then the white-noise clocks are reset (worker.attitude.qc_kernels)
+                Qw = adapter.q_rate() if adapter is not None else Qw_iso       # (3, 3) rad^2/s^3
+                Pbb, Pbw = propagate_dynamic(st.x, st.P, w_idx3, b_idx, Qw, float(dt), s.rk4_step_s, st.white,
+                                             var_clk)
+>>>>>>> main
                 if record:
                     sm_Phi[k] = np.eye(n_sub)
                     for j in range(n_bl):
                         sm_Phi[k, 3 + 3 * j:6 + 3 * j, 3 + 3 * j:6 + 3 * j] = Pbb
                         sm_Phi[k, 3 + 3 * j:6 + 3 * j, 0:3] = Pbw[j]
-                    sm_xp[k], sm_Pp[k], sm_start[k] = st.x[sub_w_b], st.P[ix_sub], False
+                    sm_xp[k], sm_Pp[k], sm_start[k], sm_dt[k] = st.x[sub_w_b], st.P[ix_sub], False, dt
             else:
-                st.P[all_b_idx, all_b_idx] += q_b * dt
-        # white-noise clocks: reset every epoch
-        st.x[st.white] = 0.0
-        st.P[st.white, :] = 0.0
-        st.P[:, st.white] = 0.0
-        st.P[st.white, st.white] = var_clk
+                propagate_kinematic(st.x, st.P, all_b_idx, q_b * dt, st.white, var_clk)
+        else:
+            reset_white_clocks(st.x, st.P, st.white, var_clk)        # white-noise clocks: reset every epoch
 
         # ---------------- single differences and QC ----------------
+        # (the editing is compiled: worker.attitude.qc_kernels; Python loops only over events that happened)
         if blk is None or k - blk.k0 >= blk.pa.shape[0]:
             blk = sd_block(pobs, geom, ia, ib, k, min(k + BLOCK_EPOCHS, n_ep), s.elevation_mask_local_deg * DEG,
                            sig_cn0)
+            blk_lw = np.log(_cn0_factor(blk.cn0))               # ln of the full C/N0 factor
+            rows = res_n + int(blk.avail_c.sum() + blk.avail_p.sum())           # residual rows of the block
+            if rows > res_i.shape[1]:
+                # room for this block and, at its rate, the remaining epochs (+10 %): rarely more than one copy
+                cap = max(rows, int(1.1 * rows * n_ep / (k + blk.pa.shape[0])) + 64)
+                res_i1, res_f1 = np.empty((6, cap), np.int64), np.empty((4, cap))
+                res_i1[:, :res_n], res_f1[:, :res_n] = res_i[:, :res_n], res_f[:, :res_n]
+                res_i, res_f = res_i1, res_f1
         i = k - blk.k0
         pa, u, cfac = blk.pa[i], blk.u[i], blk.cfac[i]                      # (n_bl,) (n_sat, 3) (n_sat,)
         sdc, sdp, cn0, lli = blk.sdc[i], blk.sdp[i], blk.cn0[i], blk.lli[i]  # (n_bl, n_sat, n_sig)
         avail_c, avail_p = blk.avail_c[i], blk.avail_p[i]
-        reason = blk.reason[i].copy()                                       # 8 no SD, 1 local horizon
         el_loc = geom.elevation_local_rad[k]
-        # antenna frame, once fixed (sec. 3.2 compromise)
-        el_ant = np.full((n_bl, n_sat), np.nan)
-        az_ant = np.full((n_bl, n_sat), np.nan)
-        # antenna-frame elevation for the noise model: by the current attitude once known, else the initial one
-        los_b = u @ (R_mask if R_mask is not None else R_body_from_ecef_0).T           # (n_sat, 3) body
-        el_w = np.fmin(np.arcsin(_clip(los_b @ boresight_body[ia].T, -1, 1)),
-                       np.arcsin(_clip(los_b @ boresight_body[ib].T, -1, 1))).T      # (n_bl, n_sat)
-        if R_mask is not None:
-            el_ant[:] = el_w
-            az_ant[:] = np.arctan2(los_b[:, 1], los_b[:, 0])[None, :]
-            below = ever_fixed[:, None] & ~(el_ant >= s.elevation_mask_antenna_deg * DEG)
-            reason = np.where((reason == 0) & below[:, :, None], 2, reason)
-        pcv_m = np.zeros((n_bl, n_sat, n_sig))
+        # antenna-frame elevation for the noise model: by the current attitude once known, else the initial one;
+        # el_ant, az_ant (the antenna-frame mask, sec. 3.2 compromise) only once an attitude exists, else NaN
+        # (n_sat, 3) body-frame lines of sight, the clipped boresight products and the predicted geometry b.u
+        R_los = R_mask if R_mask is not None else R_body_from_ecef_0
+        los_b, ub = epoch_geometry(u, R_los if R_los.flags.c_contiguous else np.ascontiguousarray(R_los), bs_a_T,
+                                   bs_b_T, st.x, b_idx, w_asn)
+        asn = np.arcsin(w_asn)                                                 # (2, n_sat, n_bl)
+        az = np.arctan2(los_b[:, 1], los_b[:, 0]) if R_mask is not None else z_f
+        pcv_m, empty, pcv_on = pcv_zero, no_pcv, False
         if pcv_tables and R_mask is not None and t - R_mask_t <= PCV_ATTITUDE_AGE_S:
             pcv_m, empty = _pcv_epoch(pcv_tables, los_b, R_ant_first, n_sig, ever_fixed)
-            if s.pcv_empty_bins == "exclude":
-                reason = np.where((reason == 0) & empty, 10, reason)
-        # C/N0
-        reason = np.where((reason == 0) & blk.low_cn0[i], 3, reason)
-        use_c = reason == 0
-        use_p = use_c & avail_p
-        # epoch clock estimate from code (first signal): c dt0 = median(SD_code + u.b) / (1 - rdot/c)
-        b_pred = st.x[all_b_idx].reshape(n_bl, 3)
-        ub = b_pred @ u.T                                                   # (n_bl, n_sat)
-        c0 = (sdc[:, :, 0] + ub) / cfac[None, :]
-        clk0_raw = masked_median_axis1(c0[:, :, None], use_c[:, :, :1])[:, 0] if n_sat else np.full(n_bl, np.nan)
-        have0 = np.isfinite(clk0_raw)
-        # no code this epoch: the last estimate (the phase clocks absorb the drift since)
-        # predicted from the last estimate and the differential drift: free-running clocks drift by up to ~10 us/s
-        # relative to each other, so across an outage the change alone is no jump
-        clk_pred = prev_clk0 + clk_rate * (t - prev_clk0_t)
-        clk0 = np.where(have0, clk0_raw, _nz(clk_pred))
-        corr = cfac[None, :, None] * clk0[:, None, None]
-        sdc_c = sdc - corr
-        sdp_c = sdp - corr
-        jump = have0 & np.isfinite(clk_pred) & (np.abs(clk0 - clk_pred) > CLOCK_JUMP_M) & pa
-        for j in np.flatnonzero(jump):
-            ev(k, "clock_jump", j, detail=f"differential clock changed by {(clk0[j] - clk_pred[j]) / C_M_S * 1e3:.3f} "
-                                         f"ms more than its drift predicts")
-        upd = have0 & pa
-        dtc = t - prev_clk0_t
-        rate_ok = upd & ~jump & np.isfinite(prev_clk0) & (dtc > 0) & (dtc <= TD_MAX_DT_S)
-        clk_rate = np.where(rate_ok, clk_rate + 0.1 * ((clk0 - prev_clk0) / np.where(dtc > 0, dtc, 1.0) - clk_rate),
-                            clk_rate)
-        prev_clk0 = np.where(upd, clk0, prev_clk0)           # the last epoch clock actually estimated
-        prev_clk0_t = np.where(upd, t, prev_clk0_t)
-        # triple differences (time differences of SDs with the predicted geometry change, median-referenced)
-        slip = (lli & 1).astype(bool) & avail_p
-        half = (lli & 2).astype(bool) & avail_p
-        reason = np.where((reason == 0) & half, 6, reason)
-        use_p &= ~half
+            pcv_on = s.pcv_empty_bins == "exclude"
+        # reasons (8 no SD, 1 local horizon, 2 antenna horizon, 10 empty PCV bin, 3 C/N0, 6 half cycle), the epoch
+        # clock estimate from code (first signal): c dt0 = median(SD_code + u.b) / (1 - rdot/c) and its jump test
+        # against the prediction from the last estimate and the differential drift (free-running clocks drift by up
+        # to ~10 us/s relative to each other, so across an outage the change alone is no jump; no code this epoch:
+        # the prediction, the phase clocks absorb the drift), and the triple differences (time differences of SDs
+        # with the predicted geometry change, median-referenced)
         consecutive = prev_t is not None and (t - prev_t) <= TD_MAX_DT_S
-        td_p = np.full(sdp.shape, np.nan)
-        if consecutive and prev_b is not None:
-            dgeo = -(ub - prev_ub)                                          # predicted SD change from geometry
-            td_c = sdc_c - prev_sdc - dgeo[:, :, None]
-            td_p = sdp_c - prev_sdp - dgeo[:, :, None]
-            td_c_ok = np.isfinite(td_c) & use_c
-            td_p_ok = np.isfinite(td_p) & use_p
-            mc = masked_median_axis1(td_c, td_c_ok)                           # (n_bl, n_sig)
-            mp = masked_median_axis1(td_p, td_p_ok)
+        do_td = consecutive and prev_b is not None
+        n_jump, n_common = qc_epoch(asn, az, R_mask is not None, ever_fixed, s.elevation_mask_antenna_deg * DEG,
+                                    blk.reason[i], empty, pcv_on, blk.low_cn0[i], avail_p, sdc, sdp, cfac, ub,
+                                    prev_ub, do_td, prev_sdc, prev_sdp, pa, lli, t, clk_state, CLOCK_JUMP_M,
+                                    TD_MAX_DT_S, *views[:3], w_reason, wb, wf, w_clk, w_jump, w_mcp)
+        el_w, el_ant, az_ant, reason, use_c, use_p, slip, td_c_ok, td_p_ok, sdc_c, sdp_c, td_c, td_p, mc, mp = views
+        if n_jump:
+            clk0, clk_pred = w_clk
+            for j in np.flatnonzero(w_jump):
+                ev(k, "clock_jump", j, detail=f"differential clock changed by "
+                                             f"{(clk0[j] - clk_pred[j]) / C_M_S * 1e3:.3f} ms more than its drift "
+                                             f"predicts")
+        if n_common:
             # a common phase jump without a code jump: a receiver clock jump not applied to phase -> integer shift
             common = _nz(mp - mc)
             for j, f in zip(*np.nonzero(np.abs(common) > 1000.0)):
@@ -418,58 +442,51 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 mp[j, f] -= n_cyc * lam[f]
                 td_p[j, :, f] -= n_cyc * lam[f]
                 ev(k, "phase_clock_jump", j, sig=pobs.signals[f], detail=f"{n_cyc:.0f} cycles common to all satellites")
-            if s.noise_estimation:
-                lw = np.log(_cn0_factor(cn0))                              # ln of the full C/N0 factor
-                if cn0_growth:
-                    # exponent gamma of the C/N0 growth (variance ~ factor^gamma) per observable and signal: slope
-                    # of ln|TD| against ln(factor) / 2 (E ln|x| = ln sigma + const for Gaussian x), pooled
-                    # moments over NOISE_EPOCHS; a receiver whose noise does not grow as C/N0 falls gets gamma ~ 0
-                    # (worker.attitude.kernels: the samples, then the moments and gamma, in place)
-                    xs, rs, g_off = cn0_growth_samples(td_c, td_p, td_c_ok, td_p_ok, mc, mp, lw, lam)
-                    cn0_growth_update(xs, np.log(rs), g_off, mom, gam_n, gamma, NOISE_EPOCHS, NOISE_MIN_EPOCHS,
-                                      0.05, POW2)
-                wfac_c = np.exp(gamma[0][None, None, :] * lw)
-                wfac_p = np.exp(gamma[1][None, None, :] * lw)
-                # MAD of the normalised TDs -> sigma of a TD = sqrt(2) sigma of one SD (white noise), in place
-                white_noise_update(td_c, td_p, td_c_ok, td_p_ok, mc, mp, wfac_c, wfac_p, est_var_c, est_var_p, est_n,
-                                   NOISE_EPOCHS, POW2)
-            bad_tc = td_c_ok & (np.abs(td_c - _nz(mc)[:, None, :]) > s.td_code_m)
-            # every phase with a state is checked, used or not: a slip while rejected (C/N0, mask) must not
-            # survive into the epochs where it is used again
-            td_p_chk = np.isfinite(td_p) & avail_p
-            bad_tp = td_p_chk & (np.abs(td_p - _nz(mp)[:, None, :]) > s.td_phase_cyc * lam[None, None, :])
-            reason = np.where((reason == 0) & bad_tc, 4, reason)
-            use_c &= ~bad_tc
-            slip |= bad_tp
-            for j, sat, f in zip(*np.nonzero(bad_tp & ~((lli & 1).astype(bool)))):
+        noise_on = s.noise_estimation and do_td
+        if noise_on:
+            lw = blk_lw[i]
+            if cn0_growth:
+                # exponent gamma of the C/N0 growth (variance ~ factor^gamma) per observable and signal: slope
+                # of ln|TD| against ln(factor) / 2 (E ln|x| = ln sigma + const for Gaussian x), pooled
+                # moments over NOISE_EPOCHS; a receiver whose noise does not grow as C/N0 falls gets gamma ~ 0
+                # (worker.attitude.kernels: the samples, then the moments and gamma, in place)
+                xs, rs, g_off = cn0_growth_samples(td_c, td_p, td_c_ok, td_p_ok, mc, mp, lw, lam)
+                growth_weights(True, xs, np.log(rs), g_off, mom, gam_n, gamma, NOISE_EPOCHS, NOISE_MIN_EPOCHS,
+                               0.05, lw, w_glw)
+            else:
+                growth_weights(False, z_f, z_f, z_i, mom, gam_n, gamma, NOISE_EPOCHS, NOISE_MIN_EPOCHS, 0.05, lw,
+                               w_glw)
+            wfac = np.exp(w_glw)                                           # C/N0 weights of code, phase
+        else:
+            wfac = w_glw
+        # MAD of the normalised TDs -> sigma of a TD = sqrt(2) sigma of one SD (white noise), in place; the TD
+        # tests: every phase with a state is checked, used or not (a slip while rejected (C/N0, mask) must not
+        # survive into the epochs where it is used again); the bookkeeping masks: restart an arc (new float from
+        # code-carrier) on a slip or where no triple difference could check it, drop states of satellites no
+        # longer observed or unused for max_gap_s
+        n_td, n_lli, n_gap, n_drop, n_need = td_checks(
+            do_td, noise_on, wfac, est_var_c, est_var_p, est_n, NOISE_EPOCHS, s.td_code_m, s.td_phase_cyc, lam,
+            avail_p, lli, reason, wb, wf, w_mcp, consecutive, prev_sdp, st.amb_index, st.amb_last_t,
+            st.n_fixed_part, t, s.max_gap_s, w_ev, w_bk)
+        if n_td:
+            for j, sat, f in zip(*np.nonzero(w_ev[0])):
                 ev(k, "cycle_slip", j, pobs.sats[sat], pobs.signals[f], "triple-difference test"
                    + ("" if st.amb_index[j, sat, f] >= 0 else " (phase not in use)"))
         # every slip is reported, also on phases not in use; an LLI on the first epoch of an arc is an acquisition
-        cont = np.isfinite(prev_sdp) if consecutive else np.zeros(avail_p.shape, bool)
-        for j, sat, f in zip(*np.nonzero((lli & 1).astype(bool) & avail_p & ((st.amb_index >= 0) | cont))):
-            ev(k, "cycle_slip", j, pobs.sats[sat], pobs.signals[f], "loss-of-lock indicator"
-               + ("" if st.amb_index[j, sat, f] >= 0 else " (phase not in use)"))
+        if n_lli:
+            for j, sat, f in zip(*np.nonzero(w_ev[1])):
+                ev(k, "cycle_slip", j, pobs.sats[sat], pobs.signals[f], "loss-of-lock indicator"
+                   + ("" if st.amb_index[j, sat, f] >= 0 else " (phase not in use)"))
         # ---------------- ambiguity bookkeeping ----------------
-        # restart an arc (new float from code-carrier) on a slip or where no triple difference could check it;
-        # drop states of satellites no longer observed, or unused for max_gap_s
-        have = st.amb_index >= 0
-        td_possible = np.isfinite(td_p) if (consecutive and prev_b is not None) else np.zeros(have.shape, bool)
-        restart = have & avail_p & (slip | ~td_possible)
-        n_gap = int((have & avail_p & ~slip & ~td_possible).sum())
         if n_gap:
             ev(k, "arc_restart", detail=f"{n_gap} ambiguities without a triple-difference check (data gap)")
-        last_t = np.full(have.shape, np.inf)
-        last_t[have] = st.amb_last_t[st.amb_index[have] - st.n_fixed_part]
-        drop_mask = restart | (have & ~avail_p) | (have & ~use_p & (last_t < t - s.max_gap_s))
-        lost_fix = np.zeros(n_bl, bool)
-        if drop_mask.any():
-            drop = st.amb_index[drop_mask]
-            for j in np.unique(np.nonzero(drop_mask)[0]):
-                if st.amb_fixed[st.amb_index[j][drop_mask[j]] - st.n_fixed_part].any():
-                    lost_fix[j] = True
-            st.remove_ambiguities(drop, k - 1)
-        need = use_p & (st.amb_index < 0)
-        if need.any():
+        need = w_bk[1]
+        if n_drop:
+            drop_mask = w_bk[0]
+            st.remove_ambiguities(st.amb_index[drop_mask], k - 1)
+            need = use_p & (st.amb_index < 0)
+            n_need = int(need.sum())
+        if n_need:
             jj, ss, ff = np.nonzero(need)
             vals = (sdp_c[jj, ss, ff] - sdc_c[jj, ss, ff]) / lam[ff]
             st.add_ambiguities(np.stack([jj, ss, ff], 1), vals, s.sigma0_ambiguity_cyc, t)
@@ -478,8 +495,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         jp, sp, fp = np.nonzero(use_p)
         mc_n, mp_n = jc.size, jp.size
         m = mc_n + mp_n
-        vp_f = np.full(n_sig, s.sigma_phase_m ** 2)
         if m:
+<<<<<<< HEAD
             # sparse rows (baseline, clock, code bias / ambiguity) and observations, code rows then phase rows
             cols, coef, z = measurement_rows(jc, sc, fc, jp, sp, fp, b_idx, u, cfac, st.clk, st.pclk, st.bias,
                                              st.amb_index, lam, sdc_c, sdp_c, pcv_m)
@@ -526,28 +543,50 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             cz = np.where(cols >= 0, coef, 0.0)
             post = z - np.einsum("mk,mk->m", cz, st.x[ok_cols])
             if mp_model and s.multipath_adaptive and good:
+=======
+            # worker.attitude.update_kernels.measurement_update, x and P in place: sparse rows (baseline, clock,
+            # code bias / ambiguity) and observations, code rows then phase rows; variances: the white noise
+            # (the configured sigmas are floors: receivers smooth their code (tiny code TDs), and time-correlated
+            # errors (multipath) never show in a triple difference) x C/N0 factor^gamma [x elevation factor: the
+            # antenna-frame elevation once an attitude exists, else the local horizon], plus the time-correlated
+            # errors (multipath, uncalibrated PCV) growing with the off-boresight angle, scaled adaptively; the
+            # update as scalar updates in turn; the post-fit residuals and the sums of the multipath scale
+            vc_f, vp_f = white_variances_cp(est_var_c, est_var_p, est_n, var_c_floor, var_p_floor, NOISE_MIN_EPOCHS,
+                                            s.noise_estimation)
+            watch_w = adapter is not None and ever_fixed.all() and prev_t is not None
+            if watch_w:
+                w_prior, Pw_prior = st.x[0:3].copy(), st.P[0:3, 0:3].copy()
+            el_wc = np.ascontiguousarray(el_w)          # one compiled signature whatever the layout
+            el_e = el_wc if not elev_w else (el_ant if R_mask is not None else np.repeat(el_loc[None, :], n_bl, 0))
+            mp_mult = mp_infl * mp_scale
+            (cols, coef, z, var, v_mp, post, good, mp_num, mp_den, n_mp, n_used, n_fixed_used, n_unfixed, n_fix_rows,
+             ms_fix, has_fix) = measurement_update(
+                st.x, st.P, jc, sc, fc, jp, sp, fp, b_idx, u, cfac, st.clk, st.pclk, st.bias, st.amb_index, lam,
+                sdc_c, sdp_c, pcv_m, vc_f, vp_f, np.ascontiguousarray(cn0), gamma, cn0_growth, el_e, elev_w, el_wc,
+                mp_model, mp_sig, mp_mult, st.amb_fixed, st.n_fixed_part, st.amb_last_t, t, JOSEPH_RATIO, st.amb_key,
+                n_bl, n_sat)
+            if mp_model and record and mp_n:
+                w_p = 1.0 / var[mc_n:]
+                sm_corr[k] = float(np.sum(v_mp[mc_n:] * mp_mult * w_p * w_p) / np.sum(w_p))
+            if good and watch_w:
+                adapter.observe(st.x[0:3] - w_prior, Pw_prior, st.P[0:3, 0:3], t - prev_t)
+            if mp_model and s.multipath_adaptive and good and n_mp >= 6:
+>>>>>>> main
                 # scale of the multipath variance from the post-fit residuals of fixed phases:
                 # E[r^2] = R_true (1 - h), h = (H P+ H^T)_ii / R_model (leverage); R_true = white + scale * mp
-                rows = mc_n + np.flatnonzero(st.amb_fixed[cols[mc_n:, 4] - st.n_fixed_part])
-                if rows.size >= 6:
-                    c_r, z_r = ok_cols[rows], cz[rows]
-                    hph = np.einsum("mi,mij,mj->m", z_r, st.P[c_r[:, :, None], c_r[:, None, :]], z_r)
-                    one_h = _clip(1.0 - hph / var[rows], 0.05, 1.0)
-                    num = np.sum(post[rows] ** 2 / one_h - v_white[rows])
-                    den = np.sum(v_mp[rows])
-                    a = 1.0 / min(mp_n_ep + 1.0, NOISE_EPOCHS)
-                    mp_scale = float(_clip(mp_scale + a * (num / den - mp_scale), MP_SCALE_MIN, MP_SCALE_MAX))
-                    mp_n_ep += 1
+                a = 1.0 / min(mp_n_ep + 1.0, NOISE_EPOCHS)
+                ratio = mp_num / mp_den if mp_den else np.float64(mp_num) / 0.0
+                mp_scale = float(min(max(mp_scale + a * (ratio - mp_scale), MP_SCALE_MIN), MP_SCALE_MAX))
+                mp_n_ep += 1
         else:
             post = np.zeros(0)
         # ---------------- ambiguity resolution ----------------
-        n_used = np.zeros(n_bl, np.int64)
-        n_fixed_used = np.zeros(n_bl, np.int64)
-        if mp_n:
-            used_amb = cols[mc_n:, 4]
-            afix = st.amb_fixed[used_amb - st.n_fixed_part]
-            n_used = count_pairs_masked(jp, sp, np.ones(jp.size, bool), n_bl, n_sat)
-            n_fixed_used = count_pairs_masked(jp, sp, afix, n_bl, n_sat)
+        # with phase rows, measurement_update gave the satellites used / with a fixed ambiguity per baseline, the
+        # unfixed rows and the fix monitor's post-fit mean squares (phase_row_stats)
+        if not mp_n:
+            n_used = np.zeros(n_bl, np.int64)
+            n_fixed_used = n_unfixed = n_used
+        ar_changed = False     # the AR below changed st.amb_fixed (the stats above are then recomputed)
         joint_ar = {}          # ambiguity_search "constrained": one MC-LAMBDA first fix of all baselines together
         if s.ambiguity_search == "constrained" and n_bl >= 2 and mp_n and not st.amb_fixed.any():
             gb = {j: first_fix_groups(cols[mc_n:, 4][jp == j], fp[jp == j], el_loc[sp[jp == j]], n_sig)
@@ -559,19 +598,13 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         for j in range(n_bl):
             if n_used[j] and first_data[j] < 0:
                 first_data[j] = k
-            if not pa[j] or n_used[j] < s.ar_min_sats:
+            if not pa[j] or n_used[j] < s.ar_min_sats or not n_unfixed[j]:
                 continue
-            sel_j = jp == j
-            idx_j = cols[mc_n:, 4][sel_j]
-            fixed_j = st.amb_fixed[idx_j - st.n_fixed_part]
-            if fixed_j.all():
-                continue
-            el_j = el_loc[sp[sel_j]]
-            sig_j = fp[sel_j]
-            has_group = np.zeros((n_bl, n_sig), bool)              # signals of baseline j with a fixed ambiguity
-            has_group[st.amb_key[st.amb_fixed, 0], st.amb_key[st.amb_fixed, 2]] = True
-            has_group = has_group[j].tolist()
-            if not any(has_group):
+            if not has_fix[j]:                                  # no signal of baseline j fixed yet
+                sel_j = jp == j
+                idx_j = cols[mc_n:, 4][sel_j]
+                el_j = el_loc[sp[sel_j]]
+                sig_j = fp[sel_j]
                 groups = first_fix_groups(idx_j, sig_j, el_j, n_sig)
                 if not groups or sum(g.size - 1 for g, _ in groups) < s.ar_min_dd:
                     continue
@@ -622,6 +655,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                             adapter.reset()
                     for g, _ in outcome.groups or groups:
                         st.amb_fixed[g - st.n_fixed_part] = True
+                    ar_changed = True
                     ev(k, "fix", j, detail=f"{outcome.n_dd} DD ambiguities, ratio {outcome.ratio:.2f}, "
                                          f"length {outcome.length_m:.4f} m")
                     if first_fix[j] < 0:
@@ -629,43 +663,26 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 else:
                     ev(k, "fix_rejected", j, detail=f"ratio {outcome.ratio:.2f}, {outcome.reason}")
             else:
-                Ds, vs = [], []
-                for f in range(n_sig):
-                    grp = np.flatnonzero((st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f) & st.amb_fixed)
-                    cand = idx_j[(sig_j == f) & ~fixed_j]
-                    if cand.size == 0:
-                        continue
-                    if grp.size:
-                        ref = st.n_fixed_part + grp[0]
-                    else:
-                        # first fix on this signal for a fixed baseline: the highest newcomer is the reference
-                        sel_f = (sig_j == f) & ~fixed_j
-                        ref = idx_j[sel_f][int(np.argmax(el_j[sel_f]))]
-                        cand = cand[cand != ref]
-                        var_ref = st.P[ref, ref]
-                        if cand.size == 0:
-                            continue
-                    D, v, okm = round_newcomers(st.x, st.P, cand, ref, s.new_amb_round_sigma_cyc,
-                                                s.new_amb_round_frac_cyc)
-                    if okm.any():
-                        Ds.append(D)
-                        vs.append(v)
-                        st.amb_fixed[cand[okm] - st.n_fixed_part] = True
-                        st.amb_fixed[ref - st.n_fixed_part] = True
-                if Ds:
-                    log_fix(np.concatenate(Ds), np.concatenate(vs))
-                    _pseudo_update(st, np.concatenate(Ds), np.concatenate(vs))
-                    ev(k, "fix_added", j, detail=f"{sum(len(v) for v in vs)} newcomers fixed by rounding")
+                # newcomers on a fixed baseline: DD to the fixed reference of their signal rounded (compiled)
+                # and constrained in place (DD pseudo-measurements as in _pseudo_update, as scalar Joseph updates)
+                nw, rf, vals = fix_newcomers(st.x, st.P, st.amb_key, st.amb_fixed, st.n_fixed_part, cols, mc_n, jp,
+                                             sp, fp, el_loc, n_sig, j, s.new_amb_round_sigma_cyc,
+                                             s.new_amb_round_frac_cyc, PSEUDO_VAR_CYC2)
+                if nw.size:
+                    ar_changed = True
+                    fix_rows.extend(zip([k] * nw.size, st.amb_arc[nw - st.n_fixed_part].tolist(),
+                                        st.amb_arc[rf - st.n_fixed_part].tolist(), vals.tolist()))
+                    ev(k, "fix_added", j, detail=f"{nw.size} newcomers fixed by rounding")
         # fix monitor: post-fit phase residuals of fixed ambiguities far above the noise for FIX_CHECK_EPOCHS in a
         # row mean a wrong fix (or an undetected slip): restart every ambiguity of that baseline as float
         if mp_n:
-            fixed_rows = st.amb_fixed[cols[mc_n:, 4] - st.n_fixed_part]
-            vp_now = vp_f if s.noise_estimation else np.full(n_sig, s.sigma_phase_m ** 2)
+            if ar_changed:
+                _, n_fixed_post, _, n_fix_rows, ms_fix = phase_row_stats(jp, sp, cols, mc_n, st.amb_fixed,
+                                                                         st.n_fixed_part, post, n_bl, n_sat)
+            lim = max(FIX_CHECK_SIGMAS * math.sqrt(max(vp_f.tolist())), FIX_CHECK_MIN_M)
             for j in range(n_bl):
-                sel = (jp == j) & fixed_rows
-                if sel.sum() >= 4:
-                    rms = np.sqrt(np.mean(post[mc_n:][sel] ** 2))
-                    lim = max(FIX_CHECK_SIGMAS * np.sqrt(np.max(vp_now)), FIX_CHECK_MIN_M)
+                if n_fix_rows[j] >= 4:
+                    rms = np.sqrt(ms_fix[j])
                     bad_fix[j] = bad_fix[j] + 1 if rms > lim else 0
                     if bad_fix[j] >= FIX_CHECK_EPOCHS:
                         reset_baseline(j, f"post-fit phase RMS {rms * 1e3:.1f} mm > {lim * 1e3:.1f} mm "
@@ -679,51 +696,40 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         pending_reset.clear()
         # recount fixed after AR
         had_fix = ever_fixed
-        ever_fixed = np.zeros(n_bl, bool)
-        ever_fixed[st.amb_key[st.amb_fixed, 0]] = True
-        for j in np.flatnonzero(had_fix & ~ever_fixed):
-            ev(k, "fix_lost", j, detail="no fixed ambiguity left (slips, gaps or setting satellites)")
-        if mp_n:
-            afix = st.amb_fixed[cols[mc_n:, 4] - st.n_fixed_part]
-            n_fixed_used = count_pairs_masked(jp, sp, afix, n_bl, n_sat)
+        if mp_n and not ar_changed:
+            ever_fixed = has_fix                    # st.amb_fixed as measurement_update saw it
+        else:
+            ever_fixed = np.zeros(n_bl, bool)
+            ever_fixed[st.amb_key[st.amb_fixed, 0]] = True
+        lost = had_fix & ~ever_fixed
+        if lost.any():
+            for j in np.flatnonzero(lost):
+                ev(k, "fix_lost", j, detail="no fixed ambiguity left (slips, gaps or setting satellites)")
+        if mp_n and ar_changed:
+            n_fixed_used = n_fixed_post             # after AR (a reset above leaves the count before AR)
         # ---------------- outputs ----------------
-        okb = pa & (n_used >= 3)
-        out_ok[k] = okb
-        out_b[k] = st.x[all_b_idx].reshape(n_bl, 3)
-        out_P[k] = st.P[ix_b]
-        fixed_now = ever_fixed & (n_fixed_used >= s.fixed_min_sats)
-        out_fixed[k] = fixed_now & okb
-        out_n[k] = n_used
-        if dynamic:
-            out_w[k] = st.x[0:3]
+        # out_b[k], out_P[k], out_w[k]; out_ok[k] = pa & (n_used >= 3), out_fixed[k] = fixed_now & out_ok[k],
+        # out_n[k] = n_used; fixed_now = ever_fixed & (n_fixed_used >= fixed_min_sats)
+        fixed_now = store_outputs(st.x, st.P, all_b_idx, k, out_b, out_P, out_w, dynamic, pa, n_used, ever_fixed,
+                                  n_fixed_used, s.fixed_min_sats, out_ok, out_fixed, out_n)
         if record:
             sm_xf[k], sm_Pf[k] = st.x[sub_w_b], st.P[ix_sub]
-        if attitude_fn is not None and np.all(fixed_now) and k % (1 if pcv_tables else 10) == 0:
+        if attitude_fn is not None and k % (1 if pcv_tables else 10) == 0 and fixed_now.all():
             R_mask = attitude_fn(out_b[k], fixed_now)
             R_mask_t = t
-        # residual records (used and rejected): one (rows, 10) block per epoch
-        jr, sr, fr_ = np.nonzero(avail_c)
-        if jr.size:
-            lookup = np.full((2, n_bl, n_sat, n_sig), np.nan)
-            if m:
-                lookup[0, jc, sc, fc] = post[:mc_n]
-                lookup[1, jp, sp, fp] = post[mc_n:]
-            rsn_c = np.where(use_c[jr, sr, fr_], 0, reason[jr, sr, fr_])
-            rsn_p = np.where(use_p[jr, sr, fr_], 0, np.where(reason[jr, sr, fr_] == 0, 5, reason[jr, sr, fr_]))
-            keep_p = avail_p[jr, sr, fr_]
-            # code rows of this epoch, then its phase rows (kept per epoch, assembled once after the loop)
-            res_blocks.append((k, jr, sr, fr_, np.degrees(el_ant[jr, sr]),
-                               np.degrees(np.mod(az_ant[jr, sr], 2 * np.pi)), cn0[jr, sr, fr_],
-                               lookup[0, jr, sr, fr_], rsn_c, lookup[1, jr, sr, fr_], rsn_p, keep_p))
-        # memory for the triple differences
+        # residual records (used and rejected): the epoch's code rows, then its phase rows; and the memory for the
+        # triple differences (clock-corrected SDs where available)
+        res_n = record_epoch(k, avail_c, avail_p, use_c, use_p, reason, el_ant, az_ant, cn0, post, m, jc, sc, fc, jp,
+                             sp, fp, w_lookup, res_i, res_f, res_n, sdc_c, sdp_c, prev_sdc, prev_sdp, out_b[k], u,
+                             prev_ub)                                   # prev_ub = out_b[k] @ u.T
         prev_t = t
-        prev_sdc = np.where(avail_c, sdc_c, np.nan)
-        prev_sdp = np.where(avail_p, sdp_c, np.nan)
-        prev_b = out_b[k].copy()
-        prev_ub = prev_b @ u.T
+        prev_b = out_b[k]
     if progress is not None:
         progress(1.0)
-    residuals = _residual_records(res_blocks)
+    # column arrays for residuals.csv (contiguous views of the record rows)
+    residuals = {"epoch": res_i[0, :res_n], "bl": res_i[1, :res_n], "sat": res_i[2, :res_n], "sig": res_i[3, :res_n],
+                 "el_ant_deg": res_f[0, :res_n], "az_ant_deg": res_f[1, :res_n], "cn0_dbhz": res_f[2, :res_n],
+                 "kind": res_i[4, :res_n], "residual_m": res_f[3, :res_n], "reason": res_i[5, :res_n]}
     arcs = np.array(st.arcs, dtype=np.int64).reshape(-1, 5)
     arcs[arcs[:, 4] < 0, 4] = n_ep - 1
     fl = np.array(fix_rows, dtype=np.float64).reshape(-1, 4)
@@ -740,7 +746,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
              "multipath_scale": float(mp_scale) if mp_model else None,
              "multipath_correlation_factor": float(mp_infl)}
     smoother_data = {"x_prior": sm_xp, "P_prior": sm_Pp, "x_post": sm_xf, "P_post": sm_Pf, "Phi": sm_Phi,
-                     "start": sm_start, "corr_share": sm_corr} if record else None
+                     "start": sm_start, "corr_share": sm_corr, "dt_s": sm_dt, "q_omega": q_w} if record else None
     return FilterResult(out_ok, out_b, out_P, out_fixed, out_n, out_ratio, out_w, residuals, events,
                         first_fix, first_data, fix_log, noise, smoother_data)
 
@@ -751,29 +757,6 @@ def _pcv_epoch(tables, los_b, R_ant_first, n_sig, fixed):
     corr, has = epoch_correction_m(tables, los_b, R_ant_first, n_sig)
     on = fixed[:, None, None] & has[:, None, :]
     return np.where(on, np.nan_to_num(corr), 0.0), on & ~np.isfinite(corr)
-
-
-def _residual_records(blocks: list[tuple]) -> dict:
-    """Column arrays of residuals.csv from the per-epoch records of run_filter: per epoch its code rows (kind 0),
-    then its phase rows (kind 1, where a phase exists), epochs in order."""
-    if not blocks:
-        z_i, z_f = np.zeros(0, np.int64), np.zeros(0)
-        return {"epoch": z_i, "bl": z_i, "sat": z_i, "sig": z_i, "el_ant_deg": z_f, "az_ant_deg": z_f,
-                "cn0_dbhz": z_f, "kind": z_i, "residual_m": z_f, "reason": z_i}
-    cat = lambda i: np.concatenate([b[i] for b in blocks])  # noqa: E731
-    n_rows = np.array([b[1].size for b in blocks])
-    ep = np.repeat(np.array([b[0] for b in blocks], dtype=np.int64), n_rows)
-    keep = cat(11)
-    cols = {"epoch": ep, "bl": cat(1).astype(np.int64), "sat": cat(2).astype(np.int64),
-            "sig": cat(3).astype(np.int64), "el_ant_deg": cat(4), "az_ant_deg": cat(5),
-            "cn0_dbhz": cat(6).astype(np.float64)}
-    code = {**cols, "kind": np.zeros(ep.size, np.int64), "residual_m": cat(7), "reason": cat(8).astype(np.int64)}
-    phase = {**{k: v[keep] for k, v in cols.items()}, "kind": np.ones(int(keep.sum()), np.int64),
-             "residual_m": cat(9)[keep], "reason": cat(10).astype(np.int64)[keep]}
-    # epoch-major, code block before phase block; stable, so each block keeps its row order
-    order = np.argsort(2 * np.concatenate([code["epoch"], phase["epoch"]])
-                       + np.concatenate([code["kind"], phase["kind"]]), kind="stable")
-    return {k: np.concatenate([code[k], phase[k]])[order] for k in code}
 
 
 def _pseudo_update(st: _State, D: np.ndarray, a_fix: np.ndarray) -> None:

@@ -15,6 +15,7 @@ from worker.attitude.geometry import EpochGeometry, compute_geometry, platform_s
 from worker.attitude.observations import PlatformObs, build_platform_obs
 from worker.attitude.settings import AttitudeSettings, effective_signals, signal_system
 from worker.attitude.solution import attitude_from_baselines, attitude_quaternion, baseline_az_el, euler_and_sigma
+from worker.attitude.update_kernels import quest_dcm
 from worker.gnss import rotations as rot
 from worker.gnss.frames import (R_enu_from_ecef, R_gcrf_from_ecef, R_ned_from_ecef, R_orbital_from_ecef,
                                 ecef_to_geodetic)
@@ -241,15 +242,24 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
         R0 = R_ref_from_ecef[k0]                 # Earth pointing (orbital frame) or level, heading north
     attitude_fn = None
     if len(baselines) >= 2:
-        def attitude_fn(b, fixed):
-            q, _ = attitude_quaternion(b[None], body, settings.attitude_method)
-            return rot.quat_to_dcm(q[0])
+        if settings.attitude_method != "triad":
+            w_len = np.linalg.norm(body, axis=1)
+            w_len = w_len / w_len.sum()
+            body_c = np.ascontiguousarray(body, dtype=np.float64)
+
+            def attitude_fn(b, fixed):
+                # attitude_quaternion's QUEST (weights by length; also for "ml") for one epoch, compiled
+                return quest_dcm(np.ascontiguousarray(b, dtype=np.float64), body_c, w_len)
+        else:
+            def attitude_fn(b, fixed):
+                q, _ = attitude_quaternion(b[None], body, settings.attitude_method)
+                return rot.quat_to_dcm(q[0])
     prog(0.15, "filtering")
     fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
                     progress=lambda f: prog(0.15 + 0.75 * f))
     if fr.smoother_data is not None:
         from worker.attitude.smoother import smooth_filter_result
-        smooth_filter_result(fr)
+        smooth_filter_result(fr, settings)
     prog(0.92, "attitude")
     sol = AttitudeSolution(settings, inputs, pobs, geom, fr, baselines, body)
     # ---- baselines table ----

@@ -43,14 +43,17 @@ def sd_block(pobs, geom, ia: np.ndarray, ib: np.ndarray, k0: int, k1: int, el_ma
              sig_cn0_dbhz: np.ndarray) -> SdBlock:
     """SdBlock of epochs k0..k1-1 for baselines (ia[j], ib[j])."""
     sl = slice(k0, k1)
-    pa = (pobs.present[ia, sl] & pobs.present[ib, sl]).T                       # (nb, n_bl)
+    # epoch-major and C-contiguous, so each epoch's slice is a contiguous array (one compiled variant of the
+    # filter's kernels whatever the number of baselines)
+    ep = lambda a: np.ascontiguousarray(np.swapaxes(a, 0, 1))  # noqa: E731
+    pa = ep(pobs.present[ia, sl] & pobs.present[ib, sl])                       # (nb, n_bl)
     gv = geom.valid[sl]                                                        # (nb, n_sat)
     u = np.where(gv[:, :, None], geom.los_ecef[sl], 0.0)
     cfac = 1.0 - geom.range_rate_m_s[sl] / C_M_S
-    sdc = np.swapaxes(pobs.code_m[ib, sl] - pobs.code_m[ia, sl], 0, 1)          # (nb, n_bl, n_sat, n_sig)
-    sdp = np.swapaxes(pobs.phase_m[ib, sl] - pobs.phase_m[ia, sl], 0, 1)
-    cn0 = np.swapaxes(np.fmin(pobs.cn0_dbhz[ia, sl], pobs.cn0_dbhz[ib, sl]), 0, 1)
-    lli = np.swapaxes(np.maximum(pobs.lli[ia, sl], 0) | np.maximum(pobs.lli[ib, sl], 0), 0, 1)
+    sdc = ep(pobs.code_m[ib, sl] - pobs.code_m[ia, sl])                        # (nb, n_bl, n_sat, n_sig)
+    sdp = ep(pobs.phase_m[ib, sl] - pobs.phase_m[ia, sl])
+    cn0 = ep(np.fmin(pobs.cn0_dbhz[ia, sl], pobs.cn0_dbhz[ib, sl]))
+    lli = ep(np.maximum(pobs.lli[ia, sl], 0) | np.maximum(pobs.lli[ib, sl], 0))
     avail_c = np.isfinite(sdc) & pa[:, :, None, None] & gv[:, None, :, None]
     avail_p = np.isfinite(sdp) & avail_c
     reason = np.where(avail_c, 0, 8)

@@ -13,7 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["gather_AHt", "gather_HA", "joseph_combine", "symmetric_plus_diag", "propagate_rotation_cov", "rotation_rk4_stm_kernel", "warm_up"]
+__all__ = ["gather_AHt", "gather_HA", "joseph_combine", "symmetric_plus_diag", "propagate_rotation_cov", "rotation_rk4_stm_kernel",
+           "sequential_update_sparse", "warm_up"]
 
 
 @njit(cache=True, nogil=True)
@@ -198,6 +199,99 @@ def propagate_rotation_cov(P, w_idx, b_idx, Phi_bb, Phi_bw, Qw, b1, dt):
             P[sub[a], sub[c]] += Q[a, c]
 
 
+@njit(cache=True, nogil=True)
+def sequential_update_sparse(x, P, cols, coef, R, z, joseph_ratio):
+    """In place: x, P after the update with the m scalar measurements z_r = h_r . x + e_r, var(e_r) = R[r]
+    (diagonal R), h_r given by sparse rows (cols (m, k) int64, -1 = no term; coef (m, k)); True if every
+    innovation variance was positive, else False with x and P left as they were.
+
+    Implements: the Kalman update with a diagonal R as m scalar updates in turn (Maybeck 1979 sec. 7.4;
+    Gelb 1974 sec. 4.2), mathematically the batch update of worker.estimation.ekf.joseph_update_sparse (the
+    Cholesky pivots of its S are these s): s = h P h^T + r, k = P h^T / s, x += k (z - h x), and
+        P -= (P h^T)(P h^T)^T / s                         if h P h^T <= joseph_ratio r (O(n^2 / 2)),
+        P = A - (A h^T) k^T + r k k^T, A = P - k (P h^T)^T  otherwise (Joseph form, Gelb 1974 eq. 4.2-21),
+    symmetrised: where a row collapses a large prior variance (a white clock, a new ambiguity) the Joseph form
+    keeps the rounding error of that collapse out of P (the error of A is projected out by I - k h), where the
+    short form would leave an absolute error ~ 1e-16 x the prior variance. P is kept as its lower triangle
+    (symmetrised on entry, mirrored on exit), and the gathers P h^T read the lower triangle only.
+    """
+    n = x.size
+    m, kk = cols.shape
+    x0 = x.copy()
+    P0 = P.copy()
+    # symmetrise into the lower triangle (the caller's P may differ from its transpose in the last bits)
+    for i in range(n):
+        for j in range(i):
+            P[i, j] = 0.5 * (P[i, j] + P[j, i])
+    ph = np.empty(n)
+    kg = np.empty(n)
+    ah = np.empty(n)
+    for r in range(m):
+        for i in range(n):
+            ph[i] = 0.0
+        hx = 0.0
+        for a in range(kk):
+            c = cols[r, a]
+            if c < 0:
+                continue
+            w = coef[r, a]
+            hx += w * x[c]
+            for i in range(c):                 # P[c, i] = P[i, c] (lower triangle, row c)
+                ph[i] += w * P[c, i]
+            for i in range(c, n):
+                ph[i] += w * P[i, c]
+        hph = 0.0
+        for a in range(kk):
+            c = cols[r, a]
+            if c >= 0:
+                hph += coef[r, a] * ph[c]
+        rr = R[r]
+        s = hph + rr
+        if not (s > 0.0):
+            x[:] = x0
+            P[:, :] = P0
+            return False
+        gain = (z[r] - hx) / s
+        for i in range(n):
+            x[i] += ph[i] * gain
+        if hph <= joseph_ratio * rr:
+            q = 1.0 / np.sqrt(s)
+            for i in range(n):
+                kg[i] = ph[i] * q
+            for i in range(n):
+                gi = kg[i]
+                for j in range(i + 1):
+                    P[i, j] -= gi * kg[j]
+            continue
+        for i in range(n):
+            kg[i] = ph[i] / s
+        # A h^T with A = P - k (P h^T)^T, column by column as A's elements are rounded
+        for i in range(n):
+            ah[i] = 0.0
+        for a in range(kk):
+            c = cols[r, a]
+            if c < 0:
+                continue
+            w = coef[r, a]
+            pc = ph[c]
+            for i in range(c):
+                ah[i] += w * (P[c, i] - kg[i] * pc)
+            for i in range(c, n):
+                ah[i] += w * (P[i, c] - kg[i] * pc)
+        for i in range(n):
+            ki, pi, ai = kg[i], ph[i], ah[i]
+            for j in range(i + 1):
+                pij = P[i, j]
+                kj = kg[j]
+                v1 = (pij - ki * ph[j]) - ai * kj + rr * (ki * kj)
+                v2 = (pij - kj * pi) - ah[j] * ki + rr * (kj * ki)
+                P[i, j] = 0.5 * (v1 + v2)
+    for i in range(n):
+        for j in range(i):
+            P[j, i] = P[i, j]
+    return True
+
+
 def warm_up() -> None:
     """Compile (or load from the cache) every kernel once on tiny inputs: at worker start or image build, so a
     job does not pay the compilation."""
@@ -205,6 +299,11 @@ def warm_up() -> None:
     cols = np.array([[0, 1, -1]], dtype=np.int64)
     S = gather_HA(gather_AHt(P, cols, np.ones((1, 3))), cols, np.ones((1, 3)))
     symmetric_plus_diag(S, np.ones(1))
+    # the layouts of joseph_update_sparse with several rows: P H^T in Fortran order, R a read-only broadcast
+    cols2 = np.array([[0, 1, -1], [2, -1, -1]], dtype=np.int64)
+    S2 = gather_HA(gather_AHt(P, cols2, np.ones((2, 3))), cols2, np.ones((2, 3)))
+    symmetric_plus_diag(S2, np.broadcast_to(np.ones(2), (2,)))
     joseph_combine(P, P, P)
     y, pbb, pbw = rotation_rk4_stm_kernel(np.ones((2, 3)), np.full(3, 1e-3), 1.0, 1.0)
     propagate_rotation_cov(P, np.arange(3), np.arange(3, 9).reshape(2, 3), pbb, pbw, np.eye(3), y, 1.0)
+    sequential_update_sparse(np.zeros(9), np.eye(9), cols, np.ones((1, 3)), np.ones(1), np.ones(1), 1e3)

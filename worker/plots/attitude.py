@@ -291,7 +291,9 @@ def status_spans(time: np.ndarray, fixed: np.ndarray, max_gap_s: float | None = 
 def fix_status_figure(attitude_csv: Any = None, baselines_csv: Any = None, events_csv: Any = None,
                       context: PlotContext | Mapping | None = None) -> Figure:
     """Top: one lane per series (the attitude, then each baseline of baselines.csv): fixed spans green,
-    float spans orange, gaps blank, events of events.csv as ticks. Bottom: satellites used per series."""
+    float spans orange, gaps blank. Middle: events of events.csv, one row of ticks per kind labelled with its
+    count (their own axis: a realistic pass has thousands of slips, which drawn across the lanes hid them).
+    Bottom: satellites used per series. Axes in that order (fig.axes[:3])."""
     import matplotlib.dates as mdates
 
     series: list[tuple[str, np.ndarray, np.ndarray, np.ndarray | None]] = []
@@ -307,12 +309,22 @@ def fix_status_figure(attitude_csv: Any = None, baselines_csv: Any = None, event
             n_sats = numeric(bl, "n_sats")
             series.append((f"baseline {name}", t_all[m], truthy(column(bl, "fixed")[m]),
                            n_sats[m] if n_sats is not None else None))
-    fig = new_figure(10.0, 3.0 + 0.5 * max(len(series), 1))
-    lanes, counts = fig.subplots(2, 1, sharex=True, height_ratios=[max(len(series), 1), 2])
+    ev = read_csv_table(events_csv)
+    kinds, t_ev = np.array([], dtype=str), np.array([], dtype="datetime64[ms]")
+    if column(ev, "time_gps") is not None and len(column(ev, "time_gps")):
+        t_ev = gps_time(ev)
+        k = column(ev, "event", "kind", "type")
+        kinds = k.astype(str) if k is not None else np.array(["event"] * len(t_ev))
+    kind_names = list(dict.fromkeys(kinds))
+    n_rows = max(len(series), 1)
+    fig = new_figure(10.0, 3.4 + 0.5 * n_rows + 0.22 * max(len(kind_names), 1))
+    lanes, events, counts = fig.subplots(3, 1, sharex=True,
+                                         height_ratios=[n_rows, 0.45 * max(len(kind_names), 1), 2])
     if not series:
         no_data(lanes, "no attitude or baseline epochs")
+        no_data(events)
         no_data(counts)
-        set_title(fig, "Fix status and satellites used", context)
+        set_title(fig, "Fix status, events and satellites used", context)
         return fig
     t_min = min(s[1].min() for s in series)
     labelled: set[str] = set()
@@ -326,27 +338,26 @@ def fix_status_figure(attitude_csv: Any = None, baselines_csv: Any = None, event
                 labelled.add(label)
         if n_sats is not None:
             counts.step(t, n_sats, where="post", lw=1.0, label=name)
-    ev = read_csv_table(events_csv)
-    if column(ev, "time_gps") is not None and len(column(ev, "time_gps")):
-        kinds = column(ev, "event", "kind", "type")
-        kinds = kinds.astype(str) if kinds is not None else np.array(["event"] * len(column(ev, "time_gps")))
-        t_ev = gps_time(ev)
-        palette = ["#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#17becf", "#bcbd22", "#1f77b4"]
-        for k, kind in enumerate(dict.fromkeys(kinds)):
-            m = kinds == kind
-            # one path per kind (x = t, t, NaN per event time), not a collection of thousands of segments
-            # (a realistic pass has ~8e3 slip events; events at the same time are one line anyway)
-            t_k = mdates.date2num(np.unique(t_ev[m]))
-            x = np.repeat(t_k, 3)
-            x[2::3] = np.nan
-            y = np.tile([-0.5, len(series) - 0.5, np.nan], len(t_k))
-            lanes.plot(x, y, "-", color=palette[k % len(palette)], lw=0.8, alpha=0.8,
-                       label=f"{kind} ({int(m.sum())})")
     lanes.set_yticks(range(len(series)))
     lanes.set_yticklabels([s[0] for s in series], fontsize=8)
     lanes.set_ylim(len(series) - 0.5, -0.5)
-    lanes.legend(fontsize=7, loc="upper right", ncols=4)
-    lanes.xaxis_date()
+    lanes.legend(fontsize=7, loc="upper right", ncols=2)
+    palette = ["#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#17becf", "#bcbd22", "#1f77b4"]
+    for k, kind in enumerate(kind_names):
+        m = kinds == kind
+        # one path per kind (x = t, t, NaN per distinct event time), not thousands of artists
+        t_k = mdates.date2num(np.unique(t_ev[m]))
+        x = np.repeat(t_k, 3)
+        x[2::3] = np.nan
+        y = np.tile([k - 0.35, k + 0.35, np.nan], len(t_k))
+        events.plot(x, y, "-", color=palette[k % len(palette)], lw=0.8, label=f"{kind} ({int(m.sum())})")
+    if kind_names:
+        events.set_yticks(range(len(kind_names)))
+        events.set_yticklabels([f"{kind} ({int((kinds == kind).sum())})" for kind in kind_names], fontsize=7)
+        events.set_ylim(len(kind_names) - 0.5, -0.5)
+    else:
+        events.set_yticks([])
+        no_data(events, "no events")
     counts.set_ylabel("satellites used")
     if counts.get_legend_handles_labels()[0]:
         counts.legend(fontsize=7, loc="lower right", ncols=3)
@@ -354,7 +365,7 @@ def fix_status_figure(attitude_csv: Any = None, baselines_csv: Any = None, event
         no_data(counts, "no n_sats column")
     counts.grid(color="0.88", lw=0.5)
     time_axis(counts, np.array([t_min]))
-    set_title(fig, "Fix status and satellites used", context)
+    set_title(fig, "Fix status, events and satellites used", context)
     return fig
 
 
