@@ -28,15 +28,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-<<<<<<< HEAD
 from worker.attitude.adaptive import ManoeuvreDetector
-from worker.attitude.ambiguity import (
-    first_fix_groups, resolve_first_fix, resolve_joint_constrained, round_newcomers,
-)
-=======
-from worker.attitude.adaptive import OmegaNoiseAdapter
 from worker.attitude.ambiguity import first_fix_groups, resolve_first_fix, resolve_joint_constrained
->>>>>>> main
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
 from worker.attitude.qc_kernels import (epoch_geometry, grow_square, growth_weights, propagate_dynamic,
                                         propagate_kinematic, qc_epoch, record_epoch, reset_white_clocks,
@@ -356,22 +349,11 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         if prev_t is not None:
             dt = t - prev_t
             if dynamic:
-<<<<<<< HEAD
-                w = st.x[0:3]
-                bb = st.x[all_b_idx].reshape(n_bl, 3)
-                b1, Pbb, Pbw = rotation_rk4_stm_kernel(bb, w, dt, s.rk4_step_s)
-                st.x[all_b_idx] = b1.ravel()
-                # P <- Phi P Phi^T + Q: the omega random walk's discrete noise and its effect on b over dt
-                Qw = adapter.q_rate(dt) if adapter is not None else np.eye(3) * q_w       # (3, 3) rad^2/s^3
-                propagate_rotation_cov(st.P, w_idx3, b_idx, Pbb, Pbw, np.ascontiguousarray(Qw, np.float64), b1,
-                                       float(dt))
-=======
                 # b by RK4 rotation; P <- Phi P Phi^T + Q: the omega random walk's discrete noise and its effect on b
                 # over dt; then the white-noise clocks are reset (worker.attitude.qc_kernels)
-                Qw = adapter.q_rate() if adapter is not None else Qw_iso       # (3, 3) rad^2/s^3
+                Qw = adapter.q_rate(dt) if adapter is not None else Qw_iso       # (3, 3) rad^2/s^3
                 Pbb, Pbw = propagate_dynamic(st.x, st.P, w_idx3, b_idx, Qw, float(dt), s.rk4_step_s, st.white,
                                              var_clk)
->>>>>>> main
                 if record:
                     sm_Phi[k] = np.eye(n_sub)
                     for j in range(n_bl):
@@ -496,54 +478,6 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         mc_n, mp_n = jc.size, jp.size
         m = mc_n + mp_n
         if m:
-<<<<<<< HEAD
-            # sparse rows (baseline, clock, code bias / ambiguity) and observations, code rows then phase rows
-            cols, coef, z = measurement_rows(jc, sc, fc, jp, sp, fp, b_idx, u, cfac, st.clk, st.pclk, st.bias,
-                                             st.amb_index, lam, sdc_c, sdp_c, pcv_m)
-            if s.noise_estimation:
-                # the configured sigmas are floors: receivers smooth their code (tiny code TDs), and time-
-                # correlated errors (multipath) never show in a triple difference
-                vc_f = np.where(est_n >= NOISE_MIN_EPOCHS, np.maximum(est_var_c, s.sigma_code_m ** 2),
-                                s.sigma_code_m ** 2)
-                vp_f = np.where(est_n >= NOISE_MIN_EPOCHS, np.maximum(est_var_p, s.sigma_phase_m ** 2),
-                                s.sigma_phase_m ** 2)
-                var = np.concatenate([vc_f[fc], vp_f[fp]])
-            else:
-                var = np.concatenate([np.full(mc_n, s.sigma_code_m ** 2), np.full(mp_n, s.sigma_phase_m ** 2)])
-            if cn0_growth:
-                var *= np.concatenate([_cn0_factor(cn0[jc, sc, fc]) ** gamma[0, fc],
-                                       _cn0_factor(cn0[jp, sp, fp]) ** gamma[1, fp]])
-            if s.weighting == "elevation":
-                # antenna-frame elevation once an attitude exists, else the local horizon (ground platforms)
-                el_e = el_ant if R_mask is not None else np.broadcast_to(el_loc, (n_bl, n_sat))
-                e = np.concatenate([el_e[jc, sc], el_e[jp, sp]])
-                var *= _clip(1.0 / np.sin(_clip(_nz(e, 0.5), 0.05, None)) ** 2, 1.0, 16.0)
-            if mp_model:
-                # time-correlated errors (multipath, uncalibrated PCV) growing with the off-boresight angle
-                th_c = np.pi / 2 - el_w[jc, sc]
-                th_p = np.pi / 2 - el_w[jp, sp]
-                v_mp = np.concatenate([_mp_var(th_c, *s.sigma_multipath_code_m),
-                                       _mp_var(th_p, *s.sigma_multipath_phase_m)])
-                v_white = var.copy()
-                var += v_mp * (mp_infl * mp_scale)
-                if record and mp_n:
-                    w_p = 1.0 / var[mc_n:]
-                    sm_corr[k] = float(np.sum(v_mp[mc_n:] * (mp_infl * mp_scale) * w_p * w_p) / np.sum(w_p))
-            ok_cols = np.where(cols >= 0, cols, 0)
-            hx = np.einsum("mk,mk->m", np.where(cols >= 0, coef, 0.0), st.x[ok_cols])
-            innov = z - hx
-            x1, P1, S, good = joseph_update_sparse(st.x, st.P, cols, coef, var, innov)
-            if good and adapter is not None and ever_fixed.all() and prev_t is not None:
-                rep = adapter.observe(st.x[sub_w_b], st.P[ix_sub], x1[sub_w_b], P1[ix_sub], t)
-                if rep is not None:        # a manoeuvre: the (omega, baselines) sub-state the detector gives
-                    x1[sub_w_b], P1[ix_sub] = rep
-            if good:
-                st.x, st.P = x1, P1
-            st.amb_last_t[cols[mc_n:, 4] - st.n_fixed_part] = t
-            cz = np.where(cols >= 0, coef, 0.0)
-            post = z - np.einsum("mk,mk->m", cz, st.x[ok_cols])
-            if mp_model and s.multipath_adaptive and good:
-=======
             # worker.attitude.update_kernels.measurement_update, x and P in place: sparse rows (baseline, clock,
             # code bias / ambiguity) and observations, code rows then phase rows; variances: the white noise
             # (the configured sigmas are floors: receivers smooth their code (tiny code TDs), and time-correlated
@@ -555,7 +489,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                                             s.noise_estimation)
             watch_w = adapter is not None and ever_fixed.all() and prev_t is not None
             if watch_w:
-                w_prior, Pw_prior = st.x[0:3].copy(), st.P[0:3, 0:3].copy()
+                sub_prior, P_sub_prior = st.x[sub_w_b], st.P[ix_sub]          # (fancy indexing: copies)
             el_wc = np.ascontiguousarray(el_w)          # one compiled signature whatever the layout
             el_e = el_wc if not elev_w else (el_ant if R_mask is not None else np.repeat(el_loc[None, :], n_bl, 0))
             mp_mult = mp_infl * mp_scale
@@ -569,9 +503,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 w_p = 1.0 / var[mc_n:]
                 sm_corr[k] = float(np.sum(v_mp[mc_n:] * mp_mult * w_p * w_p) / np.sum(w_p))
             if good and watch_w:
-                adapter.observe(st.x[0:3] - w_prior, Pw_prior, st.P[0:3, 0:3], t - prev_t)
+                rep = adapter.observe(sub_prior, P_sub_prior, st.x[sub_w_b], st.P[ix_sub], t)
+                if rep is not None:        # a manoeuvre: the (omega, baselines) sub-state the detector gives
+                    st.x[sub_w_b], st.P[ix_sub] = rep
             if mp_model and s.multipath_adaptive and good and n_mp >= 6:
->>>>>>> main
                 # scale of the multipath variance from the post-fit residuals of fixed phases:
                 # E[r^2] = R_true (1 - h), h = (H P+ H^T)_ii / R_model (leverage); R_true = white + scale * mp
                 a = 1.0 / min(mp_n_ep + 1.0, NOISE_EPOCHS)
