@@ -134,7 +134,8 @@ SLEWS = {"yaw/roll slew (17 min)": {"duration_s": 1020.0},
 
 #: settings compared on the slews (dynamic mode, "all phases"); Table 1 = the defaults
 SLEW_SETTINGS = {"Table 1": {}, "adaptive": {"adaptive_omega_noise": True}, "Table 1 + smoother": {"smoother": True},
-                 "adaptive + smoother": {"adaptive_omega_noise": True, "smoother": True}}
+                 "adaptive + smoother": {"adaptive_omega_noise": True, "smoother": True},
+                 "smoother, adaptive noise": {"smoother": True, "smoother_adaptive_noise": True}}
 
 
 def run_slews(tmp: Path, seeds=(SEED,)) -> list[str]:
@@ -150,7 +151,9 @@ def run_slews(tmp: Path, seeds=(SEED,)) -> list[str]:
     lines = ["", f"Slews (seed 000 Fig. 6; clean, simulator seed{'s' if len(seeds) > 1 else ''} "
              f"{', '.join(map(str, seeds))}, dynamic mode, \"all phases\"; Table 1 = default settings; adaptive = "
              "`adaptive_omega_noise` with its defaults: window 5 epochs, gain 4, chi-square gate 0.5; smoother = "
-             "`smoother`, the fixed-interval RTS smoother after the forward pass). Lag = max over fixed epochs after "
+             "`smoother`, the fixed-interval RTS smoother after the forward pass; smoother, adaptive noise = "
+             "`smoother_adaptive_noise`, the smoother's omega random walk per epoch from the smoothed angular "
+             "acceleration, docs/attitude.md). Lag = max over fixed epochs after "
              "the first 30 s of the 15-s running mean of the yaw/pitch/roll errors (noise averages out, a lag does "
              "not); max error: over all fixed epochs, with its time after the first fix and its predicted "
              "(1-sigma) tilt; z = std(error / predicted sigma) after 30 s, yaw / pitch / roll:", "",

@@ -226,13 +226,14 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     out_ratio = np.full((n_ep, n_bl), np.nan)
     out_w = np.full((n_ep, 3), np.nan)
     n_sub = 3 + 3 * n_bl
-    record = dynamic and s.smoother
+    record = dynamic and (s.smoother or s.smoother_adaptive_noise)
     if record:
         sm_xp, sm_xf = np.full((n_ep, n_sub), np.nan), np.full((n_ep, n_sub), np.nan)
         sm_Pp, sm_Pf = np.full((n_ep, n_sub, n_sub), np.nan), np.full((n_ep, n_sub, n_sub), np.nan)
         sm_Phi = np.full((n_ep, n_sub, n_sub), np.nan)
         sm_start = np.ones(n_ep, bool)
         sm_corr = np.zeros(n_ep)          # information-weighted share of time-correlated variance in the phases
+        sm_dt = np.zeros(n_ep)            # propagation interval into the epoch (s)
     # residual records, rows appended per epoch by record_epoch: ints epoch, bl, sat, sig, kind, reason and floats
     # el_ant_deg, az_ant_deg, cn0_dbhz, residual_m (capacity grown per SdBlock)
     res_i, res_f, res_n = np.zeros((6, 0), np.int64), np.zeros((4, 0)), 0
@@ -343,7 +344,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                     for j in range(n_bl):
                         sm_Phi[k, 3 + 3 * j:6 + 3 * j, 3 + 3 * j:6 + 3 * j] = Pbb
                         sm_Phi[k, 3 + 3 * j:6 + 3 * j, 0:3] = Pbw[j]
-                    sm_xp[k], sm_Pp[k], sm_start[k] = st.x[sub_w_b], st.P[ix_sub], False
+                    sm_xp[k], sm_Pp[k], sm_start[k], sm_dt[k] = st.x[sub_w_b], st.P[ix_sub], False, dt
             else:
                 propagate_kinematic(st.x, st.P, all_b_idx, q_b * dt, st.white, var_clk)
         else:
@@ -663,7 +664,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
              "multipath_scale": float(mp_scale) if mp_model else None,
              "multipath_correlation_factor": float(mp_infl)}
     smoother_data = {"x_prior": sm_xp, "P_prior": sm_Pp, "x_post": sm_xf, "P_post": sm_Pf, "Phi": sm_Phi,
-                     "start": sm_start, "corr_share": sm_corr} if record else None
+                     "start": sm_start, "corr_share": sm_corr, "dt_s": sm_dt, "q_omega": q_w} if record else None
     return FilterResult(out_ok, out_b, out_P, out_fixed, out_n, out_ratio, out_w, residuals, events,
                         first_fix, first_data, fix_log, noise, smoother_data)
 

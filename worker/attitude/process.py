@@ -259,7 +259,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
                     progress=lambda f: prog(0.15 + 0.75 * f))
     if fr.smoother_data is not None:
         from worker.attitude.smoother import smooth_filter_result
-        smooth_filter_result(fr)
+        smooth_filter_result(fr, settings)
     prog(0.92, "attitude")
     sol = AttitudeSolution(settings, inputs, pobs, geom, fr, baselines, body)
     # ---- baselines table ----

@@ -138,6 +138,19 @@ class AttitudeSettings:
                                                 # angular velocity and baselines after the forward pass
                                                 # (worker/attitude/smoother.py); off = the forward filter's output
                                                 # post-processing only: each epoch uses the later data
+    smoother_adaptive_noise: bool = False       # dynamic mode, implies smoother: the omega random walk per epoch
+                                                # from the smoothed angular acceleration, the (omega, baselines)
+                                                # sub-state re-filtered and smoothed with it (smoother.py
+                                                # adaptive_substate_smooth); off = Table 1's random walk
+    smoother_noise_floor: float = 0.03          # its quiet level, a fraction of Table 1's rate (sigma x 0.17)
+    smoother_noise_gain: float = 0.5            # + gain x alpha alpha^T dt (alpha the smoothed angular acceleration)
+    smoother_noise_window_s: float = 20.0       # the largest alpha within +- this sets an epoch's noise
+    smoother_accel_window_s: float = 5.0        # alpha from the smoothed omega over +- this
+    smoother_noise_iterations: int = 2          # noise estimate -> re-filter -> smooth, repeated
+    smoother_info_window_s: float = 5.0         # an epoch's information divided by the misfit of the information
+                                                # within +- this to the smoothed state, relative to the pass's
+                                                # median (>= 1; 0 = off)
+    smoother_info_scale_max: float = 10.0       # at most this
     sigma0_ambiguity_cyc: float = 500.0
     sigma_baseline_kinematic_m: float = 1.0     # kinematic mode: per baseline component per tau (seed 000 sec. 4.1)
     tau_baseline_s: float = 1.0

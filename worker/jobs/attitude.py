@@ -62,6 +62,10 @@ class AttitudeConfig(BaseModel):
                                               "and baselines after the forward pass, so each epoch also uses the "
                                               "later data: no lag in slews, about half the noise (docs/attitude.md "
                                               "'Where the slew errors come from'). Off: the forward filter's output.")
+    smoother_adaptive_noise: bool = Field(False, description="Dynamic mode, implies `smoother`: the angular "
+                                          "velocity's random walk per epoch from the smoothed angular acceleration "
+                                          "(low when steady, raised around manoeuvres), then smoothed again (docs/"
+                                          "attitude.md 'Adaptive process noise of the smoother'). Off: Table 1's.")
     attitude_method: Literal["quest", "triad", "ml"] = Field(
         "quest", description="quest: QUEST with weights by baseline length (seed 000); triad: the first baseline "
                              "exact; ml: maximum likelihood with the baselines' full covariance (uses that a "
