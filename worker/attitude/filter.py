@@ -31,9 +31,9 @@ import numpy as np
 from worker.attitude.adaptive import ManoeuvreDetector
 from worker.attitude.ambiguity import first_fix_groups, resolve_first_fix, resolve_joint_constrained
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
-from worker.attitude.qc_kernels import (epoch_geometry, grow_square, growth_weights, propagate_dynamic,
-                                        propagate_kinematic, qc_epoch, record_epoch, reset_white_clocks,
-                                        take_square, td_checks)
+from worker.attitude.qc_kernels import (add_states, drop_states, epoch_geometry, growth_weights,
+                                        propagate_dynamic, propagate_kinematic, qc_epoch, record_epoch,
+                                        reset_white_clocks, td_checks)
 from worker.attitude.fastops import clip as _clip, nz as _nz
 from worker.attitude.kernels import cn0_growth_samples
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
@@ -133,35 +133,22 @@ class _State:
         return self.x.size
 
     def add_ambiguities(self, keys: np.ndarray, values: np.ndarray, sigma0: float, t: float) -> None:
-        n0 = self.n
-        k = keys.shape[0]
-        self.x = np.concatenate([self.x, values])
-        self.P = grow_square(self.P, k, sigma0 ** 2)
-        self.amb_key = np.concatenate([self.amb_key, keys])
-        self.amb_fixed = np.concatenate([self.amb_fixed, np.zeros(k, bool)])
-        self.amb_last_t = np.concatenate([self.amb_last_t, np.full(k, t)])
+        """Append float ambiguity states (keys (k, 3) = bl, sat, sig) with variance sigma0^2; new arcs open."""
         a0 = len(self.arcs)
-        self.arcs.extend([int(b), int(sa), int(f), self.epoch, -1] for b, sa, f in keys)
-        self.amb_arc = np.concatenate([self.amb_arc, a0 + np.arange(k)])
-        self.amb_index[keys[:, 0], keys[:, 1], keys[:, 2]] = n0 + np.arange(k)
+        self.arcs.extend([int(b), int(sa), int(f), self.epoch, -1] for b, sa, f in keys.tolist())
+        (self.x, self.P, self.amb_key, self.amb_fixed, self.amb_last_t, self.amb_arc) = add_states(
+            self.x, self.P, np.asarray(values, np.float64), float(sigma0 ** 2), np.asarray(keys, np.int64),
+            float(t), a0, self.amb_key, self.amb_fixed, self.amb_last_t, self.amb_arc, self.amb_index)
 
     def remove_ambiguities(self, state_idx: np.ndarray, last_epoch: int) -> None:
         """Drop ambiguity states; their arcs end at last_epoch (the last epoch their phase was used)."""
         keep = np.ones(self.n, bool)
         keep[state_idx] = False
-        for a in self.amb_arc[~keep[self.n_fixed_part:]]:
+        for a in self.amb_arc[~keep[self.n_fixed_part:]].tolist():
             self.arcs[a][4] = last_epoch
-        self.x = self.x[keep]
-        self.P = take_square(self.P, np.flatnonzero(keep))         # P[np.ix_(keep, keep)]
-        ka = keep[self.n_fixed_part:]
-        gone = self.amb_key[~ka]
-        self.amb_index[gone[:, 0], gone[:, 1], gone[:, 2]] = -1
-        self.amb_key = self.amb_key[ka]
-        self.amb_fixed = self.amb_fixed[ka]
-        self.amb_last_t = self.amb_last_t[ka]
-        self.amb_arc = self.amb_arc[ka]
-        self.amb_index[self.amb_key[:, 0], self.amb_key[:, 1], self.amb_key[:, 2]] = \
-            self.n_fixed_part + np.arange(self.amb_key.shape[0])
+        (self.x, self.P, self.amb_key, self.amb_fixed, self.amb_last_t, self.amb_arc) = drop_states(
+            self.x, self.P, keep, self.n_fixed_part, self.amb_key, self.amb_fixed, self.amb_last_t, self.amb_arc,
+            self.amb_index)
 
 
 def _cn0_factor(cn0_dbhz: np.ndarray) -> np.ndarray:
