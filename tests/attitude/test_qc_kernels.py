@@ -380,3 +380,78 @@ def test_take_and_grow_square_are_the_numpy_indexing():
         ref[:n, :n] = P
         ref[np.arange(n, n + 3), np.arange(n, n + 3)] = 0.25
         assert np.array_equal(grow_square(P, 3, 0.25), ref)
+
+
+class _NumpyStates:
+    """_State's ambiguity add / remove as written in numpy before drop_states / add_states (the reference)."""
+
+    def __init__(self, x, P, n_fixed, shape):
+        self.x, self.P, self.n_fixed_part = x, P, n_fixed
+        self.amb_index = np.full(shape, -1, dtype=np.int64)
+        self.amb_key = np.zeros((0, 3), dtype=np.int64)
+        self.amb_fixed = np.zeros(0, bool)
+        self.amb_last_t = np.zeros(0)
+        self.amb_arc = np.zeros(0, np.int64)
+        self.arcs = []
+
+    def add(self, keys, values, sigma0, t):
+        n0, k = self.x.size, keys.shape[0]
+        self.x = np.concatenate([self.x, values])
+        P = np.zeros((n0 + k, n0 + k))
+        P[:n0, :n0] = self.P
+        P[np.arange(n0, n0 + k), np.arange(n0, n0 + k)] = sigma0 ** 2
+        self.P = P
+        self.amb_key = np.concatenate([self.amb_key, keys])
+        self.amb_fixed = np.concatenate([self.amb_fixed, np.zeros(k, bool)])
+        self.amb_last_t = np.concatenate([self.amb_last_t, np.full(k, t)])
+        a0 = len(self.arcs)
+        self.arcs.extend([int(b), int(sa), int(f), 0, -1] for b, sa, f in keys)
+        self.amb_arc = np.concatenate([self.amb_arc, a0 + np.arange(k)])
+        self.amb_index[keys[:, 0], keys[:, 1], keys[:, 2]] = n0 + np.arange(k)
+
+    def remove(self, state_idx):
+        keep = np.ones(self.x.size, bool)
+        keep[state_idx] = False
+        self.x = self.x[keep]
+        self.P = self.P[np.ix_(keep, keep)]
+        ka = keep[self.n_fixed_part:]
+        gone = self.amb_key[~ka]
+        self.amb_index[gone[:, 0], gone[:, 1], gone[:, 2]] = -1
+        self.amb_key, self.amb_fixed = self.amb_key[ka], self.amb_fixed[ka]
+        self.amb_last_t, self.amb_arc = self.amb_last_t[ka], self.amb_arc[ka]
+        self.amb_index[self.amb_key[:, 0], self.amb_key[:, 1], self.amb_key[:, 2]] = \
+            self.n_fixed_part + np.arange(self.amb_key.shape[0])
+
+
+def test_state_add_and_remove_equal_the_numpy_bookkeeping():
+    from worker.attitude.filter import _State
+
+    rng = np.random.default_rng(12)
+    st = _State(2, 9, 2, True, False)
+    n0 = st.n
+    A = rng.normal(size=(n0, n0))
+    st.x, st.P = rng.normal(size=n0), A @ A.T
+    ref = _NumpyStates(st.x.copy(), st.P.copy(), st.n_fixed_part, (2, 9, 2))
+    names = ("x", "P", "amb_index", "amb_key", "amb_fixed", "amb_last_t", "amb_arc")
+    n_add = n_rm = 0
+    for epoch in range(200):
+        free = np.argwhere(st.amb_index < 0)
+        if free.size and rng.random() < 0.6:
+            keys = free[rng.random(len(free)) < 0.3].astype(np.int64)
+            if keys.size:
+                vals = rng.normal(size=len(keys)) * 100
+                st.add_ambiguities(keys, vals, 30.0, float(epoch))
+                ref.add(keys, vals, 30.0, float(epoch))
+                n_add += 1
+        if st.amb_key.shape[0] and rng.random() < 0.5:
+            drop = st.n_fixed_part + np.flatnonzero(rng.random(st.amb_key.shape[0]) < 0.3)
+            st.remove_ambiguities(drop, epoch)
+            ref.remove(drop)
+            n_rm += 1
+        st.amb_fixed |= rng.random(st.amb_fixed.size) < 0.1
+        ref.amb_fixed = st.amb_fixed.copy()
+        for nm in names:
+            a, b = getattr(st, nm), getattr(ref, nm)
+            assert a.dtype == b.dtype and np.array_equal(a, b), nm
+        assert [a[:3] for a in st.arcs] == [a[:3] for a in ref.arcs]
+    assert n_add > 20 and n_rm > 20

@@ -28,12 +28,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from worker.attitude.adaptive import OmegaNoiseAdapter
+from worker.attitude.adaptive import ManoeuvreDetector
 from worker.attitude.ambiguity import first_fix_groups, resolve_first_fix, resolve_joint_constrained
 from worker.attitude.pcv_correction import epoch_correction_m, pcv_tables_for
-from worker.attitude.qc_kernels import (epoch_geometry, grow_square, growth_weights, propagate_dynamic,
-                                        propagate_kinematic, qc_epoch, record_epoch, reset_white_clocks,
-                                        take_square, td_checks)
+from worker.attitude.qc_kernels import (add_states, drop_states, epoch_geometry, growth_weights,
+                                        propagate_dynamic, propagate_kinematic, qc_epoch, record_epoch,
+                                        reset_white_clocks, td_checks)
 from worker.attitude.fastops import clip as _clip, nz as _nz
 from worker.attitude.kernels import cn0_growth_samples
 from worker.attitude.sd_block import BLOCK_EPOCHS, sd_block
@@ -133,35 +133,22 @@ class _State:
         return self.x.size
 
     def add_ambiguities(self, keys: np.ndarray, values: np.ndarray, sigma0: float, t: float) -> None:
-        n0 = self.n
-        k = keys.shape[0]
-        self.x = np.concatenate([self.x, values])
-        self.P = grow_square(self.P, k, sigma0 ** 2)
-        self.amb_key = np.concatenate([self.amb_key, keys])
-        self.amb_fixed = np.concatenate([self.amb_fixed, np.zeros(k, bool)])
-        self.amb_last_t = np.concatenate([self.amb_last_t, np.full(k, t)])
+        """Append float ambiguity states (keys (k, 3) = bl, sat, sig) with variance sigma0^2; new arcs open."""
         a0 = len(self.arcs)
-        self.arcs.extend([int(b), int(sa), int(f), self.epoch, -1] for b, sa, f in keys)
-        self.amb_arc = np.concatenate([self.amb_arc, a0 + np.arange(k)])
-        self.amb_index[keys[:, 0], keys[:, 1], keys[:, 2]] = n0 + np.arange(k)
+        self.arcs.extend([int(b), int(sa), int(f), self.epoch, -1] for b, sa, f in keys.tolist())
+        (self.x, self.P, self.amb_key, self.amb_fixed, self.amb_last_t, self.amb_arc) = add_states(
+            self.x, self.P, np.asarray(values, np.float64), float(sigma0 ** 2), np.asarray(keys, np.int64),
+            float(t), a0, self.amb_key, self.amb_fixed, self.amb_last_t, self.amb_arc, self.amb_index)
 
     def remove_ambiguities(self, state_idx: np.ndarray, last_epoch: int) -> None:
         """Drop ambiguity states; their arcs end at last_epoch (the last epoch their phase was used)."""
         keep = np.ones(self.n, bool)
         keep[state_idx] = False
-        for a in self.amb_arc[~keep[self.n_fixed_part:]]:
+        for a in self.amb_arc[~keep[self.n_fixed_part:]].tolist():
             self.arcs[a][4] = last_epoch
-        self.x = self.x[keep]
-        self.P = take_square(self.P, np.flatnonzero(keep))         # P[np.ix_(keep, keep)]
-        ka = keep[self.n_fixed_part:]
-        gone = self.amb_key[~ka]
-        self.amb_index[gone[:, 0], gone[:, 1], gone[:, 2]] = -1
-        self.amb_key = self.amb_key[ka]
-        self.amb_fixed = self.amb_fixed[ka]
-        self.amb_last_t = self.amb_last_t[ka]
-        self.amb_arc = self.amb_arc[ka]
-        self.amb_index[self.amb_key[:, 0], self.amb_key[:, 1], self.amb_key[:, 2]] = \
-            self.n_fixed_part + np.arange(self.amb_key.shape[0])
+        (self.x, self.P, self.amb_key, self.amb_fixed, self.amb_last_t, self.amb_arc) = drop_states(
+            self.x, self.P, keep, self.n_fixed_part, self.amb_key, self.amb_fixed, self.amb_last_t, self.amb_arc,
+            self.amb_index)
 
 
 def _cn0_factor(cn0_dbhz: np.ndarray) -> np.ndarray:
@@ -216,8 +203,10 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     if dynamic:
         st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
     q_w = (s.sigma_omega_deg_s * DEG) ** 2 / s.tau_omega_s          # rad^2/s^2 per s
-    adapter = OmegaNoiseAdapter(q_w, s.adaptive_omega_window, s.adaptive_omega_gain,
-                                s.adaptive_omega_gate) \
+    adapter = ManoeuvreDetector(q_w, (s.adaptive_omega_sigma_deg_s * DEG) ** 2 / s.tau_omega_s, n_bl,
+                                s.adaptive_omega_threshold, s.adaptive_omega_mix_at,
+                                s.adaptive_omega_sigma_acc_deg_s2 * DEG, s.adaptive_omega_hold_epochs,
+                                s.rk4_step_s, not (s.smoother or s.smoother_adaptive_noise)) \
         if dynamic and s.adaptive_omega_noise else None
     q_b = s.sigma_baseline_kinematic_m ** 2 / s.tau_baseline_s       # m^2 per s
     var_clk = (s.sigma_clock_s * C_M_S) ** 2
@@ -353,7 +342,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             if dynamic:
                 # b by RK4 rotation; P <- Phi P Phi^T + Q: the omega random walk's discrete noise and its effect on b
                 # over dt; then the white-noise clocks are reset (worker.attitude.qc_kernels)
-                Qw = q_omega[k] if q_omega is not None else (adapter.q_rate() if adapter is not None
+                Qw = q_omega[k] if q_omega is not None else (adapter.q_rate(dt) if adapter is not None
                                                               else Qw_iso)       # (3, 3) rad^2/s^3
                 Pbb, Pbw = propagate_dynamic(st.x, st.P, w_idx3, b_idx, Qw, float(dt), s.rk4_step_s, st.white,
                                              var_clk)
@@ -492,7 +481,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                                             s.noise_estimation)
             watch_w = adapter is not None and ever_fixed.all() and prev_t is not None
             if watch_w:
-                w_prior, Pw_prior = st.x[0:3].copy(), st.P[0:3, 0:3].copy()
+                sub_prior, P_sub_prior = st.x[sub_w_b], st.P[ix_sub]          # (fancy indexing: copies)
             el_wc = np.ascontiguousarray(el_w)          # one compiled signature whatever the layout
             el_e = el_wc if not elev_w else (el_ant if R_mask is not None else np.repeat(el_loc[None, :], n_bl, 0))
             mp_mult = mp_infl * mp_scale
@@ -506,7 +495,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 w_p = 1.0 / var[mc_n:]
                 sm_corr[k] = float(np.sum(v_mp[mc_n:] * mp_mult * w_p * w_p) / np.sum(w_p))
             if good and watch_w:
-                adapter.observe(st.x[0:3] - w_prior, Pw_prior, st.P[0:3, 0:3], t - prev_t)
+                rep = adapter.observe(sub_prior, P_sub_prior, st.x[sub_w_b], st.P[ix_sub], t)
+                if rep is not None:        # a manoeuvre: the (omega, baselines) sub-state the detector gives
+                    st.x[sub_w_b], st.P[ix_sub] = rep
             if mp_model and s.multipath_adaptive and good and n_mp >= 6:
                 # scale of the multipath variance from the post-fit residuals of fixed phases:
                 # E[r^2] = R_true (1 - h), h = (H P+ H^T)_ii / R_model (leverage); R_true = white + scale * mp

@@ -23,7 +23,8 @@ from worker.attitude.kernels import POW2, cn0_growth_update, white_noise_update
 from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 
 __all__ = ["reset_white_clocks", "propagate_dynamic", "propagate_kinematic", "clip_pair", "epoch_geometry", "qc_epoch",
-           "growth_weights", "td_checks", "record_epoch", "take_square", "grow_square", "warm_up"]
+           "growth_weights", "td_checks", "record_epoch", "take_square", "grow_square", "drop_states",
+           "add_states", "warm_up"]
 
 #: reason codes set here (worker.attitude.filter.REASONS)
 R_ANTENNA, R_CN0, R_TD_CODE, R_TD_PHASE, R_HALF, R_PCV_EMPTY = 2, 3, 4, 5, 6, 10
@@ -410,6 +411,73 @@ def grow_square(P, k, var):
     return out
 
 
+@njit(cache=True, nogil=True)
+def drop_states(x, P, keep, n_fixed, amb_key, amb_fixed, amb_last_t, amb_arc, amb_index):
+    """(x, P, amb_key, amb_fixed, amb_last_t, amb_arc) of the states where keep (the ambiguity arrays row a at
+    state n_fixed + a), with amb_index rewritten in place (-1 for dropped keys, the new state index of kept ones):
+    run_filter's _State.remove_ambiguities without its arc log."""
+    n1 = 0
+    for a in range(keep.size):
+        n1 += keep[a]
+    idx = np.empty(n1, np.int64)
+    q = 0
+    for a in range(keep.size):
+        if keep[a]:
+            idx[q] = a
+            q += 1
+    x1 = np.empty(n1)
+    for a in range(n1):
+        x1[a] = x[idx[a]]
+    P1 = take_square(P, idx)
+    m0 = amb_key.shape[0]
+    m1 = n1 - n_fixed
+    key1 = np.empty((m1, 3), np.int64)
+    fixed1 = np.empty(m1, np.bool_)
+    last1 = np.empty(m1)
+    arc1 = np.empty(m1, np.int64)
+    for a in range(m0):
+        if not keep[n_fixed + a]:
+            amb_index[amb_key[a, 0], amb_key[a, 1], amb_key[a, 2]] = -1
+    q = 0
+    for a in range(m0):
+        if keep[n_fixed + a]:
+            for c in range(3):
+                key1[q, c] = amb_key[a, c]
+            fixed1[q] = amb_fixed[a]
+            last1[q] = amb_last_t[a]
+            arc1[q] = amb_arc[a]
+            amb_index[amb_key[a, 0], amb_key[a, 1], amb_key[a, 2]] = n_fixed + q
+            q += 1
+    return x1, P1, key1, fixed1, last1, arc1
+
+
+@njit(cache=True, nogil=True)
+def add_states(x, P, values, var, keys, t, arc0, amb_key, amb_fixed, amb_last_t, amb_arc, amb_index):
+    """(x, P, amb_key, amb_fixed, amb_last_t, amb_arc) with k new ambiguity states appended: values, variance var
+    (uncorrelated), keys (k, 3), not fixed, last used at t, arcs arc0 + 0..k-1; amb_index of the keys set in place:
+    run_filter's _State.add_ambiguities without its arc log."""
+    n0 = x.size
+    k = keys.shape[0]
+    m0 = amb_key.shape[0]
+    x1 = np.empty(n0 + k)
+    x1[:n0] = x
+    x1[n0:] = values
+    key1 = np.empty((m0 + k, 3), np.int64)
+    key1[:m0] = amb_key
+    key1[m0:] = keys
+    fixed1 = np.zeros(m0 + k, np.bool_)
+    fixed1[:m0] = amb_fixed
+    last1 = np.empty(m0 + k)
+    last1[:m0] = amb_last_t
+    last1[m0:] = t
+    arc1 = np.empty(m0 + k, np.int64)
+    arc1[:m0] = amb_arc
+    for a in range(k):
+        arc1[m0 + a] = arc0 + a
+        amb_index[keys[a, 0], keys[a, 1], keys[a, 2]] = n0 + a
+    return x1, grow_square(P, k, var), key1, fixed1, last1, arc1
+
+
 def warm_up() -> None:
     """Compile (or load from the cache) every kernel once on tiny inputs of the types run_filter passes (contiguous
     epoch slices of the SdBlock; np.nonzero's index arrays both contiguous and strided)."""
@@ -444,6 +512,13 @@ def warm_up() -> None:
               np.zeros((2,) + sh, np.bool_), np.zeros((2,) + sh, np.bool_))
     take_square(P, np.arange(3, dtype=np.int64))
     grow_square(P, 2, 1.0)
+    amb_index = np.full(sh, -1, np.int64)
+    keys = np.array([[0, 1, 0], [1, 2, 1]], np.int64)
+    st = add_states(x, P, np.ones(2), 1.0, keys, t, 0, np.zeros((0, 3), np.int64), np.zeros(0, np.bool_),
+                    np.zeros(0), np.zeros(0, np.int64), amb_index)
+    keep = np.ones(16, np.bool_)
+    keep[14] = False
+    drop_states(st[0], st[1], keep, 14, st[2], st[3], st[4], st[5], amb_index)
     ibuf, fbuf = np.zeros((6, 8), np.int64), np.zeros((4, 8))
     for idx in (np.zeros(1, np.int64), np.nonzero(np.ones((2, 2)))[0]):      # contiguous, strided
         record_epoch(0, b3, b3, b3, b3, i3, f2, f2, f3, z, 0, idx, idx, idx, idx, idx, idx, np.zeros((2,) + sh),

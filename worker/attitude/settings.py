@@ -127,12 +127,15 @@ class AttitudeSettings:
     sigma_clock_s: float = 1.0e-6              # white noise, reset each epoch
     sigma0_omega_deg_s: float = 1.0
     sigma_omega_deg_s: float = 0.03             # random walk, per tau
-    adaptive_omega_noise: bool = False          # dynamic mode: add the excess of the omega corrections over their
-                                                # predicted covariance to the random walk (covariance matching,
-                                                # worker/attitude/adaptive.py); off = Table 1
-    adaptive_omega_window: int = 5              # epochs averaged by the adaptive estimate
-    adaptive_omega_gain: float = 4.0            # scale of the estimated excess noise
-    adaptive_omega_gate: float = 0.5            # chi-square quantile the window's normalised corrections must exceed
+    adaptive_omega_noise: bool = False          # dynamic mode: causal manoeuvre detection (worker/attitude/adaptive.py):
+                                                # constant-acceleration hypotheses against the random walk; the
+                                                # estimate follows them by their weight, a detection raises the
+                                                # random walk along the acceleration axis; off = Table 1
+    adaptive_omega_threshold: float = 5.0       # log-likelihood ratio of a detected manoeuvre
+    adaptive_omega_mix_at: float = 0.0          # log-likelihood ratio at which the estimate is half-way to it
+    adaptive_omega_sigma_acc_deg_s2: float = 0.05   # prior sigma of the hypotheses' angular acceleration
+    adaptive_omega_sigma_deg_s: float = 0.3     # random walk (per tau) along the axis after a detection
+    adaptive_omega_hold_epochs: int = 30        # updates it stays raised after the last detection
     tau_omega_s: float = 1.0
     smoother: bool = False                      # dynamic mode: fixed-interval (Rauch-Tung-Striebel) smoothing of the
                                                 # angular velocity and baselines after the forward pass

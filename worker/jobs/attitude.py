@@ -62,6 +62,21 @@ class AttitudeConfig(BaseModel):
                                               "and baselines after the forward pass, so each epoch also uses the "
                                               "later data: no lag in slews, about half the noise (docs/attitude.md "
                                               "'Where the slew errors come from'). Off: the forward filter's output.")
+    adaptive_omega_noise: bool = Field(
+        False, description="Dynamic mode: causal manoeuvre detection (docs/attitude.md 'Adaptive angular-velocity "
+                           "noise'): constant-angular-acceleration hypotheses against the angular-velocity random "
+                           "walk; the estimate follows them by their weight and a detection raises the random walk "
+                           "along the acceleration axis. Off: Table 1's random walk.")
+    adaptive_omega_threshold: float = Field(5.0, gt=0, le=100,
+                                            description="Log-likelihood ratio of a detected manoeuvre.")
+    adaptive_omega_mix_at: float = Field(0.0, ge=-20, le=100, description="Log-likelihood ratio at which the "
+                                                                          "estimate is half-way to the manoeuvre.")
+    adaptive_omega_sigma_acc_deg_s2: float = Field(0.05, gt=0, le=100, description="Prior sigma of the "
+                                                   "hypotheses' angular acceleration (deg/s^2).")
+    adaptive_omega_sigma_deg_s: float = Field(0.3, ge=0, le=100, description="Angular-velocity random walk per tau "
+                                                                             "along the axis after a detection.")
+    adaptive_omega_hold_epochs: int = Field(30, ge=0, le=3600, description="Updates the raised random walk lasts "
+                                                                           "after the last detection.")
     smoother_adaptive_noise: bool = Field(False, description="Dynamic mode, implies `smoother`: the angular "
                                           "velocity's random walk per epoch from the smoothed angular acceleration "
                                           "of a first pass (low when steady, raised around manoeuvres), then the "
