@@ -70,10 +70,10 @@ EXTRA_ROWS = {"kinematic, Table 2 masks (default)": (("clean", "realistic"), {"m
 def warm_up_kernels() -> None:
     """Load (or compile, the first time from this checkout) the filter's numba kernels before anything is timed, as
     the worker does at start (worker.main._warm_up_kernels)."""
-    from worker.attitude.kernels import warm_up as warm_up_attitude
-    from worker.attitude.qc_kernels import warm_up as warm_up_qc
-    from worker.attitude.update_kernels import warm_up as warm_up_update
-    from worker.estimation.ekf_kernels import warm_up as warm_up_ekf
+    from gnssatt.attitude.kernels import warm_up as warm_up_attitude
+    from gnssatt.attitude.qc_kernels import warm_up as warm_up_qc
+    from gnssatt.attitude.update_kernels import warm_up as warm_up_update
+    from gnssatt.estimation.ekf_kernels import warm_up as warm_up_ekf
 
     for f in (warm_up_ekf, warm_up_attitude, warm_up_qc, warm_up_update):
         f()
@@ -82,11 +82,11 @@ def warm_up_kernels() -> None:
 def run_mode(d: Path, mode: str, extra: dict | None = None) -> dict:
     """One run of the attitude processing on the set d: mode "kinematic"/"dynamic" on "all phases", or the settings
     of an EXTRA_ROWS entry (extra)."""
-    import worker.attitude.process as P
-    from worker.attitude.process import load_inputs, process
-    from worker.attitude.products import all_products
-    from worker.attitude.settings import ALL_PHASES, TABLE2_MASKS, AttitudeSettings
-    from worker.gnss import rotations as rot
+    import gnssatt.attitude.process as P
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.products import all_products
+    from gnssatt.attitude.settings import ALL_PHASES, TABLE2_MASKS, AttitudeSettings
+    from gnssatt.gnss import rotations as rot
 
     cfg = dict(extra or {"mode": mode})
     selection = TABLE2_MASKS if cfg.pop("table2", False) else ALL_PHASES   # the benches' default: "all phases"
@@ -174,9 +174,9 @@ def run_slews(tmp: Path, seeds=(SEED,)) -> list[str]:
     (max of the 15-s running mean of the Euler errors), 95 % error, std(error / predicted sigma) after 30 s."""
     from tests.attitude.test_adaptive import _lag_deg
     from tests.attitude.test_attitude_sim import errors
-    from worker.attitude.process import load_inputs, process
-    from worker.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
-    from worker.sim import simulate_scenario
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
+    from gnssatt.sim import simulate_scenario
 
     lines = ["", f"Slews (seed 000 Fig. 6; clean, simulator seed{'s' if len(seeds) > 1 else ''} "
              f"{', '.join(map(str, seeds))}, dynamic mode, \"all phases\"; Table 1 = default settings; adaptive = "
@@ -231,7 +231,7 @@ def main() -> None:
             lines = [f"Machine: {machine_line()}. One BLAS thread."] + run_slews(Path(tmp), slew_seeds)
         print("\n".join(lines))
         return
-    from worker.sim import simulate_scenario
+    from gnssatt.sim import simulate_scenario
 
     warm_up_kernels()
     lines = [f"Machine: {machine_line()}. One BLAS thread. Simulator seed {SEED}, 1 Hz, three antennas, "

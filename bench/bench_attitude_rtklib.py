@@ -93,7 +93,7 @@ def _gps_key(week, sow) -> np.ndarray:
 
 def load_truth(d: Path) -> dict:
     """keys (n,), true baselines ECEF {name: (n, 3)}, base (GPS-2) ECEF position (n, 3), body vectors."""
-    from worker.gnss import rotations as rot
+    from gnssatt.gnss import rotations as rot
 
     rows = list(csv.DictReader(open(d / "truth" / "attitude.csv")))
     keys = _gps_key([r["gps_week"] for r in rows], [r["gps_sow"] for r in rows])
@@ -160,9 +160,9 @@ def run_floor(d: Path, sol, truth: dict, weighted: bool) -> dict:
 
 
 def run_gnssatt(d: Path, mode: str, truth: dict, keep: dict | None = None) -> dict:
-    from worker.attitude.process import load_inputs, process
-    from worker.attitude.products import all_products
-    from worker.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.products import all_products
+    from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
 
     t0, c0 = time.perf_counter(), time.process_time()
     sol = process(load_inputs(files_of(d)), AttitudeSettings(mode=mode, **ALL_PHASES))
@@ -182,7 +182,7 @@ def run_gnssatt(d: Path, mode: str, truth: dict, keep: dict | None = None) -> di
 
 
 def run_rtklib(d: Path, truth: dict, work: Path, basesig_m: float = 0.05, weighting: str = "elevation") -> dict:
-    from worker.gnss.frames import R_enu_from_ecef, ecef_to_geodetic
+    from gnssatt.gnss.frames import R_enu_from_ecef, ecef_to_geodetic
 
     out = {"wall_s": 0.0, "cpu_s": 0.0, "baselines": {}, "options": {}}
     for a, b in BASELINES:
@@ -209,7 +209,7 @@ def run_rtklib(d: Path, truth: dict, work: Path, basesig_m: float = 0.05, weight
 def real_sets(work: Path) -> list[dict]:
     """gnssatt kinematic vs RTKLIB kinematic (GPS only, L1+L2, same files) on the real one-baseline sets."""
     from tests.conftest import REAL_DATA_DIR
-    from worker.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
+    from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
 
     rows = []
     nag = REAL_DATA_DIR / "static_1m_mosaicx5_nagoya_2024"
@@ -249,7 +249,7 @@ def real_sets(work: Path) -> list[dict]:
 
 
 def _real_row(label, files, rover, base_obs, nav, base_opts, work, settings, extra, ref) -> dict:
-    from worker.attitude.process import load_inputs, process
+    from gnssatt.attitude.process import load_inputs, process
 
     row = {"label": label, "ref": ref}
     if files is not None:
@@ -275,7 +275,7 @@ def _real_stats(az, el, L) -> dict:
 # ---------------------------------------------------------------------------------------------- report
 
 def simulate(label: str, out: Path, minutes: float) -> Path:
-    from worker.sim import simulate_scenario
+    from gnssatt.sim import simulate_scenario
 
     if label == "clean":
         simulate_scenario("earth-pointing", out, seed=SEED, overrides={"duration_s": minutes * 60.0, **CLEAN})

@@ -5,7 +5,7 @@ Passes: the 106-minute CASSIOPE-like pass of seed 000 sec. 4.1 (simulator preset
 antennas, L1 C/A + L2 P(Y), 1 Hz), clean ({"pcv": false, "pco": false, "multipath": false,
 "noise_grows_with_cn0": false}) and realistic (preset as it is), each in kinematic and dynamic mode.
 
-- filter: CPU time (time.process_time) of worker.attitude.filter.run_filter, epochs / s; median of --runs runs;
+- filter: CPU time (time.process_time) of gnssatt.attitude.filter.run_filter, epochs / s; median of --runs runs;
 - job: the attitude pipeline itself (worker.pipelines.attitude.run on a JobContext like the runner builds: parse
   the uploaded files, geometry, filter, attitude, every product text, PNG plots, report.html, each product
   hashed as the blob store does), CPU and wall time, median of --runs runs, and CPU per stage (the pipeline's
@@ -54,7 +54,7 @@ def files_of(d: Path) -> list[tuple[str, str, Path]]:
 
 def run_job(d: Path, mode: str, work: Path) -> dict:
     """One attitude job through its pipeline; CPU/wall of the whole job and of run_filter."""
-    import worker.attitude.process as P
+    import gnssatt.attitude.process as P
     from worker.context import InputFile, InputSet, JobContext
     from worker.jobs.attitude import AttitudeConfig
     from worker.pipelines.attitude import run
@@ -216,7 +216,7 @@ def main() -> None:
     ap.add_argument("--no-service", action="store_true", help="skip the upload-to-products runs through the service")
     ap.add_argument("--write", action="store_true")
     args = ap.parse_args()
-    from worker.sim import simulate_scenario
+    from gnssatt.sim import simulate_scenario
 
     med = lambda rows, key: float(np.median([r[key] for r in rows]))  # noqa: E731
     table, rtk, service = [], {}, []

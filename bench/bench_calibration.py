@@ -13,7 +13,7 @@ Inputs: `--sets` calibration passes + 1 held-out pass of the `calibration` prese
 45..100 min, 35 mm p-p PCV per antenna (~50 mm differential), Table 3 offsets, reference attitude 2 arcsec,
 seed 2024 (each pass simulated as its own run, see tests/calibration/_campaign.py). Truth: the injected antenna
 offsets, PCO and PCV expressed in the calibration's baseline/map split (tests/calibration/_campaign.py
-`truth_split`, worker/calibration/decomposition.py); `--twin` also calibrates a noiseless twin campaign (no noise,
+`truth_split`, gnssatt/calibration/decomposition.py); `--twin` also calibrates a noiseless twin campaign (no noise,
 no multipath, no reference noise). `--ekf`: the attitude filter on the held-out set with a priori baselines,
 calibrated baselines, and calibrated baselines + the PCV maps. `--budget`: the held-out error budget (a priori,
 true and calibrated baselines and maps in every combination, and the pass re-simulated without multipath and
@@ -52,7 +52,7 @@ def durations_s(n: int) -> list[float]:
 
 def simulate(root: Path, n: int, overrides: dict) -> list[Path]:
     """n passes, one run each (so all share the antennas), 13 h 7 min apart (never overlapping)."""
-    from worker.gnss.time import GpsTime
+    from gnssatt.gnss.time import GpsTime
 
     t0 = GpsTime.from_iso("2018-01-10T03:00:00")
     dirs = []
@@ -364,7 +364,7 @@ def _settings_of(config: dict) -> dict:
         return {}
     from dataclasses import asdict
 
-    from worker.attitude.settings import AttitudeSettings
+    from gnssatt.attitude.settings import AttitudeSettings
     from worker.jobs.attitude import AttitudeConfig
 
     s, d = asdict(AttitudeConfig(**config).to_settings()), asdict(AttitudeSettings())
@@ -374,8 +374,8 @@ def _settings_of(config: dict) -> dict:
 def ekf_held_out(d: Path, calibrated: dict, maps: dict | None = None, config: dict | None = None) -> dict:
     """The attitude job's filter (issue 6, dynamic mode) on the held-out set with a priori baselines, calibrated
     baselines, and calibrated baselines + PCV maps ((first, second, freq) -> map JSON) applied by the filter."""
-    from worker.attitude.process import load_inputs, process
-    from worker.attitude.settings import AttitudeSettings
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.settings import AttitudeSettings
 
     s = input_set(d)
     inp = load_inputs([(f.name, f.kind, f.path) for f in s.files])
@@ -410,9 +410,9 @@ def held_out_budget(held: Path, prod: dict, extra: dict | None = None, twins: bo
     split (truth_split), on the calibrated maps' filled bins and on the full grid. With `twins`, the same pass
     re-simulated without multipath and without any noise (the reference attitude keeps its 2 arcsec) bounds what
     noise and multipath leave."""
-    from worker.attitude.process import load_inputs
-    from worker.attitude.settings import AttitudeSettings
-    from worker.calibration.held_out import cut_percent, filter_errors
+    from gnssatt.attitude.process import load_inputs
+    from gnssatt.attitude.settings import AttitudeSettings
+    from gnssatt.calibration.held_out import cut_percent, filter_errors
 
     truth = truth_of(held)
     doc = json.loads(prod["baselines.json"])
@@ -435,7 +435,7 @@ def held_out_budget(held: Path, prod: dict, extra: dict | None = None, twins: bo
     sets = {"held": held}
     if twins:
         i = int(held.parent.name[1:])
-        from worker.gnss.time import GpsTime
+        from gnssatt.gnss.time import GpsTime
         t0 = GpsTime.from_iso("2018-01-10T03:00:00")
         for tag, ov in (("no_multipath", {"multipath": False}),
                         ("no_noise_no_multipath", {"multipath": False, "noise": False, "cn0_jitter_db": 0.0})):
@@ -530,7 +530,7 @@ def main() -> None:
             m = json.loads(prod[f"pcv_{key[0]}_{key[1]}_{sig}.json"])
             est[sig] = np.array([[np.nan if v is None else v for v in row] for row in m["values_mm"]])
             counts[sig] = np.where(np.isfinite(est[sig]), np.asarray(m["count"]), 0)
-        # the injected truth in the calibration's baseline/map split (worker/calibration/decomposition.py)
+        # the injected truth in the calibration's baseline/map split (gnssatt/calibration/decomposition.py)
         bt, mt = truth_split(truth, key, m["azimuth_deg"], m["elevation_deg"], counts)
         cal, sig_m = np.asarray(b["calibrated_m"]), np.asarray(b["sigma_m"])
         phys = truth["baselines"][key]["mean_m"]

@@ -24,9 +24,9 @@ from tests.estimation.problems import (  # noqa: E402
     CASSIOPE_BODY_M, CUBESAT_BODY_M, L1_WAVELENGTH_M, L2_WAVELENGTH_M, simulate_epoch,
 )
 from tests.estimation.test_constrained_search import _bootstrap  # noqa: E402
-from worker.estimation.ar_validation import bootstrap_success_rate  # noqa: E402
-from worker.estimation.constrained_search import constrained_search_float  # noqa: E402
-from worker.estimation.lambda_search import AmbiguitySearchError, mlambda  # noqa: E402
+from gnssatt.estimation.ar_validation import bootstrap_success_rate  # noqa: E402
+from gnssatt.estimation.constrained_search import constrained_search_float  # noqa: E402
+from gnssatt.estimation.lambda_search import AmbiguitySearchError, mlambda  # noqa: E402
 
 SEED_TIMING = 100
 SEED_RATES = 200

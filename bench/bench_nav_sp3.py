@@ -39,18 +39,18 @@ FILES = [  # (kind, set, file)
 # Reader snippets: (setup code, call code); `P` is the plain file path.
 READERS = {
     "nav": {
-        "gnssatt": ("from worker.gnss.io.rinex_nav import read_rinex_nav", "read_rinex_nav(P)"),
+        "gnssatt": ("from gnssatt.gnss.io.rinex_nav import read_rinex_nav", "read_rinex_nav(P)"),
         "georinex": ("import georinex", "georinex.load(P)"),
         "rtklib": ("import pyrtklib as rk",
                    "rk.readrnx(P, 1, '', rk.obs_t(), rk.nav_t(), rk.sta_t())"),
     },
     "sp3": {
-        "gnssatt": ("from worker.gnss.io.sp3 import read_sp3", "read_sp3(P)"),
+        "gnssatt": ("from gnssatt.gnss.io.sp3 import read_sp3", "read_sp3(P)"),
         "georinex": ("import georinex", "georinex.load_sp3(P, None)"),
         "rtklib": ("import pyrtklib as rk", "rk.readsp3(P, rk.nav_t(), 0)"),
     },
     "clk": {
-        "gnssatt": ("from worker.gnss.io.rinex_clock import read_rinex_clock", "read_rinex_clock(P)"),
+        "gnssatt": ("from gnssatt.gnss.io.rinex_clock import read_rinex_clock", "read_rinex_clock(P)"),
         "rtklib": ("import pyrtklib as rk", "rk.readrnxc(P, rk.nav_t())"),
         # georinex has no RINEX clock reader.
     },

@@ -51,8 +51,8 @@ def make_set106(workdir: Path) -> list[Path]:
     """Three RINEX 3.04 files (antennas GPS-0/1/2), 6360 epochs at 1 Hz, 12 GPS satellites, from SEED."""
     from types import SimpleNamespace
 
-    from worker.gnss.io.rinex_obs_write import write_rinex_obs
-    from worker.gnss.time import GpsTime
+    from gnssatt.gnss.io.rinex_obs_write import write_rinex_obs
+    from gnssatt.gnss.time import GpsTime
 
     paths = []
     n_ep, n_sat = 106 * 60, 12
@@ -97,7 +97,7 @@ def make_set106(workdir: Path) -> list[Path]:
 
 
 def real_inputs(workdir: Path) -> list[Path]:
-    from worker.gnss.io.compression import read_text_bytes
+    from gnssatt.gnss.io.compression import read_text_bytes
 
     real = REPO.parent / "shared" / "data" / "real"
     out = []
@@ -120,7 +120,7 @@ def real_inputs(workdir: Path) -> list[Path]:
 # --- the tools ---------------------------------------------------------------------------------------------
 
 def run_gnssatt(paths):
-    from worker.gnss.io.rinex_obs import read_rinex_obs
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
 
     return [read_rinex_obs(p) for p in paths]
 
@@ -172,7 +172,7 @@ def child(tool: str, paths: list[str]) -> None:
     elif tool == "georinex":
         import georinex  # noqa: F401
     else:
-        import worker.gnss.io.rinex_obs  # noqa: F401
+        import gnssatt.gnss.io.rinex_obs  # noqa: F401
     base = _hwm_kib()
     t0 = time.perf_counter()
     fn([Path(p) for p in paths])

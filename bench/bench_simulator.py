@@ -28,7 +28,7 @@ LIMIT_S = 20.0
 
 
 def one_run(out: Path, overrides: dict) -> tuple[float, dict, dict]:
-    from worker.sim import simulate_scenario
+    from gnssatt.sim import simulate_scenario
 
     marks = []
     t0 = time.perf_counter()

@@ -32,10 +32,10 @@ GRACE = ROOT.parent / "shared" / "data" / "real" / "leo_grace_a_2007080"
 
 
 def _load():
-    from worker.gnss.io.rinex_clock import read_rinex_clock
-    from worker.gnss.io.rinex_nav import read_rinex_nav
-    from worker.gnss.io.rinex_obs import read_rinex_obs
-    from worker.gnss.io.sp3 import read_sp3
+    from gnssatt.gnss.io.rinex_clock import read_rinex_clock
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+    from gnssatt.gnss.io.sp3 import read_sp3
 
     return dict(nav=read_rinex_nav(GRACE / "brdc0800.07n.gz"), sp3=read_sp3(GRACE / "cod14193.sp3.gz"),
                 clk=read_rinex_clock(GRACE / "cod14193.clk.gz"), ref=read_sp3(GRACE / "GRAA_07_080.sp3.gz"),
@@ -44,7 +44,7 @@ def _load():
 
 def _errors(sol, ref):
     """(3-D error (n,), radial error (n,), velocity error (n,)) against the reference orbit."""
-    from worker.gnss.orbits.sp3_interp import interpolate_sp3, interpolate_sp3_velocity
+    from gnssatt.gnss.orbits.sp3_interp import interpolate_sp3, interpolate_sp3_velocity
 
     pos, _ = interpolate_sp3(ref, ["L09"], sol.time)
     vel = interpolate_sp3_velocity(ref, ["L09"], sol.time)
@@ -56,7 +56,7 @@ def _errors(sol, ref):
 
 
 def _row(name, smoothing, sol, data, seconds):
-    from worker.gnss.positioning import FLAG_HIGH_PDOP, FLAG_RAIM_FAILED, FLAG_RAIM_UNTESTED
+    from gnssatt.gnss.positioning import FLAG_HIGH_PDOP, FLAG_RAIM_FAILED, FLAG_RAIM_UNTESTED
 
     e3, rad, ev = _errors(sol, data["ref"])
     ok = np.isfinite(e3)
@@ -74,8 +74,8 @@ def _row(name, smoothing, sol, data, seconds):
 
 
 def run_spp(data, runs: int) -> list[dict]:
-    from worker.gnss.ephemeris import BroadcastEphemeris, PreciseEphemeris
-    from worker.gnss.positioning import spp
+    from gnssatt.gnss.ephemeris import BroadcastEphemeris, PreciseEphemeris
+    from gnssatt.gnss.positioning import spp
 
     rows = []
     cases = [("broadcast", BroadcastEphemeris(data["nav"]), None),
@@ -97,8 +97,8 @@ def run_spp(data, runs: int) -> list[dict]:
 def run_ablations(data) -> list[dict]:
     """CODE, code only: without the satellite antenna offsets, and with the previous model (elevation weights,
     no variance calibration, no arc screening), one run each."""
-    from worker.gnss.ephemeris import PreciseEphemeris
-    from worker.gnss.positioning import spp
+    from gnssatt.gnss.ephemeris import PreciseEphemeris
+    from gnssatt.gnss.positioning import spp
 
     rows = []
     for label, eph, kw in (
@@ -115,12 +115,12 @@ def run_ablations(data) -> list[dict]:
 
 
 def run_alignment(runs: int) -> dict:
-    from worker.gnss.alignment import align_to_gps_epochs
-    from worker.gnss.ephemeris import BroadcastEphemeris
-    from worker.gnss.io.rinex_nav import read_rinex_nav
-    from worker.gnss.io.rinex_obs import read_rinex_obs
-    from worker.gnss.positioning import spp
-    from worker.sim import simulate_scenario
+    from gnssatt.gnss.alignment import align_to_gps_epochs
+    from gnssatt.gnss.ephemeris import BroadcastEphemeris
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+    from gnssatt.gnss.positioning import spp
+    from gnssatt.sim import simulate_scenario
 
     with tempfile.TemporaryDirectory() as d:
         res = simulate_scenario("hard", Path(d), seed=0, overrides={"duration_s": 1800.0, "truth_components": False})

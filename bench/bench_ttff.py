@@ -8,7 +8,7 @@ on one and two workers.
     .venv/bin/python -m bench.bench_ttff job     --count 200 --workers 1 2        # -> /tmp/bench_ttff_job.json
     .venv/bin/python -m bench.bench_ttff report  [--rtk A.json B.json] [--write]  # tables; --write: BENCHMARKS.md
 
-Starts (worker.ttff.starts): yaw +-180, pitch +-70, roll +-40 deg from Earth pointing, slewing back at a peak rate
+Starts (gnssatt.ttff.starts): yaw +-180, pitch +-70, roll +-40 deg from Earth pointing, slewing back at a peak rate
 uniform in 0.1-0.5 deg/s, CASSIOPE-like antennas, simulator preset `ttff` as it is (its realism: docs/ttff.md
 "Realism"), 120 s per start, seed named on the command line. Same seed -> same files (RTKLIB's bench re-simulates
 them: bench/bench_ttff_rtklib.py).
@@ -85,7 +85,7 @@ def satellite_counts(ss, step_s: float) -> list[list[int]]:
     above the Table 2 C/N0 mask on both antennas (the count epoch_problem's usability rules see)."""
     import numpy as np
 
-    from worker.ttff.single_epoch import SingleEpochOptions
+    from gnssatt.ttff.single_epoch import SingleEpochOptions
 
     pobs, geom, t = ss.pobs, ss.geom, ss.t_s
     f = pobs.signals.index("L1")
@@ -106,10 +106,10 @@ def cmd_cubesat(args) -> None:
     every sampled epoch of every set counts (acquisition included unless --no-acquisition)."""
     from threadpoolctl import threadpool_limits
 
-    from worker.sim import simulate_scenario
-    from worker.sim.scenarios import make_params
-    from worker.ttff.data import load_study_set
-    from worker.ttff.study import StudyOptions, run_set
+    from gnssatt.sim import simulate_scenario
+    from gnssatt.sim.scenarios import make_params
+    from gnssatt.ttff.data import load_study_set
+    from gnssatt.ttff.study import StudyOptions, run_set
 
     threadpool_limits(1)
     duration = args.duration if args.duration else make_params("cubesat").duration_s
@@ -140,7 +140,7 @@ def cubesat_lines(cubesat: dict) -> str:
     """Markdown lines of a cubesat run: success per method and baseline, and the satellite-count distribution."""
     from collections import Counter
 
-    from worker.ttff.study import summarize
+    from gnssatt.ttff.study import summarize
 
     cr = [row for r in cubesat["results"] for row in r["runs"]]
     cs = summarize(cr)["methods"]
@@ -221,7 +221,7 @@ def _pct(x) -> str:
 
 def report(study: dict, cubesat: dict | None, job: dict | None, rtk: dict | None = None) -> str:
     from bench._report import machine_line
-    from worker.ttff.study import summarize
+    from gnssatt.ttff.study import summarize
 
     runs = [row for r in study["results"] for row in r["runs"]]
     s = summarize(runs)["methods"]

@@ -14,7 +14,7 @@ tag, so receivers with free-running clocks give it wrong fixes unless their cloc
 `ttff` preset's receivers are clock-steered (|dt| < 0.3 us), where this does not matter.
 
 Scoring against the truth attitude (reference attitude of the set): a fixed epoch (Q = 1) whose baseline direction
-is more than 3 deg from the truth is a wrong fix (worker.ttff.single_epoch.WRONG_FIX_DEG); TTFF = time of the first
+is more than 3 deg from the truth is a wrong fix (gnssatt.ttff.single_epoch.WRONG_FIX_DEG); TTFF = time of the first
 fixed epoch from the first epoch of the files.
 """
 from __future__ import annotations
@@ -43,7 +43,7 @@ def _angle_deg(u, v) -> np.ndarray:
 
 def score_rtklib(sol, ss, j: int, wrong_deg: float) -> dict:
     """TTFF, instant fix, wrong fixes, fixed share and direction errors of one RTKLIB run on baseline j."""
-    from worker.gnss.frames import R_enu_from_ecef, ecef_to_geodetic
+    from gnssatt.gnss.frames import R_enu_from_ecef, ecef_to_geodetic
 
     keys = sol.epoch_keys_ms()
     tags = ss.pobs.time.s.astype(np.int64) * 1000 + np.round(ss.pobs.time.frac * 1000).astype(np.int64)
@@ -72,9 +72,9 @@ def score_rtklib(sol, ss, j: int, wrong_deg: float) -> dict:
 def run(count: int, seed: int, duration_s: float, out: Path, first: int = 0) -> None:
     from bench.bench_ttff import set_files, study_payloads
     from bench.rtklib_runner import options_for, run_postpos
-    from worker.sim import simulate_scenario
-    from worker.ttff.data import load_study_set
-    from worker.ttff.single_epoch import WRONG_FIX_DEG
+    from gnssatt.sim import simulate_scenario
+    from gnssatt.ttff.data import load_study_set
+    from gnssatt.ttff.single_epoch import WRONG_FIX_DEG
 
     pl = study_payloads(count, seed, duration_s)[first:]
     results = []
@@ -153,7 +153,7 @@ def merge_parts(paths: list[Path]) -> dict:
 
 def comparison_markdown(rtk_doc: dict, study_doc: dict) -> str:
     """One table: gnssatt (study, the same starts) and RTKLIB per configuration and baseline."""
-    from worker.ttff.study import summarize
+    from gnssatt.ttff.study import summarize
 
     sets = {r["set"] for r in rtk_doc["results"]}
     runs = [row for r in study_doc["results"] if r["label"] in sets for row in r["runs"]]

@@ -134,7 +134,7 @@ def cmd_fetch(args) -> None:
 
 
 def cmd_simulate(args) -> None:
-    from worker.sim import list_scenarios, simulate_scenario
+    from gnssatt.sim import list_scenarios, simulate_scenario
 
     if args.list:
         for name, params in list_scenarios().items():

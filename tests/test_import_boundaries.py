@@ -1,5 +1,6 @@
-"""Science never imports the web side: each science module, imported alone in a fresh process, must not
-pull fastapi, starlette, sqlalchemy, huey, httpx or the `app` package into sys.modules."""
+"""The science library never imports the service: each module of `gnssatt`, imported alone in a fresh process,
+must not pull fastapi, starlette, sqlalchemy, huey, httpx, redis, psycopg, uvicorn or the service's own packages
+(`app`, `worker`, `client`, `migrations`) into sys.modules."""
 from __future__ import annotations
 
 import subprocess
@@ -9,21 +10,17 @@ import pytest
 
 from tests.conftest import REPO_ROOT
 
-FORBIDDEN = ("fastapi", "starlette", "sqlalchemy", "huey", "httpx", "app")
+FORBIDDEN = ("fastapi", "starlette", "sqlalchemy", "huey", "httpx", "redis", "psycopg", "uvicorn", "app",
+             "worker", "client", "migrations")
 SCIENCE = sorted(
-    ".".join(p.relative_to(REPO_ROOT).with_suffix("").parts)
-    for root in ("worker/gnss", "worker/sim", "worker/estimation", "worker/attitude", "worker/calibration",
-                 "worker/plots", "worker/ttff")
-    if (REPO_ROOT / root).is_dir()
-    for p in (REPO_ROOT / root).rglob("*.py")
+    ".".join(p.relative_to(REPO_ROOT).with_suffix("").parts).removesuffix(".__init__")
+    for p in (REPO_ROOT / "gnssatt").rglob("*.py")
 )
 
 
-SCIENCE.append("worker.report")
-
-
 def test_science_modules_found():
-    assert "worker.gnss.time" in SCIENCE and "worker.gnss.io.sniff" in SCIENCE
+    assert "gnssatt.gnss.time" in SCIENCE and "gnssatt.gnss.io.sniff" in SCIENCE and "gnssatt.report" in SCIENCE
+    assert "gnssatt" in SCIENCE
 
 
 @pytest.mark.parametrize("module", SCIENCE)

@@ -163,7 +163,7 @@ class JobContext:
     def publish_pcv_map(self, name: str, doc: dict) -> None:
         """Keep a PCV map (CONVENTIONS JSON) as the next version of `name` in the team's maps, published
         with the products when the job succeeds (and never by a failed or repeated attempt)."""
-        from worker.gnss.io.pcv_map import parse_pcv_map
+        from gnssatt.gnss.io.pcv_map import parse_pcv_map
 
         parse_pcv_map(doc, name)  # refuse a malformed map now, not at publication
         self.pcv_maps.append((name, doc))

@@ -9,7 +9,7 @@ from __future__ import annotations
 import traceback
 from typing import Any
 
-from worker.gnss.io.errors import ParseError
+from gnssatt.gnss.io.errors import ParseError
 
 PROBLEM_TYPE_BASE = "https://gnssatt.dev/problems/"
 

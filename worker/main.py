@@ -63,10 +63,10 @@ def _warm_up_kernels() -> None:
     """Load (or compile, the first time on this machine) the attitude filter's numba kernels before taking jobs,
     so the first job does not pay it (docs/attitude.md "Speed")."""
     try:
-        from worker.attitude.kernels import warm_up as warm_up_attitude
-        from worker.attitude.qc_kernels import warm_up as warm_up_qc
-        from worker.attitude.update_kernels import warm_up as warm_up_update
-        from worker.estimation.ekf_kernels import warm_up as warm_up_ekf
+        from gnssatt.attitude.kernels import warm_up as warm_up_attitude
+        from gnssatt.attitude.qc_kernels import warm_up as warm_up_qc
+        from gnssatt.attitude.update_kernels import warm_up as warm_up_update
+        from gnssatt.estimation.ekf_kernels import warm_up as warm_up_ekf
 
         warm_up_ekf()
         warm_up_attitude()

@@ -149,7 +149,7 @@ def _publish_success(rt: Runtime, job_id: str, token: str, ctx: JobContext) -> b
         if ctx.pcv_maps:
             team_id = s.execute(select(Job.team_id).where(Job.id == job_id)).scalar_one()
             from app.store.pcv import add_pcv_map
-            from worker.gnss.io.pcv_map import parse_pcv_map
+            from gnssatt.gnss.io.pcv_map import parse_pcv_map
 
             for name, doc in ctx.pcv_maps:
                 add_pcv_map(s, rt.blobs, team_id, name, parse_pcv_map(doc, name), source_job_id=job_id)

@@ -9,7 +9,7 @@ a CSRF token: a random value kept in the HttpOnly `gnssatt_csrf` cookie and repe
 (scripts, the CLI) are untouched.
 
 Pages read the database directly (team-scoped like the API) and never run science: plots are products made
-by the worker (worker/plots); the interactive charts (static/charts.js, uPlot) read the job's own CSV products
+by the worker (gnssatt/plots); the interactive charts (static/charts.js, uPlot) read the job's own CSV products
 through the download URLs.
 """
 from __future__ import annotations
@@ -31,7 +31,7 @@ from app.deps import SessionDep
 from app.keys import team_for_key
 from app.models import Job, JobSet, ObservationSet, PcvMap, Product, Team
 from app.problems import ProblemError, problem_response
-from worker.report import format_value
+from gnssatt.report import format_value
 
 APP_DIR = Path(__file__).resolve().parents[1]
 TEMPLATES = Jinja2Templates(directory=str(APP_DIR / "templates"))

@@ -13,9 +13,9 @@ from app.problems import Problem, ProblemError, not_found
 from app.schemas.common import Page
 from app.schemas.pcv_maps import PcvMapCreate, PcvMapPublic
 from app.store.pcv import add_pcv_map
-from worker.gnss.io.errors import ParseError
-from worker.gnss.io.pcv_map import PcvMap as PcvGrid
-from worker.gnss.io.pcv_map import parse_pcv_map, read_pcv_antex, write_pcv_antex
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.io.pcv_map import PcvMap as PcvGrid
+from gnssatt.gnss.io.pcv_map import parse_pcv_map, read_pcv_antex, write_pcv_antex
 
 router = APIRouter(prefix="/v1/pcv-maps", tags=["PCV maps"])
 ERRORS = {401: {"model": Problem}, 404: {"model": Problem}, 422: {"model": Problem}}

@@ -159,7 +159,7 @@
       const used = t.has("used") ? t.col("used").map(truthy) : null;
       let phase = t.num("phase_residual_mm"), code = t.num("code_residual_m");
       if (!phase && t.has("phase_residual_m")) phase = t.num("phase_residual_m").map((v) => (v === null ? null : 1000 * v));
-      if (t.has("observable") && t.has("residual_m")) { // long layout: one row per observable (worker/attitude)
+      if (t.has("observable") && t.has("residual_m")) { // long layout: one row per observable (gnssatt/attitude)
         const kind = t.col("observable").map((k) => k.trim().toLowerCase()), r = t.num("residual_m");
         phase = r.map((v, i) => (kind[i] === "phase" && v !== null ? 1000 * v : null));
         code = r.map((v, i) => (kind[i] === "code" ? v : null));

@@ -8,7 +8,7 @@ from sqlalchemy.orm import Session
 
 from app.models import PcvMap
 from app.store.blobs import BlobStore
-from worker.gnss.io.pcv_map import PcvMap as PcvGrid
+from gnssatt.gnss.io.pcv_map import PcvMap as PcvGrid
 
 
 def add_pcv_map(session: Session, blobs: BlobStore, team_id: str, name: str, grid: PcvGrid,

@@ -9,9 +9,9 @@ from app.models import ObservationSet, SetFile
 from app.problems import ProblemError
 from app.store.blobs import BlobStore
 from app.store.uploads import StagedUpload
-from worker.gnss.io.errors import ParseError
-from worker.gnss.io.platform import match_observation_files, parse_platform
-from worker.gnss.io.sniff import identify
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.io.platform import match_observation_files, parse_platform
+from gnssatt.gnss.io.sniff import identify
 
 
 @dataclass

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from tests.gnss.test_pcv_map import make_map
-from worker.gnss.io.pcv_map import parse_pcv_map, read_pcv_antex
+from gnssatt.gnss.io.pcv_map import parse_pcv_map, read_pcv_antex
 
 
 def test_upload_list_download_round_trip(api):

@@ -11,7 +11,7 @@ CLEAN = {"pcv": False, "pco": False, "multipath": False, "noise_grows_with_cn0":
 
 
 def _simulate(tmp_path_factory, name: str, scenario: str, seed: int, overrides: dict) -> Path:
-    from worker.sim import simulate_scenario
+    from gnssatt.sim import simulate_scenario
 
     out = tmp_path_factory.mktemp(name)
     simulate_scenario(scenario, out, seed=seed, overrides=overrides)

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from tests.attitude.truth import _n_at, load_arcs
-from worker.gnss.constants import C_M_S
+from gnssatt.gnss.constants import C_M_S
 
 __all__ = ["true_integer_floor", "used_phase_mask"]
 

@@ -15,8 +15,8 @@ import pytest
 
 from tests.attitude.conftest import set_files
 from tests.attitude.floor import true_integer_floor, used_phase_mask
-from worker.attitude.process import load_inputs, process
-from worker.attitude.settings import ALL_PHASES, AttitudeSettings
+from gnssatt.attitude.process import load_inputs, process
+from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
 
 #: the clean pass's white phase noise per receiver (simulator preset, truth/observations_*.csv n_phase_*):
 #: L1 3 mm, L2 4.5 mm; one single difference sqrt(2) times that
@@ -30,7 +30,7 @@ def _angles_deg(b, t):
 
 def _true_baselines(d, sol):
     from tests.attitude.test_attitude_sim import truth_at
-    from worker.gnss import rotations as rot
+    from gnssatt.gnss import rotations as rot
 
     q, _ = truth_at(d, sol)      # at sol.att_epochs
     R = rot.quat_to_dcm(q)

@@ -1,4 +1,4 @@
-"""The adaptive angular-velocity noise (worker/attitude/adaptive.py, setting `adaptive_omega_noise`: causal
+"""The adaptive angular-velocity noise (gnssatt/attitude/adaptive.py, setting `adaptive_omega_noise`: causal
 manoeuvre detection) on its own and on the two slews of seed 000 Fig. 6 (short clean passes): it must bring the lag
 of Table 1's random walk in the fast pitch manoeuvre below 0.3 deg and leave a slow manoeuvre alone."""
 from __future__ import annotations
@@ -8,9 +8,9 @@ import pytest
 
 from tests.attitude.conftest import set_files
 from tests.attitude.test_attitude_sim import errors
-from worker.attitude.adaptive import ManoeuvreDetector, equivalent_measurement, info_update
-from worker.attitude.process import load_inputs, process
-from worker.attitude.settings import AttitudeSettings
+from gnssatt.attitude.adaptive import ManoeuvreDetector, equivalent_measurement, info_update
+from gnssatt.attitude.process import load_inputs, process
+from gnssatt.attitude.settings import AttitudeSettings
 
 DEG = np.pi / 180.0
 
@@ -111,7 +111,7 @@ PITCH_UP = {"start_gps": "2018-06-06T16:31:00", "duration_s": 200.0,
 @pytest.fixture(scope="module")
 def pitch_up_pass(tmp_path_factory):
     from tests.attitude.conftest import CLEAN
-    from worker.sim import simulate_scenario
+    from gnssatt.sim import simulate_scenario
 
     out = tmp_path_factory.mktemp("pitch_up")
     simulate_scenario("slew", out, seed=1, overrides={**PITCH_UP, **CLEAN})

@@ -1,10 +1,10 @@
-"""worker.attitude.kernels (numba) give the bits of the numpy code of run_filter they replace, on random inputs."""
+"""gnssatt.attitude.kernels (numba) give the bits of the numpy code of run_filter they replace, on random inputs."""
 from __future__ import annotations
 
 import numpy as np
 
-from worker.attitude.fastops import count_pairs, median1d, nanmedian1, nz
-from worker.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, count_pairs_masked,
+from gnssatt.attitude.fastops import count_pairs, median1d, nanmedian1, nz
+from gnssatt.attitude.kernels import (POW2, cn0_growth_samples, cn0_growth_update, count_pairs_masked,
                                      masked_median_axis1, measurement_rows, np_sum, white_noise_update)
 
 NOISE_EPOCHS, MIN_EPOCHS = 300.0, 10
@@ -117,9 +117,9 @@ def test_noise_estimators_equal_numpy_over_many_epochs():
 
 
 def test_round_newcomers_equals_the_dense_dd_products():
-    """worker.attitude.ambiguity.round_newcomers takes D x and diag(D P D^T) from the two non-zeros of each DD row:
+    """gnssatt.attitude.ambiguity.round_newcomers takes D x and diag(D P D^T) from the two non-zeros of each DD row:
     the same bits as the dense products (which only add exact zeros), on random states."""
-    from worker.attitude.ambiguity import round_newcomers
+    from gnssatt.attitude.ambiguity import round_newcomers
 
     rng = np.random.default_rng(9)
     for _ in range(500):

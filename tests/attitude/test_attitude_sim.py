@@ -12,11 +12,11 @@ import pytest
 
 from tests.attitude.conftest import set_files
 from tests.attitude.truth import score_fixes
-from worker.attitude.process import load_inputs, process
-from worker.attitude.products import all_products
-from worker.attitude.settings import AttitudeSettings
-from worker.gnss import rotations as rot
-from worker.gnss.time import GpsTime
+from gnssatt.attitude.process import load_inputs, process
+from gnssatt.attitude.products import all_products
+from gnssatt.attitude.settings import AttitudeSettings
+from gnssatt.gnss import rotations as rot
+from gnssatt.gnss.time import GpsTime
 
 
 def truth_at(d, sol):

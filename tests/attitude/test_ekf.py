@@ -1,9 +1,9 @@
-"""worker.estimation.ekf against textbook formulas and a generic RK4."""
+"""gnssatt.estimation.ekf against textbook formulas and a generic RK4."""
 from __future__ import annotations
 
 import numpy as np
 
-from worker.estimation.ekf import (_skew, _skew_batch, joseph_update, joseph_update_sparse, rk4_integrate,
+from gnssatt.estimation.ekf import (_skew, _skew_batch, joseph_update, joseph_update_sparse, rk4_integrate,
                                    rotation_rk4_stm, sparse_rows_to_dense)
 
 

@@ -1,11 +1,11 @@
-"""worker.estimation.ekf_kernels (numba) against the straightforward numpy versions they replace, on random inputs:
+"""gnssatt.estimation.ekf_kernels (numba) against the straightforward numpy versions they replace, on random inputs:
 bit for bit where the filter's results must not change."""
 from __future__ import annotations
 
 import numpy as np
 
-from worker.estimation.ekf import _skew, rotation_rk4_stm
-from worker.estimation.ekf_kernels import (gather_AHt, gather_HA, joseph_combine, propagate_rotation_cov,
+from gnssatt.estimation.ekf import _skew, rotation_rk4_stm
+from gnssatt.estimation.ekf_kernels import (gather_AHt, gather_HA, joseph_combine, propagate_rotation_cov,
                                           rotation_rk4_stm_kernel, symmetric_plus_diag, warm_up)
 
 

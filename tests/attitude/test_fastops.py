@@ -1,8 +1,8 @@
-"""worker.attitude.fastops gives numpy's results bit for bit (the filter's speed helpers must not change it)."""
+"""gnssatt.attitude.fastops gives numpy's results bit for bit (the filter's speed helpers must not change it)."""
 import numpy as np
 import pytest
 
-from worker.attitude.fastops import clip, count_pairs, median1d, nanmedian1, nz
+from gnssatt.attitude.fastops import clip, count_pairs, median1d, nanmedian1, nz
 
 
 @pytest.mark.parametrize("shape", [(3, 7), (2, 9, 2), (4, 1)])

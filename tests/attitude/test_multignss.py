@@ -9,11 +9,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from worker.attitude.observations import build_platform_obs
-from worker.attitude.settings import (SIGNALS, SYSTEM_SIGNALS, AttitudeSettings, cn0_mask_of, effective_signals,
+from gnssatt.attitude.observations import build_platform_obs
+from gnssatt.attitude.settings import (SIGNALS, SYSTEM_SIGNALS, AttitudeSettings, cn0_mask_of, effective_signals,
                                       signal_system)
-from worker.gnss.constants import C_M_S
-from worker.gnss.io.rinex_obs import read_rinex_obs
+from gnssatt.gnss.constants import C_M_S
+from gnssatt.gnss.io.rinex_obs import read_rinex_obs
 
 # G: L1 + L2 (W); E: E1 + E5b + E5a; C: B1I + B2I; J: L1 only (a system with one frequency); R: must be left out
 OBS_TYPES = {
@@ -135,7 +135,7 @@ def test_effective_signals_and_masks():
 
 
 def test_filter_state_has_one_code_bias_per_extra_signal():
-    from worker.attitude.filter import _State
+    from gnssatt.attitude.filter import _State
 
     two = _State(2, 10, 2, True, True)
     # GPS L1 + L2 (the default): the layout of before multi-GNSS, one bias at b + 4, phase clocks after it
@@ -174,10 +174,10 @@ def test_multi_system_orbits_explain_the_real_pseudoranges_beidou_geo_included()
     receiver clock within each system to a few metres (ionosphere and troposphere left in). A GEO computed like a
     MEO (no -5 deg / Omega_e t_k rotation) or BeiDou time taken as GPS time would be kilometres off."""
     from tests.conftest import real_set
-    from worker.attitude.process import AttitudeInputs, _sat_state
-    from worker.gnss.geometry import elevation_azimuth_local, emission_time_and_position
-    from worker.gnss.io.rinex_nav import read_rinex_nav
-    from worker.gnss.orbits.broadcast import BEIDOU_GEO_PRNS
+    from gnssatt.attitude.process import AttitudeInputs, _sat_state
+    from gnssatt.gnss.geometry import elevation_azimuth_local, emission_time_and_position
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.orbits.broadcast import BEIDOU_GEO_PRNS
 
     d = real_set("static_1m_mosaicx5_nagoya_2024")
     obs = read_rinex_obs(d / "base.obs", name="base.obs")
@@ -251,9 +251,9 @@ def test_a_system_without_ephemerides_is_left_out_with_a_warning():
     import dataclasses
 
     from tests.conftest import real_set
-    from worker.attitude.process import AttitudeInputs, InputProblem, _sat_state
-    from worker.gnss.io.rinex_nav import read_rinex_nav
-    from worker.gnss.time import GpsTime
+    from gnssatt.attitude.process import AttitudeInputs, InputProblem, _sat_state
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.time import GpsTime
 
     d = real_set("static_1m_mosaicx5_nagoya_2024")
     nav = read_rinex_nav(d / "base.nav", name="base.nav")

@@ -1,6 +1,6 @@
 """Differential PCV maps applied in the attitude filter (issue 6 item 4, issue 8 item 4).
 
-The lookup (worker.attitude.pcv_correction) against a direct evaluation of the function the map samples and
+The lookup (gnssatt.attitude.pcv_correction) against a direct evaluation of the function the map samples and
 against the simulator's own bilinear interpolation; a simulated pass with large injected PCV processed with the
 simulator's true differential maps and without: the map removes the attitude bias the PCV causes; the job config
 `pcv_map_ids` resolved through the JobContext.
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from tests.attitude.conftest import CLEAN, _simulate, set_files
-from worker.attitude.pcv_correction import epoch_correction_m, lookup_mm, pcv_table
+from gnssatt.attitude.pcv_correction import epoch_correction_m, lookup_mm, pcv_table
 from worker.context import InputFile, InputSet, JobContext
 from worker.errors import JobInputError
 from worker.jobs.attitude import AttitudeConfig, maps_for_settings
@@ -49,7 +49,7 @@ def test_lookup_matches_the_sampled_function_and_wraps_in_azimuth():
 
 
 def test_lookup_equals_the_simulators_bilinear_map():
-    from worker.sim.observables import PCV_AZ_DEG, PCV_EL_DEG, bilinear_pcv_mm, pcv_grid_mm
+    from gnssatt.sim.observables import PCV_AZ_DEG, PCV_EL_DEG, bilinear_pcv_mm, pcv_grid_mm
 
     grid = pcv_grid_mm(np.random.default_rng(5), 40.0)
     tab = pcv_table(PCV_AZ_DEG, PCV_EL_DEG, grid)        # nodes 0..360 (360 == 0), -90..90
@@ -71,7 +71,7 @@ def test_empty_bins_are_never_filled_in():
 
 def test_epoch_correction_in_the_first_antennas_frame():
     """A downward-looking first antenna (boresight -z body): the body line of sight is rotated into its frame."""
-    from worker.gnss.geometry import R_antenna_from_body, azimuth_elevation_antenna
+    from gnssatt.gnss.geometry import R_antenna_from_body, azimuth_elevation_antenna
 
     az, el, v = _bin_grid()
     tables = {(0, 1): pcv_table(az, el, v)}
@@ -109,8 +109,8 @@ def true_maps(d: Path) -> dict:
 
 def test_true_maps_remove_the_attitude_bias(pcv_pass):
     from tests.attitude.test_attitude_sim import errors
-    from worker.attitude.process import load_inputs, process
-    from worker.attitude.settings import AttitudeSettings
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.settings import AttitudeSettings
 
     inputs = load_inputs(set_files(pcv_pass))
     maps = true_maps(pcv_pass)
@@ -173,9 +173,9 @@ def test_job_config_resolves_maps_from_the_store(tmp_path, pcv_pass):
 def test_empty_bins_exclude_or_keep(pcv_pass):
     """A map with a hole: with "exclude" the phases in it leave the solution once fixed (reason pcv_empty), with
     "keep" they stay in, uncorrected."""
-    from worker.attitude.filter import REASONS
-    from worker.attitude.process import load_inputs, process
-    from worker.attitude.settings import AttitudeSettings
+    from gnssatt.attitude.filter import REASONS
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.settings import AttitudeSettings
 
     maps = true_maps(pcv_pass)
     holed = {}

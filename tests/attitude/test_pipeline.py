@@ -81,9 +81,9 @@ def test_product_tables_are_the_csv_products_as_columns(clean_pass):
     """The plots are drawn from product_tables (no re-parsing of residuals.csv): same columns, rows, names and
     times as the CSV texts read back, numbers equal to the texts' rounding, empty cells where NaN."""
     from tests.attitude.conftest import set_files
-    from worker.attitude.process import load_inputs, process
-    from worker.attitude.products import all_products, product_tables
-    from worker.plots.common import gps_time, read_csv_table
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.products import all_products, product_tables
+    from gnssatt.plots.common import gps_time, read_csv_table
 
     sol = process(load_inputs(set_files(clean_pass)), AttitudeConfig(mode="kinematic").to_settings())
     texts, tables = all_products(sol), product_tables(sol)

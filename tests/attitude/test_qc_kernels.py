@@ -1,4 +1,4 @@
-"""worker.attitude.qc_kernels (numba) give the bits of the numpy code of run_filter they replaced: each test runs
+"""gnssatt.attitude.qc_kernels (numba) give the bits of the numpy code of run_filter they replaced: each test runs
 that numpy code (kept here as the reference) and the kernels on random epochs with events (clock jumps, slips,
 half cycles, gaps, missing data) and compares every output."""
 from __future__ import annotations
@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 
 from tests.attitude.test_attitude_kernels import _numpy_noise
-from worker.attitude.fastops import clip as _clip, nanmedian1, nz as _nz
-from worker.attitude.kernels import cn0_growth_samples
-from worker.attitude.qc_kernels import (clip_pair, epoch_geometry, growth_weights, propagate_dynamic,
+from gnssatt.attitude.fastops import clip as _clip, nanmedian1, nz as _nz
+from gnssatt.attitude.kernels import cn0_growth_samples
+from gnssatt.attitude.qc_kernels import (clip_pair, epoch_geometry, growth_weights, propagate_dynamic,
                                         propagate_kinematic, qc_epoch, record_epoch, reset_white_clocks, td_checks)
-from worker.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
+from gnssatt.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 
 DEG = np.pi / 180.0
 CLOCK_JUMP_M, TD_MAX_DT_S, NOISE_EPOCHS, MIN_EPOCHS = 0.5e-3 * 299792458.0 * 0.5, 3.0, 300.0, 10
@@ -369,7 +369,7 @@ def test_record_epoch_equals_the_former_records():
 
 
 def test_take_and_grow_square_are_the_numpy_indexing():
-    from worker.attitude.qc_kernels import grow_square, take_square
+    from gnssatt.attitude.qc_kernels import grow_square, take_square
 
     rng = np.random.default_rng(10)
     for n in (1, 5, 40):
@@ -424,7 +424,7 @@ class _NumpyStates:
 
 
 def test_state_add_and_remove_equal_the_numpy_bookkeeping():
-    from worker.attitude.filter import _State
+    from gnssatt.attitude.filter import _State
 
     rng = np.random.default_rng(12)
     st = _State(2, 9, 2, True, False)

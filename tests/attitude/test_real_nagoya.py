@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from tests.conftest import real_set
-from worker.attitude.process import load_inputs, process
-from worker.attitude.products import all_products
-from worker.attitude.settings import AttitudeSettings
+from gnssatt.attitude.process import load_inputs, process
+from gnssatt.attitude.products import all_products
+from gnssatt.attitude.settings import AttitudeSettings
 
 PLATFORM = {
     "name": "nagoya-dual", "kind": "terrestrial",

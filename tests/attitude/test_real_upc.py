@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 from tests.conftest import real_set
-from worker.attitude.process import load_inputs, process
-from worker.attitude.settings import AttitudeSettings
+from gnssatt.attitude.process import load_inputs, process
+from gnssatt.attitude.settings import AttitudeSettings
 
 UPC = "upc1_upc2_38m_barcelona_2010"
 N_EPOCHS = 600                                   # 10 minutes at 1 Hz from 2010-03-18 05:00:00 GPST

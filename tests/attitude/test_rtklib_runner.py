@@ -57,8 +57,8 @@ def test_gps_only_rtklib_agrees_with_gnssatt_not_with_the_multi_gnss_readme(tmp_
     import json
 
     from tests.attitude.test_real_nagoya import PLATFORM
-    from worker.attitude.process import load_inputs, process
-    from worker.attitude.settings import AttitudeSettings
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.settings import AttitudeSettings
 
     sol = _run(tmp_path, **{"pos1-navsys": "1", "pos1-elmask": "10"})
     assert sol.fixed.all()
@@ -85,8 +85,8 @@ def test_multi_gnss_gnssatt_agrees_with_rtklib_epoch_by_epoch(tmp_path):
     import json
 
     from tests.attitude.test_real_nagoya import PLATFORM
-    from worker.attitude.process import load_inputs, process
-    from worker.attitude.settings import TABLE2_MASKS, AttitudeSettings
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.settings import TABLE2_MASKS, AttitudeSettings
 
     r = _run(tmp_path, **{"pos1-navsys": "57", "pos2-armode": "instantaneous"})
     assert r.fixed.all()

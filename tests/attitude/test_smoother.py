@@ -1,4 +1,4 @@
-"""Fixed-interval smoother of the dynamic mode (worker/attitude/smoother.py, setting `smoother`): the RTS recursion
+"""Fixed-interval smoother of the dynamic mode (gnssatt/attitude/smoother.py, setting `smoother`): the RTS recursion
 against the batch least-squares solution of the same linear model, and on seed 000 Fig. 6's pitch manoeuvre
 (clean simulated pass with the pitch-up of 50 deg in one minute) against the forward filter and the truth. The
 adaptive process noise (`smoother_adaptive_noise`): the second forward pass with Table 1's noise reproduces the first,
@@ -11,9 +11,9 @@ import pytest
 from tests.attitude.conftest import CLEAN, _simulate, set_files
 from tests.attitude.test_adaptive import _lag_deg
 from tests.attitude.test_attitude_sim import errors
-from worker.attitude.process import load_inputs, process
-from worker.attitude.settings import ALL_PHASES, AttitudeSettings
-from worker.attitude.smoother import acceleration_noise_rate, rts_smooth
+from gnssatt.attitude.process import load_inputs, process
+from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
+from gnssatt.attitude.smoother import acceleration_noise_rate, rts_smooth
 
 
 def _cv_model(n, dt, q, r, rng):
@@ -160,7 +160,7 @@ def test_job_config_passes_the_smoother_setting():
 def test_second_pass_with_table1_noise_reproduces_the_first(pitch_up, monkeypatch):
     """run_filter's per-epoch q_omega set to Table 1's rate everywhere is the default run, bit for bit (the second
     pass of smoother_adaptive_noise differs from the first only by its noise)."""
-    import worker.attitude.process as P
+    import gnssatt.attitude.process as P
 
     d, _ = pitch_up
     calls = []

@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from worker.attitude.solution import (ML_BODY_SIGMA_M, attitude_from_baselines, attitude_ml, baseline_az_el,
+from gnssatt.attitude.solution import (ML_BODY_SIGMA_M, attitude_from_baselines, attitude_ml, baseline_az_el,
                                      euler_and_sigma)
-from worker.gnss import rotations as rot
+from gnssatt.gnss import rotations as rot
 
 BODY = np.array([[1.04653, -0.07191, 0.0], [0.0, 1.13969, 0.0]])   # CASSIOPE-like (CONVENTIONS.md)
 
@@ -121,7 +121,7 @@ def test_euler_sigma_mapping_matches_numeric_jacobian():
 
 
 def test_baseline_azimuth_elevation_and_sigmas():
-    from worker.gnss.frames import R_enu_from_ecef
+    from gnssatt.gnss.frames import R_enu_from_ecef
 
     lat, lon = np.radians(35.13), np.radians(136.98)
     Renu = R_enu_from_ecef(lat, lon)

@@ -1,17 +1,17 @@
-"""worker.attitude.update_kernels and worker.estimation.ekf_kernels.sequential_update_sparse (numba) against
-independent numpy references: the filter's former numpy code, the batch Joseph update, worker.gnss.rotations.quest."""
+"""gnssatt.attitude.update_kernels and gnssatt.estimation.ekf_kernels.sequential_update_sparse (numba) against
+independent numpy references: the filter's former numpy code, the batch Joseph update, gnssatt.gnss.rotations.quest."""
 from __future__ import annotations
 
 import numpy as np
 
-from worker.attitude.ambiguity import round_newcomers
-from worker.attitude.filter import _cn0_factor, _mp_var
-from worker.attitude.kernels import measurement_rows
-from worker.attitude.update_kernels import (measurement_update, measurement_variances, phase_row_stats,
+from gnssatt.attitude.ambiguity import round_newcomers
+from gnssatt.attitude.filter import _cn0_factor, _mp_var
+from gnssatt.attitude.kernels import measurement_rows
+from gnssatt.attitude.update_kernels import (measurement_update, measurement_variances, phase_row_stats,
                                             quest_dcm, round_newcomers_rows, white_variances, warm_up)
-from worker.estimation.ekf import joseph_update, joseph_update_sparse, sparse_rows_to_dense
-from worker.estimation.ekf_kernels import sequential_update_sparse
-from worker.gnss import rotations as rot
+from gnssatt.estimation.ekf import joseph_update, joseph_update_sparse, sparse_rows_to_dense
+from gnssatt.estimation.ekf_kernels import sequential_update_sparse
+from gnssatt.gnss import rotations as rot
 
 
 def _spd(rng, n, scales):
@@ -319,7 +319,7 @@ def test_warm_up_runs():
 
 def test_fix_newcomers_constrains_like_the_batch_joseph_pseudo_update():
     """fix_newcomers = round_newcomers_rows + the DD pseudo-measurements of filter._pseudo_update (batch Joseph)."""
-    from worker.attitude.update_kernels import fix_newcomers
+    from gnssatt.attitude.update_kernels import fix_newcomers
 
     rng = np.random.default_rng(8)
     n_checked = 0
@@ -361,7 +361,7 @@ def test_fix_newcomers_constrains_like_the_batch_joseph_pseudo_update():
 
 
 def test_store_outputs():
-    from worker.attitude.update_kernels import store_outputs
+    from gnssatt.attitude.update_kernels import store_outputs
 
     rng = np.random.default_rng(9)
     x, P = rng.normal(size=20), rng.normal(size=(20, 20))

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from worker.gnss.time import GpsTime
+from gnssatt.gnss.time import GpsTime
 
 __all__ = ["load_arcs", "score_fixes"]
 

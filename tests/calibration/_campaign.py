@@ -3,7 +3,7 @@ back as InputSets exactly as the service would hand them to a pipeline.
 
 Each set is simulated as pass 0 of its own run (`count: 1`) with its own start time and orbit phase, so all sets
 share the antennas' hidden offsets, PCO and PCV: the simulator draws PCO/PCV per pass index (see
-worker/sim/simulate.py `_rng(seed, pidx, ai, "pcv")`), so its own multi-pass `count` would give every pass
+gnssatt/sim/simulate.py `_rng(seed, pidx, ai, "pcv")`), so its own multi-pass `count` would give every pass
 different antennas.
 """
 from __future__ import annotations
@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 
 from worker.context import InputFile, InputSet
-from worker.gnss.io.sniff import identify
-from worker.gnss.time import GpsTime
+from gnssatt.gnss.io.sniff import identify
+from gnssatt.gnss.time import GpsTime
 
 SPACING_S = 2 * 86400.0 + 5 * 3600.0 + 11 * 60.0  # the calibration preset's pass spacing
 
@@ -23,7 +23,7 @@ SPACING_S = 2 * 86400.0 + 5 * 3600.0 + 11 * 60.0  # the calibration preset's pas
 def simulate_campaign(out: Path, n_sets: int, duration_s: float, *, seed: int = 7, overrides: dict | None = None,
                       spacing_s: float = SPACING_S, start_gps: str = "2018-01-10T03:00:00") -> list[Path]:
     """Directories of n_sets simulated calibration passes (reused when already there)."""
-    from worker.sim import simulate_scenario
+    from gnssatt.sim import simulate_scenario
 
     dirs = []
     t0 = GpsTime.from_iso(start_gps)
@@ -78,8 +78,8 @@ def truth_map_mm(truth: dict, key: tuple, b_calibrated_m: np.ndarray, az_deg: np
     antenna, expressed in the decomposition the calibration uses: with baseline b_cal instead of the physical
     (ARP + PCO of that frequency) baseline b_f the map must also hold -g.(b_f - b_cal) (g the unit line of sight,
     body frame), and it is defined up to a constant (the per-epoch clock). mm."""
-    from worker.gnss.geometry import R_antenna_from_body
-    from worker.sim.observables import bilinear_pcv_mm
+    from gnssatt.gnss.geometry import R_antenna_from_body
+    from gnssatt.sim.observables import bilinear_pcv_mm
 
     doc = truth["pcv"][key]
     grid = np.array([[np.nan if v is None else v for v in row] for row in doc["values_mm"]], float)
@@ -103,7 +103,7 @@ def compare_maps_mm(values_mm: np.ndarray, truth_mm: np.ndarray, weight: np.ndar
 
 def truth_split(truth: dict, pair: tuple, az_deg: np.ndarray, el_deg: np.ndarray, weights: dict,
                 boresight_first=(0.0, 0.0, -1.0)) -> tuple[np.ndarray, dict]:
-    """The injected truth of a baseline in the calibration's decomposition (worker.calibration.decomposition):
+    """The injected truth of a baseline in the calibration's decomposition (gnssatt.calibration.decomposition):
     (baseline (3,) m, {signal: map (n_el, n_az) mm}) such that, over the bins with weight > 0 (bin counts of the
     estimated maps), the maps have no least-squares part a_f - g.db, exactly as the calibration splits its own
     estimate. The physical model per frequency (ARP + PCO baseline b_f, injected differential PCV) is the
@@ -111,9 +111,9 @@ def truth_split(truth: dict, pair: tuple, az_deg: np.ndarray, el_deg: np.ndarray
 
     Args: az_deg (n_az,), el_deg (n_el,) bin centres; weights: signal -> (n_el, n_az) bin counts (0 = empty).
     """
-    from worker.calibration.decomposition import offset_split
-    from worker.gnss.geometry import R_antenna_from_body
-    from worker.sim.observables import bilinear_pcv_mm
+    from gnssatt.calibration.decomposition import offset_split
+    from gnssatt.gnss.geometry import R_antenna_from_body
+    from gnssatt.sim.observables import bilinear_pcv_mm
 
     A, E = np.meshgrid(np.asarray(az_deg, float), np.asarray(el_deg, float))
     a, e = np.radians(A), np.radians(E)

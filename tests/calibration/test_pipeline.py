@@ -173,8 +173,8 @@ def test_held_out_comparison_is_the_attitude_filter_with_the_published_calibrati
     held-out set, a priori vs calibrated baselines + maps, and is exactly what an attitude job with the published
     baselines.json and maps (pcv_map_ids) gives; on this noiseless campaign the calibration removes the
     attitude bias that the Table 3 offsets and the PCV put into the a priori solution."""
-    from worker.attitude.process import load_inputs
-    from worker.calibration.held_out import filter_errors
+    from gnssatt.attitude.process import load_inputs
+    from gnssatt.calibration.held_out import filter_errors
     from worker.jobs.attitude import AttitudeConfig, maps_for_settings
 
     sets = [input_set(d) for d in pcv_campaign]

@@ -5,17 +5,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from worker.calibration.baselines import (BatchSums, BaselineRow, baselines_document, baselines_table_csv,
+from gnssatt.calibration.baselines import (BatchSums, BaselineRow, baselines_document, baselines_table_csv,
                                           batch_sums, body_from_ecef, combine, gate_epochs)
-from worker.calibration.binning import BinSums, Grid2D, accumulate, finalize
-from worker.calibration.kinematic import epoch_lsq, fix_integers
-from worker.calibration.pcv import (FixedPhases, iterate_map, map_change_rms_mm, map_lookup, map_normal,
+from gnssatt.calibration.binning import BinSums, Grid2D, accumulate, finalize
+from gnssatt.calibration.kinematic import epoch_lsq, fix_integers
+from gnssatt.calibration.pcv import (FixedPhases, iterate_map, map_change_rms_mm, map_lookup, map_normal,
                                     residuals_m)
-from worker.calibration.reference import reference_at_epochs, slerp, uncovered_spans
-from worker.gnss.frames import R_gcrf_from_ecef
-from worker.gnss.io.reference_attitude import ReferenceAttitude
-from worker.gnss.rotations import (attitude_error_deg, dcm_to_quat, quat_from_rotvec, quat_multiply, quat_to_dcm)
-from worker.gnss.time import GpsTime
+from gnssatt.calibration.reference import reference_at_epochs, slerp, uncovered_spans
+from gnssatt.gnss.frames import R_gcrf_from_ecef
+from gnssatt.gnss.io.reference_attitude import ReferenceAttitude
+from gnssatt.gnss.rotations import (attitude_error_deg, dcm_to_quat, quat_from_rotvec, quat_multiply, quat_to_dcm)
+from gnssatt.gnss.time import GpsTime
 
 T0 = GpsTime.from_iso("2018-06-06T12:20:00")
 

@@ -1,13 +1,13 @@
-"""The baseline/map split (worker.calibration.decomposition), the Zernike map smoothing
-(worker.calibration.smoothing) and the C/N0 weights of the extraction, against constructed truths."""
+"""The baseline/map split (gnssatt.calibration.decomposition), the Zernike map smoothing
+(gnssatt.calibration.smoothing) and the C/N0 weights of the extraction, against constructed truths."""
 from __future__ import annotations
 
 import numpy as np
 
-from worker.calibration.binning import Grid2D
-from worker.calibration.decomposition import apply_split, bin_los_body, offset_split
-from worker.calibration.extract import cn0_variance_factor
-from worker.calibration.smoothing import smooth_map, zernike_basis
+from gnssatt.calibration.binning import Grid2D
+from gnssatt.calibration.decomposition import apply_split, bin_los_body, offset_split
+from gnssatt.calibration.extract import cn0_variance_factor
+from gnssatt.calibration.smoothing import smooth_map, zernike_basis
 
 GRID = Grid2D.regular(2.5, 1.0)
 BORESIGHT = np.array([0.0, 0.0, -1.0])

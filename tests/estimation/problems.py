@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from worker.estimation.constrained_search import DDBlock, FloatSolution, dd_geometry, single_epoch_float
+from gnssatt.estimation.constrained_search import DDBlock, FloatSolution, dd_geometry, single_epoch_float
 
 #: GPS L1 and L2 wavelengths, metres (c / 1575.42 MHz, c / 1227.60 MHz).
 L1_WAVELENGTH_M = 299_792_458.0 / 1575.42e6

@@ -6,10 +6,10 @@ import math
 import numpy as np
 import pytest
 
-from worker.estimation.ar_validation import (
+from gnssatt.estimation.ar_validation import (
     baseline_angle_test, baseline_length_test, bootstrap_success_rate, fixed_baseline, partial_fix, ratio_test,
 )
-from worker.estimation.lambda_search import decorrelate, mlambda
+from gnssatt.estimation.lambda_search import decorrelate, mlambda
 
 
 def test_ratio_test():

@@ -1,4 +1,4 @@
-"""MC-LAMBDA from per-baseline C-LAMBDA lists (worker.estimation.constrained_search.constrained_search_by_baselines):
+"""MC-LAMBDA from per-baseline C-LAMBDA lists (gnssatt.estimation.constrained_search.constrained_search_by_baselines):
 the true constrained minimiser against brute-force enumeration on small random problems, agreement with the joint
 tree search, and its search effort in nodes on single-epoch L1 CASSIOPE-like and CubeSat-like problems."""
 from __future__ import annotations
@@ -8,7 +8,7 @@ import pytest
 
 from tests.estimation.problems import CASSIOPE_BODY_M, CUBESAT_BODY_M, simulate_epoch
 from tests.estimation.test_constrained_search import _brute_constrained, _joint_problem
-from worker.estimation.constrained_search import constrained_search, constrained_search_by_baselines
+from gnssatt.estimation.constrained_search import constrained_search, constrained_search_by_baselines
 
 
 @pytest.mark.parametrize("m_first", [1, 3])

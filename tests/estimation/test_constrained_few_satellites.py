@@ -15,10 +15,10 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from tests.estimation.problems import CUBESAT_BODY_M, L1_WAVELENGTH_M, random_los, random_rotation
-from worker.estimation.constrained_search import (
+from gnssatt.estimation.constrained_search import (
     DDBlock, constrained_search_by_baselines, dd_geometry, rotation_fit, rotation_starts, single_epoch_float,
 )
-from worker.estimation.constrained_search import _gauss_newton_rotation
+from gnssatt.estimation.constrained_search import _gauss_newton_rotation
 
 LAM = L1_WAVELENGTH_M
 
@@ -143,7 +143,7 @@ def test_rotation_fit_is_global_on_short_imprecise_baselines():
 def test_compiled_sphere_dual_bound_equals_the_python_one():
     """The C-LAMBDA node bound compiled (numba, scalars) gives the same floats as the plain-Python reference, and
     both stay below the exact constrained minimum (weak duality), on random metrics, centres and lengths."""
-    from worker.estimation.constrained_search import _sphere_dual_bound, _sphere_dual_bound_nb, sphere_fit
+    from gnssatt.estimation.constrained_search import _sphere_dual_bound, _sphere_dual_bound_nb, sphere_fit
 
     rng = np.random.default_rng(7)
     same = 0

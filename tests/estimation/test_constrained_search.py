@@ -17,11 +17,11 @@ from scipy.optimize import minimize
 from tests.estimation.problems import (
     CASSIOPE_BODY_M, CUBESAT_BODY_M, L1_WAVELENGTH_M, random_rotation, simulate_epoch,
 )
-from worker.estimation.constrained_search import (
+from gnssatt.estimation.constrained_search import (
     DDBlock, constrained_search, constrained_search_float, dd_operator, float_from_single_differences,
     rotation_fit, single_epoch_float, sphere_fit,
 )
-from worker.estimation.lambda_search import decorrelate, mlambda
+from gnssatt.estimation.lambda_search import decorrelate, mlambda
 
 
 def _rotvec_to_R(v):

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from worker.estimation.lambda_search import (
+from gnssatt.estimation.lambda_search import (
     AmbiguitySearchError, decorrelate, ldl_decompose, mlambda, search,
 )
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from worker.estimation import lambda_search
-from worker.estimation.lambda_search import AmbiguitySearchError
+from gnssatt.estimation import lambda_search
+from gnssatt.estimation.lambda_search import AmbiguitySearchError
 
 
 @pytest.mark.parametrize("value", [np.inf, np.nan, 3.0e15])

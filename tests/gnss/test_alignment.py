@@ -1,6 +1,6 @@
-"""worker.gnss.alignment: receivers with free-running clocks, aligned, against perfectly synchronised twins.
+"""gnssatt.gnss.alignment: receivers with free-running clocks, aligned, against perfectly synchronised twins.
 
-The simulator (worker.sim, preset "hard") is run twice with the same seed and noise, multipath, slips, gaps and
+The simulator (gnssatt.sim, preset "hard") is run twice with the same seed and noise, multipath, slips, gaps and
 outages off: once with free-running clocks (+-0.5 ms, 1 ms jumps; drift raised to 5 ppm so 300 s hold one or two
 jumps per receiver) and once with clocks exactly on GPS time (steered, amplitude 0). Everything else (geometry,
 biases, ionosphere, PCV, wind-up) is identical, so the single differences between antennas of the aligned free
@@ -16,10 +16,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from worker.gnss.alignment import align_to_gps_epochs, detect_clock_jumps
-from worker.gnss.constants import C_M_S, FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ
-from worker.gnss.ephemeris import BroadcastEphemeris
-from worker.gnss.positioning import spp
+from gnssatt.gnss.alignment import align_to_gps_epochs, detect_clock_jumps
+from gnssatt.gnss.constants import C_M_S, FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ
+from gnssatt.gnss.ephemeris import BroadcastEphemeris
+from gnssatt.gnss.positioning import spp
 
 ANTS = ["GPS-2", "GPS-0", "GPS-1"]
 BASE = dict(duration_s=300.0, noise=False, multipath=False, slip_rate_per_hour=0.0, gap_rate_per_hour=0.0,
@@ -34,7 +34,7 @@ MIN_SATS = 5                 # epochs where both receivers have a tested fix (th
 
 
 def _simulate(tmp_path, jump_in_phase: bool):
-    from worker.sim import simulate_scenario
+    from gnssatt.sim import simulate_scenario
 
     ov = dict(BASE, clock_jump_in_phase=jump_in_phase)
     free = simulate_scenario("hard", tmp_path / "free", seed=3, overrides=ov)
@@ -44,8 +44,8 @@ def _simulate(tmp_path, jump_in_phase: bool):
 
 
 def _read(set_):
-    from worker.gnss.io.rinex_nav import read_rinex_nav
-    from worker.gnss.io.rinex_obs import read_rinex_obs
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
 
     eph = BroadcastEphemeris(read_rinex_nav(set_["files"]["nav"]))
     return eph, [read_rinex_obs(set_["files"]["obs"][a]) for a in ANTS]

@@ -7,9 +7,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from worker.gnss.io.antex import AntennaPattern, FrequencyPattern, read_antex, summarize_antex, write_antex
-from worker.gnss.io.errors import ParseError
-from worker.gnss.time import GpsTime
+from gnssatt.gnss.io.antex import AntennaPattern, FrequencyPattern, read_antex, summarize_antex, write_antex
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.time import GpsTime
 
 
 def L(content, label=""):

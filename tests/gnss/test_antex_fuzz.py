@@ -5,8 +5,8 @@ from hypothesis import HealthCheck, given, settings
 
 from tests.gnss.test_antex import sample_text
 from tests.gnss.test_rinex_nav_fuzz import mutated
-from worker.gnss.io.antex import read_antex, summarize_antex, write_antex
-from worker.gnss.io.errors import ParseError
+from gnssatt.gnss.io.antex import read_antex, summarize_antex, write_antex
+from gnssatt.gnss.io.errors import ParseError
 
 BASE = sample_text().encode()
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from tests.conftest import real_set
-from worker.gnss import constants as K
-from worker.gnss.orbits.broadcast import BroadcastOrbit, eccentricity_relativity_s, kepler_position_ecef, solve_kepler
-from worker.gnss.time import GpsTime
+from gnssatt.gnss import constants as K
+from gnssatt.gnss.orbits.broadcast import BroadcastOrbit, eccentricity_relativity_s, kepler_position_ecef, solve_kepler
+from gnssatt.gnss.time import GpsTime
 
 POS_TOL_M = 1e-3  # the brief: < 1 mm against an independent evaluation of the same equations
 CLK_TOL_S = 1e-12
@@ -133,7 +133,7 @@ def test_matches_independent_table_20_iv_on_real_ephemerides(geonet_gps):
 
 
 def test_same_answer_from_the_rinex_nav_reader(geonet_gps):
-    from worker.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
 
     path, recs, eph = geonet_gps
     nav = read_rinex_nav(path).kepler["G"]
@@ -236,7 +236,7 @@ def _rtk_states(path, when_s_after_toe=(0.0, 1800.0, -2400.0)):
 
 
 def test_all_systems_match_rtklib_eph2pos_incl_beidou_geo():
-    from worker.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
 
     path = real_set("static_1m_mosaicx5_nagoya_2024") / "base.nav"
     ref = _rtk_states(path)
@@ -267,8 +267,8 @@ def test_beidou_geo_special_rotation_is_applied_and_physical():
     RTKLIB agreement above really exercises the R_Z(we tk) R_X(-5 deg) branch."""
     import dataclasses
 
-    from worker.gnss.frames import ecef_to_geodetic
-    from worker.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.frames import ecef_to_geodetic
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
 
     eph = read_rinex_nav(real_set("static_1m_mosaicx5_nagoya_2024") / "base.nav").kepler["C"]
     geo = np.flatnonzero(np.isin(eph.sat, ["C01", "C02", "C03", "C04", "C05", "C59", "C60", "C61", "C62", "C63"]))
@@ -289,8 +289,8 @@ def test_gps_broadcast_vs_igs_precise_orbit():
     offset (broadcast orbits refer to the antenna phase centre, up to ~2.6 m along z for Block IIA): < 3 m RMS
     and 95 % < 5 m over all satellites and hourly epochs, none > 20 m. (G02 reaches 16 m at 14:00 because the
     record selected by nearest toe, toe 14:00:00, is the stale pre-upload one; the 13:59:44 upload is 0.4 m.)"""
-    from worker.gnss.io.rinex_nav import read_rinex_nav
-    from worker.gnss.io.sp3 import read_sp3
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.io.sp3 import read_sp3
 
     d = real_set("leo_grace_a_2007080")
     eph = read_rinex_nav(d / "brdc0800.07n.gz").kepler["G"]

@@ -11,8 +11,8 @@ import ncompress
 import pytest
 
 from tests.builders.rinex import obs_v3_text
-from worker.gnss.io.compression import detect_layer, read_text_bytes
-from worker.gnss.io.errors import ParseError
+from gnssatt.gnss.io.compression import detect_layer, read_text_bytes
+from gnssatt.gnss.io.errors import ParseError
 
 RAW = obs_v3_text("ANT1", n_epochs=20).encode()
 

@@ -1,4 +1,4 @@
-"""worker.gnss.ephemeris: broadcast vs CODE precise orbit/clock on the real GRACE-A day, record choice, protocol.
+"""gnssatt.gnss.ephemeris: broadcast vs CODE precise orbit/clock on the real GRACE-A day, record choice, protocol.
 
 Authority: CODE final orbits (cod14193.sp3, IGS05, centre of mass) and clocks (cod14193.clk, 30 s) of 2007-03-21,
 against the IGS merged broadcast file of the same day (../shared/data/real/leo_grace_a_2007080/README.md).
@@ -15,10 +15,10 @@ import numpy as np
 import pytest
 
 from tests.conftest import real_set
-from worker.gnss.constants import C_M_S, OMEGA_EARTH_RAD_S
-from worker.gnss.ephemeris import (BroadcastEphemeris, PreciseEphemeris, SatelliteEphemeris, SatState,
+from gnssatt.gnss.constants import C_M_S, OMEGA_EARTH_RAD_S
+from gnssatt.gnss.ephemeris import (BroadcastEphemeris, PreciseEphemeris, SatelliteEphemeris, SatState,
                                    relativity_clock_s)
-from worker.gnss.time import GpsTime
+from gnssatt.gnss.time import GpsTime
 
 GRACE = "leo_grace_a_2007080"
 DAY0 = GpsTime.from_calendar(2007, 3, 21)
@@ -37,9 +37,9 @@ CLOCK_STD_NS = 7.0
 
 @pytest.fixture(scope="module")
 def products():
-    from worker.gnss.io.rinex_clock import read_rinex_clock
-    from worker.gnss.io.rinex_nav import read_rinex_nav
-    from worker.gnss.io.sp3 import read_sp3
+    from gnssatt.gnss.io.rinex_clock import read_rinex_clock
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.io.sp3 import read_sp3
 
     d = real_set(GRACE)
     nav = read_rinex_nav(d / "brdc0800.07n.gz")
@@ -119,7 +119,7 @@ def test_precise_velocity_and_clock_rate(products):
 def test_record_choice_follows_the_receiver_at_an_upload(products):
     """G02 on 2007-03-21: at 14:00 a receiver holds the fresh upload (IODE 58, toe 13:59:44, sent 12:40:48), not
     the stale toe-14:00 record (IODE 32, sent 12:11:48) that "nearest toe" would pick."""
-    from worker.gnss.orbits.broadcast import kepler_position_ecef
+    from gnssatt.gnss.orbits.broadcast import kepler_position_ecef
 
     nav, sp3, clk = products
     t = DAY0 + 14 * 3600.0
@@ -155,7 +155,7 @@ def test_invalid_rows_and_protocol(products):
 
 def test_group_delay_and_relativity(products):
     nav, sp3, clk = products
-    from worker.gnss.orbits.broadcast import eccentricity_relativity_s
+    from gnssatt.gnss.orbits.broadcast import eccentricity_relativity_s
 
     be = BroadcastEphemeris(nav)
     t = DAY0 + 20000.0

@@ -1,4 +1,4 @@
-"""worker.gnss.satellite_antenna and PreciseEphemeris(antenna_offsets=...): satellite antenna offsets for CoM orbits.
+"""gnssatt.gnss.satellite_antenna and PreciseEphemeris(antenna_offsets=...): satellite antenna offsets for CoM orbits.
 
 Authorities:
 - the Sun: the Astronomical Almanac's low-precision formula (written out below, independently of ERFA; ~0.01 deg
@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 
 from tests.conftest import real_set
-from worker.gnss.satellite_antenna import (IGS05_GPS_PCO, SatelliteAntennaOffsets, default_offsets_for_sp3,
+from gnssatt.gnss.satellite_antenna import (IGS05_GPS_PCO, SatelliteAntennaOffsets, default_offsets_for_sp3,
                                            satellite_body_axes_ecef, sun_position_ecef_m)
-from worker.gnss.time import GpsTime
+from gnssatt.gnss.time import GpsTime
 
 GRACE = "leo_grace_a_2007080"
 DAY = GpsTime.from_calendar(2007, 3, 21)
@@ -88,7 +88,7 @@ def test_igs05_table_lookup_and_validity():
 
 
 def test_from_antex_agrees_with_the_table(tmp_path):
-    from worker.gnss.io.antex import AntennaPattern, FrequencyPattern, read_antex, write_antex
+    from gnssatt.gnss.io.antex import AntennaPattern, FrequencyPattern, read_antex, write_antex
 
     def sat(prn, svn, block, z_mm, frm, until=None):
         zen = np.zeros(15)
@@ -113,9 +113,9 @@ def test_from_antex_agrees_with_the_table(tmp_path):
 
 @pytest.fixture(scope="module")
 def grace():
-    from worker.gnss.io.rinex_clock import read_rinex_clock
-    from worker.gnss.io.rinex_obs import read_rinex_obs
-    from worker.gnss.io.sp3 import read_sp3
+    from gnssatt.gnss.io.rinex_clock import read_rinex_clock
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+    from gnssatt.gnss.io.sp3 import read_sp3
 
     d = real_set(GRACE)
     return dict(sp3=read_sp3(d / "cod14193.sp3.gz"), clk=read_rinex_clock(d / "cod14193.clk.gz"),
@@ -124,9 +124,9 @@ def grace():
 
 def _mean_residual_per_satellite(grace, eph, n_epochs=2160):
     """Per-satellite mean of the ionosphere-free code minus the range from the JPL orbit (6 h, clock removed)."""
-    from worker.gnss.constants import C_M_S, FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ
-    from worker.gnss.geometry import sagnac_rotate
-    from worker.gnss.orbits.sp3_interp import interpolate_sp3
+    from gnssatt.gnss.constants import C_M_S, FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ
+    from gnssatt.gnss.geometry import sagnac_rotate
+    from gnssatt.gnss.orbits.sp3_interp import interpolate_sp3
 
     obs = grace["obs"]
     P1 = obs.get("C1W", "G")[:n_epochs]
@@ -152,7 +152,7 @@ def _mean_residual_per_satellite(grace, eph, n_epochs=2160):
 
 
 def test_grace_code_residuals_lose_their_block_split(grace):
-    from worker.gnss.ephemeris import PreciseEphemeris
+    from gnssatt.gnss.ephemeris import PreciseEphemeris
 
     block = {prn: b for prn, _, b, frm, until, _ in IGS05_GPS_PCO
              if frm <= "2007-03-21" and (until is None or until > "2007-03-21")}

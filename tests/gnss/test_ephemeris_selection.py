@@ -4,11 +4,11 @@ from __future__ import annotations
 import numpy as np
 
 from tests.conftest import real_set
-from worker.gnss.io.rinex_nav import read_rinex_nav, select_ephemeris
-from worker.gnss.io.sp3 import read_sp3
-from worker.gnss.orbits.broadcast import kepler_position_ecef
-from worker.gnss.orbits.sp3_interp import interpolate_sp3
-from worker.gnss.time import GpsTime
+from gnssatt.gnss.io.rinex_nav import read_rinex_nav, select_ephemeris
+from gnssatt.gnss.io.sp3 import read_sp3
+from gnssatt.gnss.orbits.broadcast import kepler_position_ecef
+from gnssatt.gnss.orbits.sp3_interp import interpolate_sp3
+from gnssatt.gnss.time import GpsTime
 
 
 def test_fresh_upload_beats_an_older_data_set_with_a_nearer_toe():

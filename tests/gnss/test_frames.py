@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from worker.gnss import frames as F
-from worker.gnss.eop import ARCSEC_RAD, EopSource, OMEGA_ERA_RAD_S
-from worker.gnss.leap_seconds import utc_to_gps
-from worker.gnss.time import GpsTime
+from gnssatt.gnss import frames as F
+from gnssatt.gnss.eop import ARCSEC_RAD, EopSource, OMEGA_ERA_RAD_S
+from gnssatt.gnss.leap_seconds import utc_to_gps
+from gnssatt.gnss.time import GpsTime
 
 ANGLE_TOL_RAD = 1e-9  # the brief's requirement (0.2 mas, 6 mm at GNSS orbit radius)
 

@@ -7,11 +7,11 @@ import astropy_iers_data
 import numpy as np
 import pytest
 
-from worker.gnss import frames as F
-from worker.gnss.eop import ARCSEC_RAD, EopSource, EopWarning
-from worker.gnss.io.errors import ParseError
-from worker.gnss.leap_seconds import utc_to_gps
-from worker.gnss.time import GpsTime
+from gnssatt.gnss import frames as F
+from gnssatt.gnss.eop import ARCSEC_RAD, EopSource, EopWarning
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.leap_seconds import utc_to_gps
+from gnssatt.gnss.time import GpsTime
 
 FINALS = astropy_iers_data.IERS_A_FILE
 C04 = astropy_iers_data.IERS_B_FILE

@@ -8,10 +8,10 @@ import pytest
 from scipy.optimize import brentq
 
 from tests.conftest import real_set
-from worker.gnss import geometry as G
-from worker.gnss.constants import C_M_S, OMEGA_EARTH_RAD_S, WGS84_A_M
-from worker.gnss.rotations import euler321_to_dcm
-from worker.gnss.time import GpsTime
+from gnssatt.gnss import geometry as G
+from gnssatt.gnss.constants import C_M_S, OMEGA_EARTH_RAD_S, WGS84_A_M
+from gnssatt.gnss.rotations import euler321_to_dcm
+from gnssatt.gnss.time import GpsTime
 
 T0 = GpsTime.from_calendar(2021, 9, 22, 6)
 RADIUS_M = 26_560e3
@@ -92,9 +92,9 @@ def test_broadcast_ranges_explain_real_pseudoranges():
     """GEONET 0759, 2005-04-02: C1 - (rho - c dt_sv) is one receiver clock for all satellites up to the
     atmosphere above 15 deg elevation (measured: scatter 2.8 m, max 5.4 m). Dropping the Sagnac rotation
     (omega = 0) gives 18 m scatter and 34 m max, so the bounds below (10 m, 5 m) catch it."""
-    from worker.gnss.io.rinex_nav import read_rinex_nav
-    from worker.gnss.io.rinex_obs import read_rinex_obs
-    from worker.gnss.orbits.broadcast import BroadcastOrbit
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+    from gnssatt.gnss.orbits.broadcast import BroadcastOrbit
 
     d = real_set("geonet_0759_3040_3km_2005")
     obs = read_rinex_obs(d / "07590920.05o")

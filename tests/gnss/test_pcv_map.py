@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from worker.gnss.io.errors import ParseError
-from worker.gnss.io.pcv_map import PcvMap, parse_pcv_map, read_pcv_antex, write_pcv_antex
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.io.pcv_map import PcvMap, parse_pcv_map, read_pcv_antex, write_pcv_antex
 
 
 def make_map(seed=1, daz=2.5, del_=1.0, freq="L1", empty=0.2):

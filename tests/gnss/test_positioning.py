@@ -1,4 +1,4 @@
-"""worker.gnss.positioning: SPP on real data against independent truths.
+"""gnssatt.gnss.positioning: SPP on real data against independent truths.
 
 - GRACE-A 2007-03-21 (RINEX 2.10 P1/P2/C1, 10 s) against the JPL reduced-dynamic orbit (centre of mass; the
   antenna sits ~0.5 m above it: the solutions' mean radial offset, +0.5 m, is left in the error). Broadcast on the
@@ -18,11 +18,11 @@ import numpy as np
 import pytest
 
 from tests.conftest import real_set
-from worker.gnss.ephemeris import BroadcastEphemeris, PreciseEphemeris
-from worker.gnss.frames import enu, geodetic_to_ecef
-from worker.gnss.positioning import (FLAG_NO_VELOCITY, FLAG_NOT_CONVERGED, FLAG_TOO_FEW, hatch_smooth,
+from gnssatt.gnss.ephemeris import BroadcastEphemeris, PreciseEphemeris
+from gnssatt.gnss.frames import enu, geodetic_to_ecef
+from gnssatt.gnss.positioning import (FLAG_NO_VELOCITY, FLAG_NOT_CONVERGED, FLAG_TOO_FEW, hatch_smooth,
                                      klobuchar_l1_delay_s, saastamoinen_delay_m, spp)
-from worker.gnss.time import GpsTime
+from gnssatt.gnss.time import GpsTime
 
 GRACE = "leo_grace_a_2007080"
 NAGOYA = "static_1m_mosaicx5_nagoya_2024"
@@ -44,10 +44,10 @@ STATIC_VEL_M_S = 0.05     # Doppler velocity of a static receiver (measured 0.01
 
 @pytest.fixture(scope="module")
 def grace():
-    from worker.gnss.io.rinex_clock import read_rinex_clock
-    from worker.gnss.io.rinex_nav import read_rinex_nav
-    from worker.gnss.io.rinex_obs import read_rinex_obs
-    from worker.gnss.io.sp3 import read_sp3
+    from gnssatt.gnss.io.rinex_clock import read_rinex_clock
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+    from gnssatt.gnss.io.sp3 import read_sp3
 
     d = real_set(GRACE)
     return dict(nav=read_rinex_nav(d / "brdc0800.07n.gz"), sp3=read_sp3(d / "cod14193.sp3.gz"),
@@ -56,7 +56,7 @@ def grace():
 
 
 def _grace_errors(sol, ref):
-    from worker.gnss.orbits.sp3_interp import interpolate_sp3, interpolate_sp3_velocity
+    from gnssatt.gnss.orbits.sp3_interp import interpolate_sp3, interpolate_sp3_velocity
 
     pos, _ = interpolate_sp3(ref, ["L09"], sol.time)  # the reference at the reception time in GPS time
     vel = interpolate_sp3_velocity(ref, ["L09"], sol.time)
@@ -144,8 +144,8 @@ def test_grace_arc_screening_removes_a_biased_pass(grace):
 
 @pytest.fixture(scope="module")
 def nagoya():
-    from worker.gnss.io.rinex_nav import read_rinex_nav
-    from worker.gnss.io.rinex_obs import read_rinex_obs
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
 
     d = real_set(NAGOYA)
     out = {"eph": BroadcastEphemeris(read_rinex_nav(d / "base.nav"))}
@@ -239,7 +239,7 @@ def test_hatch_filter_restarts_and_averages():
 
 
 def test_arc_exclusions_rule():
-    from worker.gnss.positioning import _arc_exclusions
+    from gnssatt.gnss.positioning import _arc_exclusions
 
     n = 20
     t = GpsTime(np.arange(n) * 10 + 1_000_000_000, np.zeros(n))

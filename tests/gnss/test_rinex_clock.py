@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from tests.conftest import real_set
-from worker.gnss.io.errors import ParseError
-from worker.gnss.io.rinex_clock import read_rinex_clock, summarize_rinex_clock
-from worker.gnss.time import GpsTime
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.io.rinex_clock import read_rinex_clock, summarize_rinex_clock
+from gnssatt.gnss.time import GpsTime
 
 
 def _hdr(content, label):

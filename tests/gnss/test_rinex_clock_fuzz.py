@@ -6,8 +6,8 @@ from hypothesis import strategies as st
 
 from tests.gnss.test_rinex_clock import clock_text
 from tests.gnss.test_rinex_nav_fuzz import mutated
-from worker.gnss.io.errors import ParseError
-from worker.gnss.io.rinex_clock import read_rinex_clock, summarize_rinex_clock
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.io.rinex_clock import read_rinex_clock, summarize_rinex_clock
 
 RECS = [("AS", "G01", 0.0, [1.5e-4, 2.0e-11]), ("AS", "E11", 0.0, [-3.25e-5, 1.0e-11, 1e-12, 1e-13]),
         ("AR", "WSRT00NLD", 0.0, [1.25e-7, 8.8e-11]), ("AS", "G01", 30.0, [1.6e-4])]

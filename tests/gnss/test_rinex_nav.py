@@ -11,10 +11,10 @@ from tests.conftest import real_set
 from tests.gnss.test_rinex_nav_builders import (GLO_VALUES, GPS_VALUES, d19, glonass_record_v3,
                                                  kepler_record_v2, kepler_record_v3, nav_header_v2,
                                                  nav_header_v3, nav_header_v4)
-from worker.gnss.io.errors import ParseError
-from worker.gnss.io.rinex_nav import (KeplerEphemeris, gps_minus_utc_s, read_rinex_nav, select_ephemeris,
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.io.rinex_nav import (KeplerEphemeris, gps_minus_utc_s, read_rinex_nav, select_ephemeris,
                                       summarize_rinex_nav)
-from worker.gnss.time import GpsTime
+from gnssatt.gnss.time import GpsTime
 
 KEPLER_FIELDS = ["sat", "toc", "af0_s", "af1_s_s", "af2_s_s2", "iode", "crs_m", "delta_n_rad_s", "m0_rad",
                  "cuc_rad", "e", "cus_rad", "sqrt_a_sqrt_m", "toe_sow", "cic_rad", "omega0_rad", "cis_rad",

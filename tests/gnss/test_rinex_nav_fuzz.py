@@ -7,9 +7,9 @@ from hypothesis import strategies as st
 
 from tests.gnss.test_rinex_nav_builders import (GPS_VALUES, glonass_record_v3, kepler_record_v2, kepler_record_v3,
                                                  nav_header_v2, nav_header_v3, nav_header_v4)
-from worker.gnss.io.errors import ParseError
-from worker.gnss.io.rinex_nav import read_rinex_nav, select_ephemeris, summarize_rinex_nav
-from worker.gnss.time import GpsTime
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.io.rinex_nav import read_rinex_nav, select_ephemeris, summarize_rinex_nav
+from gnssatt.gnss.time import GpsTime
 
 
 @st.composite

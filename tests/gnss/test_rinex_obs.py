@@ -13,9 +13,9 @@ import pytest
 
 from tests.conftest import real_set
 from tests.gnss.test_rinex_obs_helpers import replace_header_line, small_obs
-from worker.gnss.io.errors import ParseError
-from worker.gnss.io.rinex_obs import read_rinex_obs, rinex3_code, summarize_rinex_obs
-from worker.gnss.io.rinex_obs_write import rinex_obs_bytes
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.io.rinex_obs import read_rinex_obs, rinex3_code, summarize_rinex_obs
+from gnssatt.gnss.io.rinex_obs_write import rinex_obs_bytes
 
 
 V2_SATS = ("G01", "G05", "R07")
@@ -503,7 +503,7 @@ def test_summary_of_real_rinex2():
 
 
 def test_writer_is_deterministic(tmp_path):
-    from worker.gnss.io.rinex_obs_write import write_rinex_obs
+    from gnssatt.gnss.io.rinex_obs_write import write_rinex_obs
 
     src = small_obs(n_epochs=20)
     a = write_rinex_obs(tmp_path / "a.rnx", src)

@@ -14,9 +14,9 @@ from hypothesis import strategies as st
 
 from tests.conftest import REAL_DATA_DIR
 from tests.gnss.test_rinex_obs_helpers import cut_rinex, small_obs
-from worker.gnss.io.errors import ParseError
-from worker.gnss.io.rinex_obs import read_rinex_obs, summarize_rinex_obs
-from worker.gnss.io.rinex_obs_write import rinex_obs_bytes
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.io.rinex_obs import read_rinex_obs, summarize_rinex_obs
+from gnssatt.gnss.io.rinex_obs_write import rinex_obs_bytes
 
 #: Per-example peak of Python/numpy allocations (tracemalloc). The seeds are < 30 kB, so a reader that needs
 #: more than this on a mutated seed has let a count from the file size an allocation.

@@ -11,8 +11,8 @@ import pytest
 
 from tests.conftest import real_set
 from tests.gnss.test_rinex_obs_helpers import compare_with_georinex, cut_rinex, load_georinex, small_obs
-from worker.gnss.io.rinex_obs import read_rinex_obs
-from worker.gnss.io.rinex_obs_write import rinex_obs_bytes
+from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+from gnssatt.gnss.io.rinex_obs_write import rinex_obs_bytes
 
 REAL_OBS = [
     ("static_1m_mosaicx5_nagoya_2024", "base.obs"),

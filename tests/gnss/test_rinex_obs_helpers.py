@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from worker.gnss.io.compression import read_text_bytes
+from gnssatt.gnss.io.compression import read_text_bytes
 
 # An epoch line: RINEX 3/4 '> yyyy ...', RINEX 2 ' yy mm dd hh mm ss.sssssss  f'.
 _EPOCH_RE = re.compile(rb"^(> \d{4} |  ?\d{1,2} [ \d]\d [ \d]\d [ \d]\d [ \d]\d [ \d]\d\.\d{7}  [0-6])", re.M)
@@ -92,7 +92,7 @@ def small_obs(n_epochs: int = 5, sats=("E11", "G01", "G05", "R07"), codes=("C1C"
     """A RinexObs-like namespace with plausible values, LLI/SSI digits, a blank and a 0.000 (writer input)."""
     from types import SimpleNamespace
 
-    from worker.gnss.time import GpsTime
+    from gnssatt.gnss.time import GpsTime
 
     rng = np.random.default_rng(seed)
     t0 = GpsTime.from_calendar(*start)

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import assume, given, settings, strategies as st
 from hypothesis.extra.numpy import arrays
 
-from worker.gnss import rotations as rot
+from gnssatt.gnss import rotations as rot
 
 finite = st.floats(-1.0, 1.0, allow_nan=False)
 quats = arrays(np.float64, (4,), elements=finite).filter(lambda q: np.linalg.norm(q) > 0.1)

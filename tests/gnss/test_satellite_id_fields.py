@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from worker.gnss.io.rinex_clock import _norm_sat
-from worker.gnss.io.rinex_nav import _sat_norm
+from gnssatt.gnss.io.rinex_clock import _norm_sat
+from gnssatt.gnss.io.rinex_nav import _sat_norm
 
 
 @pytest.mark.parametrize("norm", [_norm_sat, _sat_norm])

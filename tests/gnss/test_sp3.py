@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from tests.conftest import real_set
-from worker.gnss.io.errors import ParseError
-from worker.gnss.io.sp3 import read_sp3, summarize_sp3
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.io.sp3 import read_sp3, summarize_sp3
 
 
 def sp3_text(sats, epochs, *, version="d", velocity=False, seconds=None, drop=(), extra_body_sat=None,

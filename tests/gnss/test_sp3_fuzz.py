@@ -7,9 +7,9 @@ from hypothesis import strategies as st
 
 from tests.gnss.test_rinex_nav_fuzz import mutated
 from tests.gnss.test_sp3 import sp3_text
-from worker.gnss.io.errors import ParseError
-from worker.gnss.io.sp3 import read_sp3, summarize_sp3
-from worker.gnss.orbits.sp3_interp import interpolate_sp3
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.io.sp3 import read_sp3, summarize_sp3
+from gnssatt.gnss.orbits.sp3_interp import interpolate_sp3
 
 BASE_D = sp3_text(["G01", "G02", "E11", "R05"], 4, velocity=True, bad={(1, "G01", "clk")})
 BASE_C = sp3_text(["G01", "G02"], 3, version="c")

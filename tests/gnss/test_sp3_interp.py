@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from tests.conftest import real_set
-from worker.gnss.io.sp3 import Sp3Data, read_sp3
-from worker.gnss.orbits.sp3_interp import interpolate_sp3, interpolate_sp3_velocity, lagrange_basis
-from worker.gnss.time import GpsTime
+from gnssatt.gnss.io.sp3 import Sp3Data, read_sp3
+from gnssatt.gnss.orbits.sp3_interp import interpolate_sp3, interpolate_sp3_velocity, lagrange_basis
+from gnssatt.gnss.time import GpsTime
 
 GM_M3_S2 = 3.986005e14          # IS-GPS-200 WGS 84 value
 OMEGA_E_RAD_S = 7.2921151467e-5  # IS-GPS-200

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from worker.gnss import leap_seconds as L
-from worker.gnss.time import GpsTime
+from gnssatt.gnss import leap_seconds as L
+from gnssatt.gnss.time import GpsTime
 
 US_IN_DAYS = 1e-6 / 86400.0
 

@@ -6,7 +6,7 @@ import io
 
 import numpy as np
 
-from worker.gnss.rotations import dcm_to_quat, euler321_to_dcm, quat_to_dcm
+from gnssatt.gnss.rotations import dcm_to_quat, euler321_to_dcm, quat_to_dcm
 
 T0 = np.datetime64("2018-06-06T12:20:00.000")
 GPS_WEEK = 2004

@@ -7,8 +7,8 @@ from matplotlib import dates as mdates
 
 from tests.plots.builders import (SATS, attitude_case, baselines_case, events_case, residuals_case, sat_directions,
                                   times)
-from worker.plots import attitude as A
-from worker.plots.common import PlotContext, read_csv_table
+from gnssatt.plots import attitude as A
+from gnssatt.plots.common import PlotContext, read_csv_table
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 CTX = PlotContext(set_name="sim earth-pointing", job_id="0123456789abcdef", config={"mode": "kinematic",
@@ -190,7 +190,7 @@ def test_plots_accept_empty_products():
 
 
 def _long_layout(wide_csv: str) -> str:
-    """The wide builder rows rewritten as worker/attitude writes residuals.csv: one row per observable
+    """The wide builder rows rewritten as gnssatt/attitude writes residuals.csv: one row per observable
     (observable = code | phase, residual_m), sat / az_ant_deg / el_ant_deg column names."""
     table = read_csv_table(wide_csv)
     out = ["time_gps,gps_sow,baseline,sat,signal,observable,residual_m,az_ant_deg,el_ant_deg,cn0_dbhz,used,reason"]
@@ -220,7 +220,7 @@ def test_long_residual_layout_of_the_attitude_job():
 
 
 def test_attitude_plots_bundle_and_report():
-    from worker.report import html_report
+    from gnssatt.report import html_report
 
     att, ref_q, _, _ = attitude_case(n=40)
     res, _ = residuals_case(n=40)

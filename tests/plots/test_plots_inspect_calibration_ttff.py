@@ -14,11 +14,11 @@ import pytest
 from tests.builders.rinex import obs_v3_text
 from tests.conftest import REPO_ROOT
 from tests.plots.builders import TABLE5_FIRST_ROWS, pcv_map, ttff_runs
-from worker.gnss.io.rinex_obs import read_rinex_obs
-from worker.plots import calibration as C
-from worker.plots import inspect as I
-from worker.plots import ttff as T
-from worker.report import html_report
+from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+from gnssatt.plots import calibration as C
+from gnssatt.plots import inspect as I
+from gnssatt.plots import ttff as T
+from gnssatt.report import html_report
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -188,8 +188,8 @@ def test_html_report_self_contained():
 
 
 def test_plots_and_report_import_no_web_code():
-    code = ("import sys, worker.plots.attitude, worker.plots.inspect, worker.plots.calibration, "
-            "worker.plots.ttff, worker.report\n"
+    code = ("import sys, gnssatt.plots.attitude, gnssatt.plots.inspect, gnssatt.plots.calibration, "
+            "gnssatt.plots.ttff, gnssatt.report\n"
             "bad = sorted(m for m in sys.modules if m.split('.')[0] in "
             "('fastapi', 'starlette', 'sqlalchemy', 'huey', 'httpx', 'app'))\nprint(','.join(bad))")
     out = subprocess.run([sys.executable, "-c", code], cwd=REPO_ROOT, capture_output=True, text=True, timeout=120)
@@ -198,8 +198,8 @@ def test_plots_and_report_import_no_web_code():
 
 
 def test_calibration_and_ttff_bundles():
-    from worker.plots.calibration import calibration_plots
-    from worker.plots.ttff import ttff_plots
+    from gnssatt.plots.calibration import calibration_plots
+    from gnssatt.plots.ttff import ttff_plots
 
     doc = {"platform": "P", "frames": "body", "baselines": [{"from": "A", "to": "B", "a_priori_m": [1, 0, 0],
                                                             "calibrated_m": [1.001, 0, 0], "sigma_m": [1e-4] * 3,

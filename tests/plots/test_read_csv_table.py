@@ -6,7 +6,7 @@ import io
 import numpy as np
 import pytest
 
-from worker.plots.common import read_csv_table
+from gnssatt.plots.common import read_csv_table
 
 
 def _reference(text: str) -> dict:
@@ -49,7 +49,7 @@ def test_same_table_as_dictreader(name):
 @pytest.mark.parametrize("values", [["b", "a", "b", "c", "a"], ["GPS-2>GPS-0", "GPS-2>GPS-1", "G", "GPS-2>GPS-0"],
                                     ["é", "e", "", "é", ""], [], ["x"]])
 def test_categories_are_first_appearance_order_and_codes(values):
-    from worker.plots.common import categories
+    from gnssatt.plots.common import categories
 
     names, codes = categories(np.array(values, dtype=str))
     assert names == list(dict.fromkeys(values))
@@ -57,7 +57,7 @@ def test_categories_are_first_appearance_order_and_codes(values):
 
 
 def test_first_per_epoch_and_key_keeps_the_first_row_of_each_pair():
-    from worker.plots.common import first_per_epoch_and_key
+    from gnssatt.plots.common import first_per_epoch_and_key
 
     t = np.array(["2018-01-01T00:00:00", "2018-01-01T00:00:00", "2018-01-01T00:00:00", "2018-01-01T00:00:01",
                   "2018-01-01T00:00:01", "2018-01-01T00:00:00"], dtype="datetime64[ms]")
@@ -67,7 +67,7 @@ def test_first_per_epoch_and_key_keeps_the_first_row_of_each_pair():
 
 
 def test_category_memo_reuses_the_codes_of_the_same_array_only_inside_the_block():
-    from worker.plots.common import categories, category_memo
+    from gnssatt.plots.common import categories, category_memo
 
     a, b = np.array(["x", "y", "x"]), np.array(["x", "y", "x"])
     with category_memo():

@@ -1,4 +1,4 @@
-"""Independent re-computations for the simulator tests, written apart from worker/sim (no shared code).
+"""Independent re-computations for the simulator tests, written apart from gnssatt/sim (no shared code).
 
 Broadcast orbit/clock per IS-GPS-200 Table 20-IV from records read back by the project's nav reader,
 light time + Sagnac, bilinear PCV lookup, quaternion -> matrix per CONVENTIONS.md.

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 from tests.conftest import real_set
-from worker.gnss.ephemeris import BroadcastEphemeris
-from worker.gnss.io.rinex_nav import read_rinex_nav
-from worker.gnss.orbits.broadcast import kepler_position_ecef
-from worker.gnss.time import GpsTime
-from worker.sim import simulate_scenario
-from worker.sim.constellation import gps_from_nav
+from gnssatt.gnss.ephemeris import BroadcastEphemeris
+from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+from gnssatt.gnss.orbits.broadcast import kepler_position_ecef
+from gnssatt.gnss.time import GpsTime
+from gnssatt.sim import simulate_scenario
+from gnssatt.sim.constellation import gps_from_nav
 
 
 def test_model_reproduces_the_real_records():

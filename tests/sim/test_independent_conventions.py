@@ -1,14 +1,14 @@
 """The simulator keeps its own small rotation and Earth-rotation helpers on purpose: it scores the product,
-so a convention slip in worker/gnss/rotations.py or frames.py must not be copied into the truth. Here the
+so a convention slip in gnssatt/gnss/rotations.py or frames.py must not be copied into the truth. Here the
 two independent implementations of ../shared/CONVENTIONS.md are held to agree."""
 from __future__ import annotations
 
 import numpy as np
 
-from worker.gnss import frames, rotations
-from worker.gnss.time import GpsTime
-from worker.sim import _frames as sim_frames
-from worker.sim import _rot as sim_rot
+from gnssatt.gnss import frames, rotations
+from gnssatt.gnss.time import GpsTime
+from gnssatt.sim import _frames as sim_frames
+from gnssatt.sim import _rot as sim_rot
 
 
 def _random_quats(n, seed=0):

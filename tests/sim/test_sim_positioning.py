@@ -9,11 +9,11 @@ import csv
 import numpy as np
 import pytest
 
-from worker.gnss.ephemeris import BroadcastEphemeris
-from worker.gnss.io.rinex_nav import read_rinex_nav
-from worker.gnss.io.rinex_obs import read_rinex_obs
-from worker.gnss.positioning import spp
-from worker.sim import simulate_scenario
+from gnssatt.gnss.ephemeris import BroadcastEphemeris
+from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+from gnssatt.gnss.positioning import spp
+from gnssatt.sim import simulate_scenario
 
 
 def _truth_positions(path, antenna):

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from tests.sim import _independent as ind
-from worker.sim import list_scenarios, simulate_scenario
+from gnssatt.sim import list_scenarios, simulate_scenario
 
 georinex = pytest.importorskip("georinex")
 
@@ -61,8 +61,8 @@ def _times_iso(ds):
 
 def _reconstruct(set_dir: Path, aid: str, ds, signal: str):
     """Model phase (m) and code (m) of every observation in `ds` from the truth files and the nav file only."""
-    from worker.gnss.io.rinex_nav import read_rinex_nav
-    from worker.gnss.time import GpsTime
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.time import GpsTime
 
     nav = read_rinex_nav(set_dir / "nav" / "brdc.rnx").kepler["G"]
     model = ind.load_model(set_dir)
@@ -188,9 +188,9 @@ def test_georinex_reads_header_lli_and_ssi(benign_set):
 
 
 def test_nav_file_round_trips_through_both_readers(benign_set):
-    from worker.gnss.io.rinex_nav import read_rinex_nav
-    from worker.gnss.time import GpsTime
-    from worker.sim.constellation import synthetic_gps
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.time import GpsTime
+    from gnssatt.sim.constellation import synthetic_gps
 
     set_dir, res = benign_set
     nav = read_rinex_nav(set_dir / "nav" / "brdc.rnx")
@@ -223,7 +223,7 @@ def test_nav_file_round_trips_through_both_readers(benign_set):
 
 
 def test_platform_sp3_reads_back(benign_set):
-    from worker.gnss.io.sp3 import read_sp3
+    from gnssatt.gnss.io.sp3 import read_sp3
 
     set_dir, _ = benign_set
     sp3 = read_sp3(set_dir / "platform.sp3")
@@ -244,8 +244,8 @@ def test_platform_sp3_reads_back(benign_set):
 
 
 def test_reference_attitude_noise_and_truth_attitude(benign_set):
-    from worker.gnss.io.reference_attitude import read_reference_attitude
-    from worker.sim import _rot
+    from gnssatt.gnss.io.reference_attitude import read_reference_attitude
+    from gnssatt.sim import _rot
 
     set_dir, _ = benign_set
     ref = read_reference_attitude((set_dir / "reference_attitude.csv").read_text())
@@ -388,7 +388,7 @@ def test_hard_pass_clock_jumps_slips_gaps_outage(hard_set):
 
 
 def test_ground_static_heading(tmp_path):
-    from worker.sim._frames import R_ned_from_ecef, geodetic_from_ecef
+    from gnssatt.sim._frames import R_ned_from_ecef, geodetic_from_ecef
 
     res = simulate_scenario("ground-static", tmp_path, seed=0, overrides={"duration_s": 20.0})
     set_dir = Path(res.sets[0]["dir"])
@@ -424,7 +424,7 @@ def test_noise_level_of_single_differences(tmp_path):
 
 
 def test_orbit_from_sp3_and_tle(tmp_path):
-    from worker.gnss.io.sp3 import read_sp3
+    from gnssatt.gnss.io.sp3 import read_sp3
 
     a = simulate_scenario("earth-pointing", tmp_path / "a", overrides={"start_gps": "2018-06-06T12:19:00",
                                                                         "duration_s": 240.0, "truth_components": False})

@@ -1,11 +1,11 @@
-"""worker.attitude.ambiguity.resolve_constrained (C-LAMBDA on the attitude filter's SD state, issue 7 item 3) on a
+"""gnssatt.attitude.ambiguity.resolve_constrained (C-LAMBDA on the attitude filter's SD state, issue 7 item 3) on a
 synthetic single-epoch SD float solution built like the EKF's first update: right integers accepted (never wrong ones),
 and it fixes single-frequency epochs that MLAMBDA + length validation does not always fix."""
 from __future__ import annotations
 
 import numpy as np
 
-from worker.attitude.ambiguity import resolve_constrained, resolve_lambda
+from gnssatt.attitude.ambiguity import resolve_constrained, resolve_lambda
 
 LAM_M = 0.190293672798
 

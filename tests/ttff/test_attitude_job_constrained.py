@@ -1,5 +1,5 @@
 """The attitude job's `ambiguity_search: "constrained"` (issue 7 item 3) on short simulated single-frequency
-passes: the filter with the MC-LAMBDA first fix (worker.attitude.ambiguity.resolve_joint_constrained) fixes every
+passes: the filter with the MC-LAMBDA first fix (gnssatt.attitude.ambiguity.resolve_joint_constrained) fixes every
 baseline no later than the paper's MLAMBDA + length search, sooner on at least one, and never wrongly (truth)."""
 from __future__ import annotations
 
@@ -9,9 +9,9 @@ import pytest
 
 from bench.bench_ttff import set_files, study_payloads
 from worker.jobs.attitude import AttitudeConfig
-from worker.sim import simulate_scenario
-from worker.ttff.data import load_study_set
-from worker.ttff.study import StudyOptions, _filter_runs
+from gnssatt.sim import simulate_scenario
+from gnssatt.ttff.data import load_study_set
+from gnssatt.ttff.study import StudyOptions, _filter_runs
 
 DURATION_S = 20.0
 #: starts 3, 4 and 13 of `bench_ttff study --seed 1` (20 s, the `ttff` preset of commit e0e0b58): on starts 4 and

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from tests.attitude.conftest import set_files
-from worker.sim import simulate_scenario
-from worker.ttff.data import load_study_set
-from worker.ttff.single_epoch import SingleEpochOptions, epoch_problem, solve_constrained, solve_lambda
+from gnssatt.sim import simulate_scenario
+from gnssatt.ttff.data import load_study_set
+from gnssatt.ttff.single_epoch import SingleEpochOptions, epoch_problem, solve_constrained, solve_lambda
 
 DURATION_S = 120.0
 STEP_S = 5.0

@@ -14,11 +14,11 @@ from worker.context import JobContext
 from worker.errors import JobInputError
 from worker.jobs.ttff import TtffConfig
 from worker.pipelines.ttff import payloads, run
-from worker.sim import simulate_scenario
-from worker.ttff.data import load_study_set, subset_signals
-from worker.ttff.single_epoch import SingleEpochOptions, epoch_problem, solve_constrained, solve_lambda
-from worker.ttff.starts import BENIGN_OVERRIDES, random_starts, start_overrides
-from worker.ttff.study import StudyOptions, run_set, runs_csv, summarize, table5_rows
+from gnssatt.sim import simulate_scenario
+from gnssatt.ttff.data import load_study_set, subset_signals
+from gnssatt.ttff.single_epoch import SingleEpochOptions, epoch_problem, solve_constrained, solve_lambda
+from gnssatt.ttff.starts import BENIGN_OVERRIDES, random_starts, start_overrides
+from gnssatt.ttff.study import StudyOptions, run_set, runs_csv, summarize, table5_rows
 
 DURATION_S = 20.0
 
@@ -51,7 +51,7 @@ def test_random_starts_ranges_and_determinism():
 
 
 def test_initial_offset_is_the_simulated_start(study_set, sim_set):
-    from worker.ttff.data import initial_offset_euler_deg
+    from gnssatt.ttff.data import initial_offset_euler_deg
     _, start = sim_set
     y, p, r = initial_offset_euler_deg(study_set)
     # reference attitude noise 3 arcsec; the slew starts at rest (min-jerk)
@@ -96,7 +96,7 @@ def test_single_epoch_l1_both_methods_right(study_set):
 
 def test_judge_flags_a_wrong_integer(study_set):
     """Shifting the truth by one cycle on one DD must make the check say 'wrong'."""
-    from worker.ttff.single_epoch import _judge
+    from gnssatt.ttff.single_epoch import _judge
     prob = epoch_problem(study_set, 0, ["L1"], SingleEpochOptions())
     rows = {i: t.copy() for i, (blk, t) in enumerate(zip(prob.sol.blocks, prob.truth_dd)) if blk.baseline == 0}
     assert _judge(prob, 0, rows, prob.b_true_ecef_m[0]) is True
@@ -214,8 +214,8 @@ def test_job_type_registered():
 
 def test_ttff_preset_carries_the_realism_and_other_presets_are_unchanged():
     """Issue 7 item 2 is the preset itself (no bench-level overrides); the other presets keep their values."""
-    from worker.sim.observables import noise_scale
-    from worker.sim.scenarios import make_params
+    from gnssatt.sim.observables import noise_scale
+    from gnssatt.sim.scenarios import make_params
 
     p = make_params("ttff")
     assert p.pcv_peak_to_peak_mm == 35.0 and p.mp_code_m == [0.1, 1.0, 2.0]
@@ -233,9 +233,9 @@ def test_ttff_preset_carries_the_realism_and_other_presets_are_unchanged():
 def test_filter_integers_scored_against_truth(study_set):
     """The filter's integer constraints agree with the truth arcs; one cycle off on one constraint is flagged
     from its epoch on, on its baseline only."""
-    from worker.attitude.filter import run_filter
-    from worker.attitude.settings import AttitudeSettings
-    from worker.ttff.study import filter_integer_errors
+    from gnssatt.attitude.filter import run_filter
+    from gnssatt.attitude.settings import AttitudeSettings
+    from gnssatt.ttff.study import filter_integer_errors
 
     ss = study_set
     fr = run_filter(ss.pobs, ss.geom, ss.bl_idx, ss.body_baselines_m, ss.boresight_body,

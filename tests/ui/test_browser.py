@@ -22,7 +22,7 @@ EXPECTED_MEDIA = {".png": "image/png", ".csv": "text/csv", ".json": "application
 
 @pytest.fixture(scope="module")
 def simulated_set(tmp_path_factory) -> list[Path]:
-    from worker.sim import simulate_scenario
+    from gnssatt.sim import simulate_scenario
 
     out = tmp_path_factory.mktemp("sim")
     simulate_scenario("earth-pointing", out, overrides={"duration_s": 120})

@@ -104,7 +104,7 @@ class AttitudeConfig(BaseModel):
     @field_validator("signals")
     @classmethod
     def _unique(cls, v):
-        from worker.attitude.settings import SIGNAL_ALIASES, SIGNALS
+        from gnssatt.attitude.settings import SIGNAL_ALIASES, SIGNALS
 
         unknown = [x for x in v if x not in SIGNALS]
         if unknown:
@@ -123,7 +123,7 @@ class AttitudeConfig(BaseModel):
     @field_validator("cn0_mask_dbhz")
     @classmethod
     def _known_masks(cls, v):
-        from worker.attitude.settings import SIGNALS
+        from gnssatt.attitude.settings import SIGNALS
 
         bad = [k for k, x in v.items() if k not in SIGNALS or not 0 <= x <= 70]
         if bad:
@@ -131,7 +131,7 @@ class AttitudeConfig(BaseModel):
         return v
 
     def to_settings(self):
-        from worker.attitude.settings import AttitudeSettings
+        from gnssatt.attitude.settings import AttitudeSettings
 
         d = self.model_dump()
         cn0 = {**d.pop("cn0_mask_dbhz"), "L1": d.pop("cn0_mask_l1_dbhz"), "L2": d.pop("cn0_mask_l2_dbhz")}
@@ -160,8 +160,8 @@ def maps_for_settings(docs: list[tuple[str, dict]], baselines: list[tuple[str, s
     """(first, second, frequency) -> map dict for AttitudeSettings.pcv_maps from (map id, CONVENTIONS JSON)
     pairs; ValueError naming the map when one is malformed, is not for a baseline of the platform, or repeats a
     (pair, frequency)."""
-    from worker.gnss.io.errors import ParseError
-    from worker.gnss.io.pcv_map import parse_pcv_map
+    from gnssatt.gnss.io.errors import ParseError
+    from gnssatt.gnss.io.pcv_map import parse_pcv_map
 
     out: dict = {}
     for map_id, doc in docs:

@@ -1,4 +1,4 @@
-"""The `attitude` pipeline: parse the set, run worker.attitude.process, write the products."""
+"""The `attitude` pipeline: parse the set, run gnssatt.attitude.process, write the products."""
 from __future__ import annotations
 
 import logging
@@ -9,8 +9,8 @@ from worker.errors import JobInputError
 
 log = logging.getLogger("gnssatt.attitude")
 #: imported by the worker at start (worker.main.preload_pipelines), not by the first job
-PRELOAD = ("worker.attitude.process", "worker.attitude.products", "worker.attitude.statistics",
-           "worker.plots.attitude", "worker.report", "matplotlib.backends.backend_agg")
+PRELOAD = ("gnssatt.attitude.process", "gnssatt.attitude.products", "gnssatt.attitude.statistics",
+           "gnssatt.plots.attitude", "gnssatt.report", "matplotlib.backends.backend_agg")
 
 
 class StageClock:
@@ -35,8 +35,8 @@ class StageClock:
 
 
 def run(ctx: JobContext, config) -> None:
-    from worker.attitude.process import InputProblem, load_inputs, process
-    from worker.attitude.products import all_products, product_tables
+    from gnssatt.attitude.process import InputProblem, load_inputs, process
+    from gnssatt.attitude.products import all_products, product_tables
 
     obs_set = ctx.require_one()
     clock = StageClock()
@@ -90,10 +90,10 @@ def _write_plots_and_report(ctx: JobContext, config, obs_set, products: dict, ta
                             clock: StageClock | None = None) -> None:
     """PNG plots (seed 000 Figs. 5-7 style Euler errors, fix status, DOP, residuals, sky plot) and one
     self-contained report.html; see docs/pages.md. The plots take the CSV products' column arrays (`tables`,
-    worker.attitude.products.product_tables) where there are some, not the texts parsed back."""
-    from worker.plots import PlotContext
-    from worker.plots.attitude import attitude_plots
-    from worker.report import html_report
+    gnssatt.attitude.products.product_tables) where there are some, not the texts parsed back."""
+    from gnssatt.plots import PlotContext
+    from gnssatt.plots.attitude import attitude_plots
+    from gnssatt.report import html_report
 
     ctx.progress(0.95, "plotting")
     texts = {name: (content.decode() if isinstance(content, bytes) else content)

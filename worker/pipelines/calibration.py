@@ -23,9 +23,9 @@ HELD_OUT_COST = 12.0  # the held-out task's cost in set extractions (pass 2: thr
 
 
 def _options(cfg: dict):
-    from worker.calibration.binning import Grid2D
-    from worker.calibration.campaign import CampaignOptions
-    from worker.calibration.extract import ExtractOptions
+    from gnssatt.calibration.binning import Grid2D
+    from gnssatt.calibration.campaign import CampaignOptions
+    from gnssatt.calibration.extract import ExtractOptions
 
     ext = ExtractOptions(signals=tuple(cfg["frequencies"]), sigma_phase_m=cfg["sigma_phase_mm"] * 1e-3,
                          cn0_mask_dbhz={"L1": cfg["cn0_mask_l1_dbhz"], "L2": cfg["cn0_mask_l2_dbhz"]},
@@ -53,8 +53,8 @@ def _find(sets, set_id: str):
 
 def _load(payload: dict, sets):
     """(SetData, options) or an {"input_error"} dict."""
-    from worker.calibration.extract import SetInputError, load_set
-    from worker.gnss.io.errors import ParseError
+    from gnssatt.calibration.extract import SetInputError, load_set
+    from gnssatt.gnss.io.errors import ParseError
 
     options = _options(payload["config"])
     s = _find(sets, payload["set_id"])
@@ -67,7 +67,7 @@ def _load(payload: dict, sets):
         return None, options, {"input_error": {"title": "An input file could not be parsed",
                                                "detail": f"set {_label(s)!r}: {exc}", "file": exc.path}}
     if data.reference.coverage < options.min_reference_coverage:
-        from worker.calibration.reference import uncovered_spans
+        from gnssatt.calibration.reference import uncovered_spans
         spans = "; ".join(f"{a} to {b}" for a, b in uncovered_spans(data.epochs, data.reference.ok))
         return None, options, {"input_error": {
             "title": "Reference attitude does not cover the observations",
@@ -78,12 +78,12 @@ def _load(payload: dict, sets):
 
 
 def statistics_task(payload: dict, sets):
-    """Pass 1 of one set: SetStats (worker.calibration.campaign) or {"input_error": ...}.
+    """Pass 1 of one set: SetStats (gnssatt.calibration.campaign) or {"input_error": ...}.
 
-    Also the set's own campaign check (reference attitude against the observation span, worker.calibration.checks)
+    Also the set's own campaign check (reference attitude against the observation span, gnssatt.calibration.checks)
     that needs its reference file read: done here, in parallel, instead of in the parent before the fan-out."""
-    from worker.calibration.campaign import set_statistics
-    from worker.calibration.checks import CampaignError, check_campaign
+    from gnssatt.calibration.campaign import set_statistics
+    from gnssatt.calibration.checks import CampaignError, check_campaign
 
     t0, c0 = time.perf_counter(), time.process_time()
     s = _find(sets, payload["set_id"])
@@ -101,7 +101,7 @@ def statistics_task(payload: dict, sets):
 
 def final_task(payload: dict, sets):
     """Pass 2 of one set: SetFinal or {"input_error": ...}."""
-    from worker.calibration.campaign import set_final
+    from gnssatt.calibration.campaign import set_final
 
     t0, c0 = time.perf_counter(), time.process_time()
     data, options, err = _load(payload, sets)
@@ -122,10 +122,10 @@ def final_task(payload: dict, sets):
 
 def held_out_attitude(payload: dict, s, calibrated: dict, maps: dict, options, epoch_wise: dict | None) -> dict:
     """held_out_attitude.json: the attitude filter (the attitude job's processing, `held_out_attitude_config`)
-    on the held-out set without and with the calibration (worker.calibration.held_out), and the epoch-wise QUEST
-    comparison (worker.calibration.campaign.attitude_comparison) as a secondary block."""
-    from worker.attitude.process import InputProblem, load_inputs
-    from worker.calibration.held_out import filter_comparison, map_documents
+    on the held-out set without and with the calibration (gnssatt.calibration.held_out), and the epoch-wise QUEST
+    comparison (gnssatt.calibration.campaign.attitude_comparison) as a secondary block."""
+    from gnssatt.attitude.process import InputProblem, load_inputs
+    from gnssatt.calibration.held_out import filter_comparison, map_documents
     from worker.jobs.attitude import AttitudeConfig
     from worker.jobs.calibration import HELD_OUT_ATTITUDE_DEFAULT
 
@@ -154,7 +154,7 @@ def _raise_input_errors(results: list, payloads: list) -> None:
 
 def _obs_span(s):
     """(first, last) GpsTime of a set's observations from the upload summaries (no RINEX parsing)."""
-    from worker.gnss.time import GpsTime
+    from gnssatt.gnss.time import GpsTime
 
     obs = s.of_kind("rinex_obs")
     firsts = [GpsTime.from_iso(f.summary["time_first"]) for f in obs if f.summary.get("time_first")]
@@ -165,11 +165,11 @@ def _obs_span(s):
 
 
 def _set_infos(sets, read_reference):
-    """SetInfo of each set (worker.calibration.checks); the reference file is parsed only when read_reference is
+    """SetInfo of each set (gnssatt.calibration.checks); the reference file is parsed only when read_reference is
     True or a collection holding the set's id (the calibration sets' references are checked in their own pass-1
     task; the parent checks what the summaries and platform.json give, and the held-out set's reference)."""
-    from worker.calibration.checks import SetInfo
-    from worker.gnss.io.reference_attitude import read_reference_attitude
+    from gnssatt.calibration.checks import SetInfo
+    from gnssatt.gnss.io.reference_attitude import read_reference_attitude
 
     infos = []
     for s in sets:
@@ -206,7 +206,7 @@ def _map_in_order(ctx: JobContext, function: str, payloads: list[dict], costs: l
 
 
 def _map_doc(platform: str, key, grid, values, count, sigma) -> dict:
-    from worker.gnss.io.pcv_map import PcvMap
+    from gnssatt.gnss.io.pcv_map import PcvMap
 
     m = PcvMap(platform, key[0], key[1], key[2], grid.x_centres_deg, grid.y_centres_deg,
                np.round(values, 4), count.astype(np.int64), np.round(sigma, 4))
@@ -214,11 +214,11 @@ def _map_doc(platform: str, key, grid, values, count, sigma) -> dict:
 
 
 def run(ctx: JobContext, config) -> None:
-    from worker.calibration.campaign import (combine_residual_stats, finish_maps, reduce_baselines, reduce_maps,
+    from gnssatt.calibration.campaign import (combine_residual_stats, finish_maps, reduce_baselines, reduce_maps,
                                              split_baselines)
-    from worker.calibration.baselines import baselines_document, baselines_table_csv
-    from worker.calibration.checks import CampaignError, check_campaign
-    from worker.gnss.io.platform import parse_platform
+    from gnssatt.calibration.baselines import baselines_document, baselines_table_csv
+    from gnssatt.calibration.checks import CampaignError, check_campaign
+    from gnssatt.gnss.io.platform import parse_platform
 
     cfg = config.model_dump()
     options = _options(cfg)
@@ -309,7 +309,7 @@ def run(ctx: JobContext, config) -> None:
             "max_mm": round(float(np.nanmax(values)), 3) if finite.any() else None,
             "max_abs_final_bin_residual_mm": round(float(np.nanmax(np.abs(check))), 4) if finite.any() else None,
             "median_sigma_mm": round(float(np.nanmedian(sigma)), 4) if finite.any() else None})
-    from worker.plots.calibration import baselines_table, pcv_counts_plot, pcv_maps_plot
+    from gnssatt.plots.calibration import baselines_table, pcv_counts_plot, pcv_maps_plot
 
     context = {"job": ctx.job_id, "platform": platform.name, "sets": len(cal_sets)}
     pngs = {"pcv_maps.png": pcv_maps_plot(map_docs, context=context),
@@ -331,7 +331,7 @@ def run(ctx: JobContext, config) -> None:
                for s, r, q in zip(stats, r1, r2)]
     summary = {
         "platform": platform.name, "sets": len(cal_sets), "held_out_set": [_label(s) for s in held[:1]],
-        "extractor": "reference-aided kinematic (worker.calibration.extract): epoch-wise integer fixing with the "
+        "extractor": "reference-aided kinematic (gnssatt.calibration.extract): epoch-wise integer fixing with the "
                      "reference attitude, epoch-wise least-squares baselines",
         "grid": {"azimuth_step_deg": config.azimuth_step_deg, "elevation_step_deg": config.elevation_step_deg,
                  "elevation_range_deg": [config.elevation_min_deg, config.elevation_max_deg],
@@ -350,7 +350,7 @@ def run(ctx: JobContext, config) -> None:
     }
     ctx.write_product("tasks.csv", tasks_csv(ctx.task_records, started_at))
     ctx.write_product("calibration_summary.json", summary)
-    from worker.report import html_report
+    from gnssatt.report import html_report
 
     report_summary = {k: v for k, v in summary.items() if k not in ("per_set", "baselines", "maps")}
     tables = {"Baselines (body frame, Table 3 layout)": baselines_table(baselines_document(platform.name, rows))}

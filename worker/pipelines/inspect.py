@@ -7,19 +7,19 @@ import io
 import numpy as np
 
 from worker.context import JobContext
-from worker.gnss.tracking import tracking_table
-from worker.plots.inspect import tracking_arrays
+from gnssatt.gnss.tracking import tracking_table
+from gnssatt.plots.inspect import tracking_arrays
 
 
 def run(ctx: JobContext, config) -> None:
-    from worker.gnss.io.rinex_obs import read_rinex_obs
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
 
     obs_set = ctx.require_one()
     obs_files = obs_set.of_kind("rinex_obs")
     other = [f for f in obs_set.files if f.kind != "rinex_obs"]
     rows: list[dict] = []
     files_summary: list[dict] = []
-    tracking: list[dict] = []  # per receiver, for the plots (worker/plots/inspect.py)
+    tracking: list[dict] = []  # per receiver, for the plots (gnssatt/plots/inspect.py)
     for i, f in enumerate(obs_files):
         ctx.progress(i / max(len(obs_files), 1) * 0.9, f"parsing {f.name}")
         obs = read_rinex_obs(f.path, name=f.name)
@@ -59,8 +59,8 @@ def run(ctx: JobContext, config) -> None:
 def _write_plots(ctx: JobContext, config, obs_set, tracking: list[dict], observations_csv: str) -> None:
     """tracking.csv (per receiver and epoch: satellites, mean C/N0; feeds the job page's interactive chart),
     tracking.png (satellites x GPS time coloured by C/N0) and cn0.png (mean C/N0 per satellite and receiver)."""
-    from worker.plots import PlotContext
-    from worker.plots.inspect import cn0_overview_plot, tracking_plot, tracking_series_csv
+    from gnssatt.plots import PlotContext
+    from gnssatt.plots.inspect import cn0_overview_plot, tracking_plot, tracking_series_csv
 
     ctx.progress(0.95, "plotting")
     context = PlotContext(set_name=obs_set.name or obs_set.id, job_id=ctx.job_id, config=config.model_dump())

@@ -8,7 +8,7 @@ from worker.errors import JobInputError
 
 
 def run(ctx: JobContext, config) -> None:
-    from worker.sim import simulate_scenario
+    from gnssatt.sim import simulate_scenario
 
     out = ctx.workdir / "sim"
     try:

@@ -21,8 +21,8 @@ TABLE_PLOT_MAX_SETS = 50
 
 
 def _options(d: dict):
-    from worker.ttff.single_epoch import SingleEpochOptions
-    from worker.ttff.study import StudyOptions
+    from gnssatt.ttff.single_epoch import SingleEpochOptions
+    from gnssatt.ttff.study import StudyOptions
 
     se = SingleEpochOptions(max_length_error_m=d["max_length_error_m"],
                             min_ratio_constrained=d["min_ratio_constrained"])
@@ -45,18 +45,18 @@ def _one_thread():
 
 
 def set_task(payload: dict, sets) -> dict:
-    """One set of the study: worker.ttff.study.run_set's result (+ "label"), or {"input_error": ...}."""
-    from worker.attitude.process import InputProblem
-    from worker.gnss.io.errors import ParseError
-    from worker.ttff.data import load_study_set
-    from worker.ttff.study import run_set
+    """One set of the study: gnssatt.ttff.study.run_set's result (+ "label"), or {"input_error": ...}."""
+    from gnssatt.attitude.process import InputProblem
+    from gnssatt.gnss.io.errors import ParseError
+    from gnssatt.ttff.data import load_study_set
+    from gnssatt.ttff.study import run_set
 
     opts = _options(payload["options"])
     label = payload["label"]
     t0, c0 = time.perf_counter(), time.process_time()
     with _one_thread():
         if payload["source"] == "simulated":
-            from worker.sim import simulate_scenario
+            from gnssatt.sim import simulate_scenario
 
             tmp = Path(tempfile.mkdtemp(prefix="ttff_"))
             try:
@@ -95,7 +95,7 @@ def set_task(payload: dict, sets) -> dict:
 
 def payloads(ctx: JobContext, config) -> list[dict]:
     """Task payloads: uploaded sets first (in the order given), then the simulated starts."""
-    from worker.ttff.starts import BENIGN_OVERRIDES, random_starts, start_overrides
+    from gnssatt.ttff.starts import BENIGN_OVERRIDES, random_starts, start_overrides
 
     opts = {k: getattr(config, k) for k in ("configurations", "methods", "duration_s", "single_epoch_step_s",
                                             "min_ratio_constrained", "max_length_error_m", "filter_mode",
@@ -117,7 +117,7 @@ def payloads(ctx: JobContext, config) -> list[dict]:
 
 
 def _html(runs: list[dict], methods: list[str], summary: dict) -> str:
-    from worker.ttff.study import table5_rows
+    from gnssatt.ttff.study import table5_rows
 
     parts = ["<!doctype html><meta charset='utf-8'><title>Time to first fix</title>",
              "<style>table{border-collapse:collapse;font:12px sans-serif}td,th{border:1px solid #bbb;"
@@ -144,14 +144,14 @@ def _tasks_per_worker(ctx: JobContext) -> dict:
 
 
 def run(ctx: JobContext, config) -> None:
-    from worker.ttff.study import runs_csv, summarize, table5_csv, table5_markdown
+    from gnssatt.ttff.study import runs_csv, summarize, table5_csv, table5_markdown
 
     tasks = payloads(ctx, config)
     if not tasks:
         raise JobInputError("Nothing to study", "give at least one observation set or a `simulate` block",
                             field="config.simulate")
     if config.simulate is not None and config.simulate.overrides:
-        from worker.sim.scenarios import make_params
+        from gnssatt.sim.scenarios import make_params
         try:
             make_params("ttff", tasks[-1]["overrides"])
         except ValueError as exc:
@@ -185,7 +185,7 @@ def run(ctx: JobContext, config) -> None:
     ctx.progress(0.95, "plots")
     pngs: dict[str, bytes] = {}
     try:
-        from worker.plots.ttff import ttff_histogram_plot, ttff_plots
+        from gnssatt.plots.ttff import ttff_histogram_plot, ttff_plots
 
         main = "filter" if "filter" in methods else methods[0]
         main_runs = [r for r in runs if r["method"] == main]
@@ -199,8 +199,8 @@ def run(ctx: JobContext, config) -> None:
             ctx.write_product(name, png, media_type="image/png")
     except Exception as exc:  # noqa: BLE001 - plots are a convenience; the tables carry the result
         ctx.log(f"plots failed: {type(exc).__name__}: {exc}")
-    from worker.plots.ttff import table5
-    from worker.report import html_report
+    from gnssatt.plots.ttff import table5
+    from gnssatt.report import html_report
 
     tables = {f"Table 5 layout, method {m}": table5([r for r in runs if r["method"] == m]) for m in methods}
     ctx.write_product("report.html", html_report("Time to first fix", {k: v for k, v in summary.items()

@@ -1,0 +1,315 @@
+"""The attitude job on parsed inputs: observations -> geometry -> EKF -> attitude, baselines and statistics.
+
+`load_inputs(files)` parses an observation set given as (name, kind, path) triples; `process(inputs, settings)`
+runs everything and returns an `AttitudeSolution` that gnssatt.attitude.products turns into files.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from gnssatt.attitude.filter import FilterResult, run_filter
+from gnssatt.attitude.geometry import EpochGeometry, compute_geometry, platform_state_from_sp3
+from gnssatt.attitude.observations import PlatformObs, build_platform_obs
+from gnssatt.attitude.settings import AttitudeSettings, effective_signals, signal_system
+from gnssatt.attitude.solution import attitude_from_baselines, attitude_quaternion, baseline_az_el, euler_and_sigma
+from gnssatt.attitude.update_kernels import quest_dcm
+from gnssatt.gnss import rotations as rot
+from gnssatt.gnss.frames import (R_enu_from_ecef, R_gcrf_from_ecef, R_ned_from_ecef, R_orbital_from_ecef,
+                                ecef_to_geodetic)
+from gnssatt.gnss.time import GpsTime
+
+__all__ = ["AttitudeInputs", "AttitudeSolution", "InputProblem", "load_inputs", "process"]
+
+
+class InputProblem(ValueError):
+    """The inputs cannot give an attitude (missing file, unusable platform); carries file/field for the job."""
+
+    def __init__(self, title: str, detail: str, file: str | None = None, field: str | None = None):
+        super().__init__(detail)
+        self.title, self.detail, self.file, self.field = title, detail, file, field
+
+
+@dataclass
+class AttitudeInputs:
+    platform: object                       # gnssatt.gnss.io.platform.Platform
+    obs: dict                              # antenna id -> RinexObs
+    obs_names: dict                        # antenna id -> file name in the set
+    nav: object | None = None              # NavData
+    gnss_sp3: object | None = None         # Sp3Data of GNSS satellites
+    platform_sp3: object | None = None     # Sp3Data of the platform itself
+    reference: object | None = None        # ReferenceAttitude
+    warnings: list = field(default_factory=list)
+
+
+@dataclass
+class AttitudeSolution:
+    settings: AttitudeSettings
+    inputs: AttitudeInputs
+    pobs: PlatformObs
+    geom: EpochGeometry
+    fr: FilterResult
+    baselines: list                        # [(first id, second id)]
+    body_baselines_m: np.ndarray           # (n_bl, 3)
+    # attitude rows (epochs where every baseline has a solution); None with one baseline
+    att_epochs: np.ndarray | None = None   # indices into pobs.time
+    q_body_from_ecef: np.ndarray | None = None
+    q_body_from_gcrf: np.ndarray | None = None
+    euler_deg: np.ndarray | None = None    # (n, 3) yaw, pitch, roll
+    sigma_euler_deg: np.ndarray | None = None
+    att_fixed: np.ndarray | None = None
+    att_n_sats: np.ndarray | None = None
+    baseline_table: dict = field(default_factory=dict)   # column arrays of baselines.csv
+    summary: dict = field(default_factory=dict)
+
+
+def load_inputs(files: list[tuple[str, str, Path]]) -> AttitudeInputs:
+    """Parse a set given as (name, kind, path) with kinds rinex_obs, rinex_nav, sp3, platform, reference_attitude."""
+    from gnssatt.gnss.io.platform import match_observation_files, parse_platform
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+    from gnssatt.gnss.io.sp3 import read_sp3
+
+    plat_files = [f for f in files if f[1] == "platform"]
+    if not plat_files:
+        raise InputProblem("No platform description", "the attitude job needs a platform.json in the set "
+                           "(antennas in the body frame, CONVENTIONS.md)", field="platform")
+    name, _, path = plat_files[0]
+    platform = parse_platform(Path(path).read_bytes(), name=name)
+    if len(platform.antennas) < 2 or not platform.baselines:
+        raise InputProblem("Too few antennas", f"{name}: attitude needs at least two antennas (one baseline)",
+                           file=name)
+    obs_files = {f[0]: f[2] for f in files if f[1] == "rinex_obs"}
+    parsed, failed, markers = {}, {}, {}
+    for fname, fpath in obs_files.items():      # each file parsed once: the marker names come from the headers
+        try:
+            parsed[fname] = read_rinex_obs(fpath, name=fname)
+            markers[fname] = parsed[fname].header.marker_name
+        except Exception as exc:  # noqa: BLE001 - a bad file is reported when an antenna needs it, below
+            failed[fname], markers[fname] = exc, None
+    mapping = match_observation_files(platform, markers, name=name)
+    needed = {a for bl in platform.baselines for a in bl}
+    obs = {}
+    for ant in platform.antennas:
+        if ant in needed:
+            if mapping[ant] in failed:
+                raise failed[mapping[ant]]
+            obs[ant] = parsed[mapping[ant]]
+    inputs = AttitudeInputs(platform, obs, {a: mapping[a] for a in obs})
+    for fname, kind, fpath in files:
+        if kind == "rinex_nav" and inputs.nav is None:
+            inputs.nav = read_rinex_nav(fpath, name=fname)
+        elif kind == "sp3":
+            sp3 = read_sp3(fpath, name=fname)
+            if any(s[0] in "GJ" for s in sp3.sats):
+                inputs.gnss_sp3 = inputs.gnss_sp3 or sp3
+            else:
+                inputs.platform_sp3 = inputs.platform_sp3 or sp3
+        elif kind == "reference_attitude":
+            from gnssatt.gnss.io.reference_attitude import read_reference_attitude
+            inputs.reference = read_reference_attitude(Path(fpath).read_bytes(), name=fname)
+    if inputs.nav is None and inputs.gnss_sp3 is None:
+        raise InputProblem("No GNSS orbits", "the set needs a RINEX navigation file or an SP3 of the GNSS "
+                           "satellites", field="rinex_nav")
+    return inputs
+
+
+def _sat_state(inputs: AttitudeInputs, systems=("G",)):
+    """(sat_state callable, source) for satellites of `systems`: the GNSS SP3, else the broadcast records of each
+    system (gnssatt.gnss.orbits.broadcast.BroadcastOrbit per system; BeiDou BDT and GEO handled there). A
+    system without records leaves its satellites without geometry (a warning); no records at all is an error."""
+    if inputs.gnss_sp3 is not None:
+        from gnssatt.gnss.geometry import sp3_state
+        return sp3_state(inputs.gnss_sp3), "sp3"
+    from gnssatt.gnss.orbits.broadcast import BroadcastOrbit
+    have = [x for x in systems if x in inputs.nav.kepler]
+    missing = [x for x in systems if x not in inputs.nav.kepler]
+    if not have:
+        raise InputProblem("No ephemerides", f"{inputs.nav.name} holds no records of {'/'.join(systems)}",
+                           file=inputs.nav.name)
+    if missing:
+        inputs.warnings.append(f"{inputs.nav.name}: no ephemerides of system(s) {'/'.join(missing)}; their "
+                               "satellites are not used")
+    if have == ["G"]:
+        return BroadcastOrbit(inputs.nav.kepler["G"]), "broadcast"
+    return _multi_system_state({x: BroadcastOrbit(inputs.nav.kepler[x]) for x in have}), "broadcast"
+
+
+def _multi_system_state(orbits: dict):
+    """A sat_state callable (sats, t) -> (r, v, clk, clk_rate) dispatching each satellite to its system's orbit."""
+    def state(sats, t):
+        sats = np.atleast_1d(np.asarray(sats)).astype(str)
+        n = sats.size
+        ts = GpsTime(np.broadcast_to(np.asarray(t.s), (n,)), np.broadcast_to(np.asarray(t.frac), (n,)))
+        r, v = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
+        clk, rate = np.full(n, np.nan), np.full(n, np.nan)
+        letters = np.array([x[:1] for x in sats])
+        for sysl, orbit in orbits.items():
+            m = letters == sysl
+            if m.any():
+                r[m], v[m], clk[m], rate[m] = orbit(sats[m], ts[m])
+        return r, v, clk, rate
+    return state
+
+
+def _platform_state(inputs: AttitudeInputs, pobs: PlatformObs, master: str):
+    """(r (n_ep, 3), v (n_ep, 3), source) of the platform reference point at the epoch tags."""
+    if inputs.platform_sp3 is not None:
+        r, v = platform_state_from_sp3(inputs.platform_sp3, pobs.time)
+        if np.isfinite(r).all(-1).mean() > 0.5:
+            return r, v, f"platform SP3 {inputs.platform_sp3.name}"
+    from gnssatt.gnss.ephemeris import BroadcastEphemeris, PreciseEphemeris
+    from gnssatt.gnss.positioning import spp
+
+    eph = PreciseEphemeris(inputs.gnss_sp3, nav=inputs.nav) if inputs.gnss_sp3 is not None \
+        else BroadcastEphemeris(inputs.nav)
+    obs = inputs.obs[master]
+    sol = spp(obs, eph, systems=("G",), velocity=True)
+    tags = sol.time_tag.s * 1000 + np.round(sol.time_tag.frac * 1000).astype(np.int64)
+    want = pobs.time.s * 1000 + np.round(pobs.time.frac * 1000).astype(np.int64)
+    r = np.full((len(want), 3), np.nan)
+    v = np.full((len(want), 3), np.nan)
+    pos = sol.position_ecef_m
+    vel = sol.velocity_ecef_m_s
+    good = np.isfinite(pos).all(-1)
+    idx = np.searchsorted(tags, want)
+    idx_c = np.clip(idx, 0, len(tags) - 1)
+    hit = (tags[idx_c] == want) & good[idx_c]
+    r[hit], v[hit] = pos[idx_c[hit]], vel[idx_c[hit]]
+    if not hit.any():
+        raise InputProblem("No platform position", f"single point positioning of {inputs.obs_names[master]} "
+                           "gave no position; add an SP3 of the platform", file=inputs.obs_names[master])
+    # a ground or slow platform: fill epochs without an SPP fix (gaps) by the nearest fix
+    good_i = np.flatnonzero(hit)
+    near = good_i[np.clip(np.searchsorted(good_i, np.arange(len(want))), 0, len(good_i) - 1)]
+    missing = ~hit
+    r[missing] = r[near[missing]]
+    v[missing] = np.nan_to_num(v[near[missing]])
+    v = np.nan_to_num(v)
+    return r, v, f"single point positioning of {inputs.obs_names[master]}"
+
+
+def _R_ref_from_ecef(kind: str, r: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Orbital frame (spacecraft) or NED (terrestrial) <- ECEF, (n, 3, 3)."""
+    if kind == "terrestrial":
+        lat, lon, _ = ecef_to_geodetic(r)
+        return R_ned_from_ecef(lat, lon)
+    return R_orbital_from_ecef(r, v)
+
+
+def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -> AttitudeSolution:
+    """AttitudeSolution of the whole pass. progress(fraction, stage) is called often (cancellation point)."""
+    def prog(f, stage=None):
+        if progress is not None:
+            progress(f, stage)
+
+    plat = inputs.platform
+    antennas = list(inputs.obs)
+    prog(0.02, "aligning observations")
+    try:
+        signals = effective_signals(settings)
+    except ValueError as e:
+        raise InputProblem("Unknown signals", str(e), field="signals") from e
+    systems = list(dict.fromkeys(signal_system(x) for x in signals))
+    pobs = build_platform_obs(inputs.obs, signals)
+    if len(pobs.time) == 0 or len(pobs.sats) == 0:
+        raise InputProblem("No observations", f"the observation files hold no {'/'.join(systems)} epochs for "
+                           f"{'/'.join(signals)}")
+    ant_index = {a: i for i, a in enumerate(antennas)}
+    baselines = [(a, b) for a, b in plat.baselines if a in ant_index and b in ant_index]
+    bl_idx = [(ant_index[a], ant_index[b]) for a, b in baselines]
+    body = []
+    for a, b in baselines:
+        cal = settings.calibrated_baselines.get((a, b))
+        body.append(np.asarray(cal, float) if cal is not None else plat.baseline_body_m(a, b))
+    body = np.array(body)
+    boresight = np.array([plat.antennas[a].boresight_body for a in antennas])
+    prog(0.05, "platform position")
+    master = plat.master if plat.master in ant_index else antennas[0]
+    r_p, v_p, psrc = _platform_state(inputs, pobs, master)
+    prog(0.10, "satellite geometry")
+    sat_state, orbit_src = _sat_state(inputs, systems)
+    observed = np.isfinite(pobs.code_m).any(axis=(0, 3))
+    geom = compute_geometry(pobs.time, pobs.sats, observed, sat_state, r_p, v_p, psrc)
+    R_ref_from_ecef = _R_ref_from_ecef(plat.kind, r_p, v_p)                      # (n_ep, 3, 3)
+    # initial attitude
+    k0 = int(np.argmax(np.isfinite(r_p).all(-1)))
+    if settings.initial_q_body_from_ecef is not None:
+        R0 = rot.quat_to_dcm(np.asarray(settings.initial_q_body_from_ecef, float))
+    else:
+        R0 = R_ref_from_ecef[k0]                 # Earth pointing (orbital frame) or level, heading north
+    attitude_fn = None
+    if len(baselines) >= 2:
+        if settings.attitude_method != "triad":
+            w_len = np.linalg.norm(body, axis=1)
+            w_len = w_len / w_len.sum()
+            body_c = np.ascontiguousarray(body, dtype=np.float64)
+
+            def attitude_fn(b, fixed):
+                # attitude_quaternion's QUEST (weights by length; also for "ml") for one epoch, compiled
+                return quest_dcm(np.ascontiguousarray(b, dtype=np.float64), body_c, w_len)
+        else:
+            def attitude_fn(b, fixed):
+                q, _ = attitude_quaternion(b[None], body, settings.attitude_method)
+                return rot.quat_to_dcm(q[0])
+    prog(0.15, "filtering")
+    two_pass = settings.mode == "dynamic" and settings.smoother_adaptive_noise
+    span = 0.375 if two_pass else 0.75
+    fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
+                    progress=lambda f: prog(0.15 + span * f))
+    if two_pass:
+        # smoother_adaptive_noise: the omega random walk per epoch from the smoothed first pass, then the whole
+        # filter again with it (gnssatt/attitude/smoother.py adaptive_noise_profile); products from the second pass
+        from gnssatt.attitude.smoother import adaptive_noise_profile
+        q_omega, info = adaptive_noise_profile(fr, settings)
+        fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
+                        progress=lambda f: prog(0.15 + span * (1 + f)), q_omega=q_omega)
+        fr.smoother_data["adaptive_noise"] = info
+    if fr.smoother_data is not None:
+        from gnssatt.attitude.smoother import smooth_filter_result
+        smooth_filter_result(fr, settings)
+    prog(0.92, "attitude")
+    sol = AttitudeSolution(settings, inputs, pobs, geom, fr, baselines, body)
+    # ---- baselines table ----
+    n_ep, n_bl = fr.ok.shape
+    jj, kk = np.nonzero(fr.ok.T)          # baseline-major -> sort by epoch after
+    order = np.lexsort((jj, kk))
+    jj, kk = jj[order], kk[order]
+    first_ant_pos = r_p[kk]
+    lat, lon, _ = ecef_to_geodetic(first_ant_pos)
+    Renu = R_enu_from_ecef(lat, lon)
+    bvec = fr.b_ecef_m[kk, jj]
+    Pbl = np.empty((kk.size, 3, 3))
+    for a in range(3):
+        for c in range(3):
+            Pbl[:, a, c] = fr.P_b_m2[kk, 3 * jj + a, 3 * jj + c]
+    L, az, el, sL, saz, sel = baseline_az_el(bvec, Pbl, Renu)
+    sol.baseline_table = {"epoch": kk, "bl": jj, "b": bvec, "length_m": L, "azimuth_deg": az,
+                          "elevation_deg": el, "sigma_length_m": sL, "sigma_azimuth_deg": saz,
+                          "sigma_elevation_deg": sel, "fixed": fr.fixed[kk, jj], "n_sats": fr.n_sats[kk, jj]}
+    # ---- attitude ----
+    if n_bl >= 2:
+        ep = np.flatnonzero(fr.ok.all(axis=1))
+        q_e, P_th = attitude_from_baselines(fr.b_ecef_m[ep], fr.P_b_m2[ep], body, settings.attitude_method)
+        good = np.isfinite(q_e).all(-1)
+        ep, q_e, P_th = ep[good], q_e[good], P_th[good]
+        R_be = rot.quat_to_dcm(q_e)
+        t_ep = pobs.time[ep]
+        R_gcrf_ecef = R_gcrf_from_ecef(t_ep)
+        R_bi = R_be @ np.swapaxes(R_gcrf_ecef, -1, -2)
+        q_i = rot.dcm_to_quat(R_bi)
+        R_b_ref = R_be @ np.swapaxes(R_ref_from_ecef[ep], -1, -2)
+        yaw, pitch, roll, sy, sp, sr = euler_and_sigma(R_b_ref, P_th)
+        sol.att_epochs = ep
+        sol.q_body_from_ecef = rot.quat_normalize(q_e)
+        sol.q_body_from_gcrf = q_i
+        sol.euler_deg = np.stack([yaw, pitch, roll], 1)
+        sol.sigma_euler_deg = np.stack([sy, sp, sr], 1)
+        sol.att_fixed = fr.fixed[ep].all(axis=1)
+        sol.att_n_sats = fr.n_sats[ep].max(axis=1)
+    prog(0.95, "statistics")
+    from gnssatt.attitude.statistics import summarize
+    sol.summary = summarize(sol, R_ref_from_ecef, orbit_src)
+    return sol

@@ -1,0 +1,263 @@
+"""Files of the attitude job: attitude.csv, baselines.csv (CONVENTIONS.md columns), residuals.csv, events.csv,
+summary.json, and exports in the field's formats: CCSDS AEM (KVN) for spacecraft, NMEA HDT for terrestrial.
+
+Implements: ../shared/CONVENTIONS.md "Output: attitude time series" and "Output: baseline time series";
+CCSDS 504.0-B-1 Attitude Data Messages sec. 4 (AEM version 1.0, KVN, ATTITUDE_TYPE = QUATERNION,
+QUATERNION_TYPE = FIRST, ATTITUDE_DIR = A2B from GCRF to the body frame); NMEA 0183 v4.10 HDT sentence
+("$GPHDT,x.x,T*hh", checksum = XOR of the characters between '$' and '*').
+"""
+from __future__ import annotations
+
+import io
+
+import numpy as np
+
+from gnssatt.attitude.filter import REASONS
+
+__all__ = ["attitude_csv", "baselines_csv", "residuals_csv", "events_csv", "aem_kvn", "nmea_hdt", "all_products",
+           "product_tables"]
+
+
+def _time_cols(t) -> tuple[list[str], np.ndarray, np.ndarray]:
+    week, sow = t.week_sow()
+    iso = t.iso(3)
+    return (iso if isinstance(iso, list) else [iso]), week, sow
+
+
+def _fmt(arr: np.ndarray, fmt: str) -> np.ndarray:
+    """fmt % value for each value, as a str array (Python's %-formatting, as np.char.mod, ~10x faster)."""
+    return np.array(list(map(fmt.__mod__, np.asarray(arr).tolist())), dtype=object)
+
+
+def _fmt_repeated(arr: np.ndarray, fmt: str) -> np.ndarray:
+    """Like _fmt for a column with few distinct values (angles per satellite and epoch repeated over signals and
+    observables, C/N0 in 0.25 dB-Hz steps): each distinct value (bitwise, so -0.0 stays apart from 0.0) is
+    formatted once. Same text as _fmt."""
+    arr = np.ascontiguousarray(arr, dtype=np.float64)
+    bits, inverse = np.unique(arr.view(np.int64), return_inverse=True)
+    return _fmt(bits.view(np.float64), fmt)[inverse.ravel()]
+
+
+def attitude_csv(sol) -> str | None:
+    """attitude.csv text (CONVENTIONS.md columns + gps_time flags); None with fewer than two baselines."""
+    if sol.att_epochs is None:
+        return None
+    t = sol.pobs.time[sol.att_epochs]
+    iso, week, sow = _time_cols(t)
+    cols = [np.asarray(iso), _fmt(week, "%d"), _fmt(sow, "%.3f")]
+    for q in (sol.q_body_from_ecef, sol.q_body_from_gcrf):
+        cols += [_fmt(q[:, i], "%.12f") for i in range(4)]
+    cols += [_fmt(sol.euler_deg[:, i], "%.6f") for i in range(3)]
+    cols += [_fmt(sol.sigma_euler_deg[:, i], "%.6f") for i in range(3)]
+    cols += [_fmt(sol.att_fixed.astype(int), "%d"), _fmt(sol.att_n_sats, "%d")]
+    header = ("time_gps,gps_week,gps_sow,qe_w,qe_x,qe_y,qe_z,qi_w,qi_x,qi_y,qi_z,yaw_deg,pitch_deg,roll_deg,"
+              "sigma_yaw_deg,sigma_pitch_deg,sigma_roll_deg,fixed,n_sats")
+    return _join(header, cols)
+
+
+def _join(header: str, cols: list[np.ndarray]) -> str:
+    if len(cols[0]) == 0:
+        return header + "\n"
+    rows = map(",".join, zip(*[c.tolist() if isinstance(c, np.ndarray) else list(c) for c in cols]))
+    return header + "\n" + "\n".join(rows) + "\n"
+
+
+def baselines_csv(sol) -> str:
+    """baselines.csv text, one row per epoch and baseline with a solution (CONVENTIONS.md)."""
+    bt = sol.baseline_table
+    t = sol.pobs.time[bt["epoch"]]
+    iso, week, sow = _time_cols(t)
+    names = np.array([f"{a}>{b}" for a, b in sol.baselines] or ["-"])
+    cols = [np.asarray(iso), _fmt(week, "%d"), _fmt(sow, "%.3f"), names[bt["bl"]]]
+    cols += [_fmt(bt["b"][:, i], "%.5f") for i in range(3)]
+    cols += [_fmt(bt["length_m"], "%.5f"), _fmt(bt["azimuth_deg"], "%.5f"), _fmt(bt["elevation_deg"], "%.5f"),
+             _fmt(bt["sigma_azimuth_deg"], "%.5f"), _fmt(bt["sigma_elevation_deg"], "%.5f"),
+             _fmt(bt["sigma_length_m"], "%.5f"), _fmt(bt["fixed"].astype(int), "%d"), _fmt(bt["n_sats"], "%d")]
+    header = ("time_gps,gps_week,gps_sow,baseline,x_ecef_m,y_ecef_m,z_ecef_m,length_m,azimuth_deg,elevation_deg,"
+              "sigma_azimuth_deg,sigma_elevation_deg,sigma_length_m,fixed,n_sats")
+    return _join(header, cols)
+
+
+def residuals_csv(sol) -> str:
+    """residuals.csv: per epoch, baseline, satellite, signal and observable, the post-fit SD residual (m),
+    antenna-frame azimuth/elevation, C/N0, used flag and rejection reason."""
+    r = sol.fr.residuals
+    header = ("time_gps,gps_sow,baseline,sat,signal,observable,residual_m,az_ant_deg,el_ant_deg,cn0_dbhz,used,"
+              "reason")
+    if r["epoch"].size == 0:
+        return header + "\n"
+    iso_all = np.asarray(sol.pobs.time.iso(3))
+    _, sow_all = sol.pobs.time.week_sow()
+    names = np.array([f"{a}>{b}" for a, b in sol.baselines])
+    sats = np.asarray(sol.pobs.sats)
+    sigs = np.asarray(sol.pobs.signals)
+    reasons = np.array([REASONS[i] for i in range(len(REASONS))])
+    kinds = np.array(["code", "phase"])
+    ep = r["epoch"]
+
+    def num(a, f, repeated=False):
+        out = np.full(a.shape, "", dtype=object)
+        ok = np.isfinite(a)
+        out[ok] = (_fmt_repeated if repeated else _fmt)(a[ok], f)
+        return out
+
+    def pairs(a, b):
+        """'a,b' for every pair of two small label lists, flat index i * len(b) + j."""
+        return np.array([f"{x},{y}" for x in a.tolist() for y in b.tolist()], dtype=object)
+
+    # columns that come from a few labels (epoch times, baseline + satellite, signal + observable,
+    # used + reason) are joined once per combination and indexed: fewer cells to join per row
+    used_reason = np.array([f"{int(i == 0)},{reasons[i]}" for i in range(len(reasons))], dtype=object)
+    cols = [(iso_all.astype(object) + "," + _fmt(sow_all, "%.3f"))[ep],
+            pairs(names, sats)[r["bl"] * len(sats) + r["sat"]], pairs(sigs, kinds)[r["sig"] * 2 + r["kind"]],
+            num(r["residual_m"], "%.5f"), num(r["az_ant_deg"], "%.2f", True), num(r["el_ant_deg"], "%.2f", True),
+            num(r["cn0_dbhz"], "%.1f", True), used_reason[r["reason"]]]
+    return _join(header, cols)
+
+
+def events_csv(sol) -> str:
+    """events.csv: fixes, failed validations, slips, clock jumps, restarts, in time order."""
+    buf = io.StringIO()
+    buf.write("time_gps,gps_sow,event,baseline,sat,signal,detail\n")
+    iso = sol.pobs.time.iso(3)
+    _, sow = sol.pobs.time.week_sow()
+    for e in sol.fr.events:
+        k = e["epoch"]
+        bl = "" if e["baseline"] is None else f"{sol.baselines[e['baseline']][0]}>{sol.baselines[e['baseline']][1]}"
+        detail = str(e.get("detail", "")).replace('"', "'")
+        buf.write(f"{iso[k]},{sow[k]:.3f},{e['event']},{bl},{e['sat'] or ''},{e['signal'] or ''},\"{detail}\"\n")
+    return buf.getvalue()
+
+
+def aem_kvn(sol, creation_date: str = "2000-01-01T00:00:00", originator: str = "GNSSATT") -> str | None:
+    """CCSDS AEM 1.0 KVN of the GCRF->body quaternions (scalar first), or None without an attitude."""
+    if sol.att_epochs is None or sol.att_epochs.size == 0:
+        return None
+    t = sol.pobs.time[sol.att_epochs]
+    iso = np.asarray(t.iso(3))
+    name = sol.inputs.platform.name
+    lines = [
+        "CCSDS_AEM_VERS = 1.0",
+        f"CREATION_DATE = {creation_date}",
+        f"ORIGINATOR = {originator}",
+        "",
+        "META_START",
+        "COMMENT GNSS attitude (gnssatt): passive quaternion GCRF -> body, v_body = R(q) v_gcrf, scalar first",
+        "COMMENT GCRF from ECEF by IAU 2006/2000A with zero EOP; float epochs included (see attitude.csv fixed)",
+        f"OBJECT_NAME = {name}",
+        f"OBJECT_ID = {name}",
+        "CENTER_NAME = EARTH",
+        "REF_FRAME_A = GCRF",
+        "REF_FRAME_B = SC_BODY_1",
+        "ATTITUDE_DIR = A2B",
+        "TIME_SYSTEM = GPS",
+        f"START_TIME = {iso[0]}",
+        f"USEABLE_START_TIME = {iso[0]}",
+        f"USEABLE_STOP_TIME = {iso[-1]}",
+        f"STOP_TIME = {iso[-1]}",
+        "ATTITUDE_TYPE = QUATERNION",
+        "QUATERNION_TYPE = FIRST",
+        "META_STOP",
+        "",
+        "DATA_START",
+    ]
+    q = sol.q_body_from_gcrf
+    body = iso.astype(object)
+    for i in range(4):
+        body = body + " " + _fmt(q[:, i], "%.12f").astype(object)
+    return "\n".join(lines + body.tolist() + ["DATA_STOP", ""])
+
+
+def nmea_hdt(sol, baseline_index: int = 0) -> str | None:
+    """NMEA HDT sentences (true heading of the body x axis) for a terrestrial platform, one per epoch with a
+    baseline solution; heading = baseline azimuth minus the baseline's azimuth in the body frame."""
+    bt = sol.baseline_table
+    if sol.inputs.platform.kind != "terrestrial" or bt["epoch"].size == 0:
+        return None
+    if sol.att_epochs is not None:
+        heading = np.mod(sol.euler_deg[:, 0], 360.0)
+        epochs = sol.att_epochs
+    else:
+        m = bt["bl"] == baseline_index
+        bb = sol.body_baselines_m[baseline_index]
+        heading = np.mod(bt["azimuth_deg"][m] - np.degrees(np.arctan2(bb[1], bb[0])), 360.0)
+        epochs = bt["epoch"][m]
+    _, _, _, hh, mm, ss = sol.pobs.time[epochs].calendar()
+    out = []
+    for h, m_, s_, hd in zip(hh, mm, ss, heading):
+        body = f"GPHDT,{hd:.3f},T"
+        ck = 0
+        for ch in body:
+            ck ^= ord(ch)
+        out.append(f"${body}*{ck:02X}")
+    return "\r\n".join(out) + "\r\n"
+
+
+def all_products(sol) -> dict[str, str | dict]:
+    """Product name -> content (text or JSON-able dict) of a solved attitude job."""
+    out: dict[str, str | dict] = {}
+    att = attitude_csv(sol)
+    if att is not None:
+        out["attitude.csv"] = att
+    out["baselines.csv"] = baselines_csv(sol)
+    out["residuals.csv"] = residuals_csv(sol)
+    out["events.csv"] = events_csv(sol)
+    out["summary.json"] = sol.summary
+    if sol.inputs.platform.kind == "terrestrial":
+        hdt = nmea_hdt(sol)
+        if hdt is not None:
+            out["heading.nmea"] = hdt
+    else:
+        aem = aem_kvn(sol)
+        if aem is not None:
+            out["attitude.aem"] = aem
+    return out
+
+
+def _epoch_times(sol) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(time_gps as datetime64[ms], gps_week, gps_sow) of every epoch of the pass (the CSVs' time columns)."""
+    week, sow = sol.pobs.time.week_sow()
+    iso = sol.pobs.time.iso(3)
+    t = np.array(iso if isinstance(iso, list) else [iso], dtype="datetime64[ms]")
+    return t, np.asarray(week, float), np.asarray(sow, float)
+
+
+def product_tables(sol) -> dict[str, dict[str, np.ndarray]]:
+    """attitude.csv, baselines.csv and residuals.csv as column arrays (gnssatt.plots.common.Table) straight from
+    the solution, for the plots: same column names and rows as the CSV texts, numbers as float64 (unrounded; NaN
+    where the CSV cell is empty), names as str arrays, time_gps as datetime64[ms] (GPS time, as written).
+    What read_csv_table would give back from the texts, without formatting and re-parsing ~6e5 residual rows."""
+    t_ep, week_ep, sow_ep = _epoch_times(sol)
+    out: dict[str, dict[str, np.ndarray]] = {}
+    if sol.att_epochs is not None:
+        ep = sol.att_epochs
+        tab = {"time_gps": t_ep[ep], "gps_week": week_ep[ep], "gps_sow": sow_ep[ep]}
+        for prefix, q in (("qe", sol.q_body_from_ecef), ("qi", sol.q_body_from_gcrf)):
+            tab.update({f"{prefix}_{c}": np.asarray(q[:, i], float) for i, c in enumerate("wxyz")})
+        for i, a in enumerate(("yaw", "pitch", "roll")):
+            tab[f"{a}_deg"] = np.asarray(sol.euler_deg[:, i], float)
+        for i, a in enumerate(("yaw", "pitch", "roll")):
+            tab[f"sigma_{a}_deg"] = np.asarray(sol.sigma_euler_deg[:, i], float)
+        tab["fixed"] = sol.att_fixed.astype(float)
+        tab["n_sats"] = np.asarray(sol.att_n_sats, float)
+        out["attitude.csv"] = tab
+    bt = sol.baseline_table
+    ep = bt["epoch"]
+    names = np.array([f"{a}>{b}" for a, b in sol.baselines] or ["-"])
+    tab = {"time_gps": t_ep[ep], "gps_week": week_ep[ep], "gps_sow": sow_ep[ep], "baseline": names[bt["bl"]]}
+    tab.update({c: np.asarray(bt["b"][:, i], float) for i, c in enumerate(("x_ecef_m", "y_ecef_m", "z_ecef_m"))})
+    for c in ("length_m", "azimuth_deg", "elevation_deg", "sigma_azimuth_deg", "sigma_elevation_deg",
+              "sigma_length_m", "fixed", "n_sats"):
+        tab[c] = np.asarray(bt[c], float)
+    out["baselines.csv"] = tab
+    r = sol.fr.residuals
+    ep = r["epoch"]
+    reasons = np.array([REASONS[i] for i in range(len(REASONS))])
+    out["residuals.csv"] = {
+        "time_gps": t_ep[ep], "gps_sow": sow_ep[ep],
+        "baseline": np.array([f"{a}>{b}" for a, b in sol.baselines] or ["-"])[r["bl"]],
+        "sat": np.asarray(sol.pobs.sats, str)[r["sat"]], "signal": np.asarray(sol.pobs.signals, str)[r["sig"]],
+        "observable": np.array(["code", "phase"])[r["kind"]],
+        **{c: np.asarray(r[c], float) for c in ("residual_m", "az_ant_deg", "el_ant_deg", "cn0_dbhz")},
+        "used": (r["reason"] == 0).astype(float), "reason": reasons[r["reason"]]}
+    return out

@@ -1,0 +1,432 @@
+"""Identify an uploaded file and summarise it cheaply, in bounded memory, for upload validation.
+
+Observation files are scanned line by line (header fully, then only epoch lines and the first three
+characters of satellite records), so a 1 GiB RINEX file is checked with a few MB of memory. Gzip and
+zip members stream; Hatanaka and Unix-compress need the whole file and are decompressed in memory.
+The full readers (rinex_obs, rinex_nav, sp3, ...) are for jobs.
+
+Implements: RINEX 2.11 / 3.05 / 4.01 observation record layout (epoch lines, event flags 0-6),
+SP3-c/d first line, ANTEX 1.4 and RINEX clock headers, for identification only.
+"""
+from __future__ import annotations
+
+import bz2
+import gzip
+import io
+import json
+import zipfile
+from collections import Counter
+from pathlib import Path
+from typing import Iterator
+
+
+from gnssatt.gnss.io.errors import ParseError, ParseWarning
+
+_KNOWN = ("RINEX observation (2.10-4.02), RINEX navigation, SP3-c/d, RINEX clock, ANTEX, platform.json or a "
+          "reference attitude CSV (plain, .gz, .Z, .zip or Hatanaka)")
+
+
+# --- opening ---------------------------------------------------------------------------------------
+
+def _open_binary(path: Path, name: str) -> io.BufferedIOBase:
+    """A binary stream of the decompressed content (gzip/bz2/zip stream; .Z and Hatanaka in memory)."""
+    with open(path, "rb") as fh:
+        head = fh.read(8)
+    if head.startswith(b"\x1f\x8b"):
+        return gzip.open(path, "rb")
+    if head.startswith(b"BZh"):
+        return bz2.open(path, "rb")
+    if head.startswith(b"PK\x03\x04"):
+        zf = zipfile.ZipFile(path)
+        members = [i for i in zf.infolist() if not i.is_dir()]
+        if len(members) != 1:
+            raise ParseError(name, None, "a zip holding exactly one file", f"{len(members)} members")
+        return zf.open(members[0])
+    if head.startswith(b"\x1f\x9d"):
+        from gnssatt.gnss.io.compression import read_text_bytes
+        return io.BytesIO(read_text_bytes(path, name=name))
+    return open(path, "rb")
+
+
+def _decompress_hatanaka(data: bytes, name: str) -> bytes:
+    import hatanaka
+
+    try:
+        return hatanaka.decompress(data)
+    except Exception as exc:  # the package raises ValueError/HatanakaException variants
+        raise ParseError(name, None, "a valid Hatanaka-compressed (CRINEX) file", str(exc)[:200]) from exc
+
+
+def _lines(stream: io.BufferedIOBase, name: str) -> Iterator[str]:
+    for raw in stream:
+        try:
+            yield raw.decode("ascii").rstrip("\r\n")
+        except UnicodeDecodeError:
+            yield raw.decode("latin-1").rstrip("\r\n")
+
+
+def _is_binary(chunk: bytes) -> bool:
+    if b"\x00" in chunk:
+        return True
+    text = sum(32 <= b < 127 or b in (9, 10, 13) for b in chunk)
+    return bool(chunk) and text / len(chunk) < 0.95
+
+
+# --- identification --------------------------------------------------------------------------------
+
+def identify(path: Path, name: str) -> tuple[str, dict]:
+    """(kind, summary) of one file; ParseError naming the file and line when it is not what it claims."""
+    path = Path(path)
+    if path.stat().st_size == 0:
+        raise ParseError(name, None, _KNOWN, "an empty file")
+    with _open_binary(path, name) as stream:
+        try:
+            head = stream.read(4096)
+        except (OSError, EOFError, zipfile.BadZipFile) as exc:
+            raise ParseError(name, None, "a readable (de)compressed file", str(exc)) from exc
+    if not head:
+        raise ParseError(name, None, _KNOWN, "an empty file after decompression")
+    if _is_binary(head):
+        raise ParseError(name, 1, _KNOWN, "binary data")
+    first = head.split(b"\n", 1)[0].decode("latin-1").rstrip("\r")
+    stripped = head.lstrip()
+    if stripped.startswith(b"{") or stripped.startswith(b"["):
+        from gnssatt.gnss.io.platform import parse_platform
+
+        data = _read_all(path, name, limit=16 * 1024 * 1024)
+        platform = parse_platform(data, name)
+        return "platform", {"format": "platform.json", "name": platform.name, "kind": platform.kind,
+                            "antennas": list(platform.antennas), "master": platform.master,
+                            "baselines": [f"{a}>{b}" for a, b in platform.baselines]}
+    if first.replace(" ", "").startswith("time_gps,"):
+        from gnssatt.gnss.io.reference_attitude import summarize_reference_attitude
+
+        return "reference_attitude", summarize_reference_attitude(_read_all(path, name, 512 * 1024 * 1024), name)
+    label = first[60:80].strip()
+    if label.startswith("CRINEX VERS"):
+        data = _decompress_hatanaka(_read_all(path, name, limit=None), name)
+        return "rinex_obs", scan_rinex_obs(_lines(io.BytesIO(data), name), name, compression="hatanaka")
+    if label == "RINEX VERSION / TYPE":
+        ftype = first[20:21]
+        if ftype == "O":
+            with _open_binary(path, name) as stream:
+                return "rinex_obs", scan_rinex_obs(_lines(stream, name), name)
+        if ftype in ("N", "G", "H", "B", "L", "J", "C", "E", "I", "M") and "NAV" in first[20:60].upper() \
+                or ftype in ("N", "G", "H"):
+            return "rinex_nav", _summarize_with("rinex_nav", "summarize_rinex_nav", path, name)
+        if ftype == "C":
+            return "rinex_clock", _summarize_with("rinex_clock", "summarize_rinex_clock", path, name)
+        raise ParseError(name, 1, "RINEX file type O (observation), N/G/H (navigation) or C (clock) in column 21",
+                         first)
+    if first.startswith("#") and len(first) > 2 and first[1] in "abcd" and first[2] in "PV":
+        return "sp3", _summarize_with("sp3", "summarize_sp3", path, name)
+    if label == "ANTEX VERSION / SYST":
+        return "antex", _summarize_with("antex", "summarize_antex", path, name)
+    raise ParseError(name, 1, _KNOWN, first[:80])
+
+
+def _read_all(path: Path, name: str, limit: int | None) -> bytes:
+    with _open_binary(path, name) as stream:
+        data = stream.read(-1 if limit is None else limit + 1)
+    if limit is not None and len(data) > limit:
+        raise ParseError(name, None, f"a file of at most {limit} bytes of this kind", f"{len(data)}+ bytes")
+    return data
+
+
+def _summarize_with(module: str, func: str, path: Path, name: str) -> dict:
+    import importlib
+
+    mod = importlib.import_module(f"gnssatt.gnss.io.{module}")
+    return getattr(mod, func)(_read_all(path, name, limit=512 * 1024 * 1024), name=name)
+
+
+# --- the streaming observation-file scan ----------------------------------------------------------
+
+def _epoch_v3(line: str, name: str, line_no: int):
+    try:
+        year, month, day = int(line[2:6]), int(line[7:9]), int(line[10:12])
+        hour, minute, sec = int(line[13:15]), int(line[16:18]), float(line[18:29])
+        flag = int(line[31:32] or 0)
+        count = int(line[32:35])
+    except ValueError as exc:
+        raise ParseError(name, line_no, "an epoch line '> YYYY MM DD HH MM SS.SSSSSSS  F NNN' (RINEX 3 A13)",
+                         line) from exc
+    return (year, month, day, hour, minute, sec), flag, count
+
+
+def _epoch_v2(line: str, name: str, line_no: int):
+    try:
+        yy = int(line[1:3])
+        year = yy + (2000 if yy < 80 else 1900)
+        month, day, hour, minute = int(line[4:6]), int(line[7:9]), int(line[10:12]), int(line[13:15])
+        sec = float(line[15:26])
+        flag = int(line[28:29] or 0)
+        count = int(line[29:32])
+    except ValueError as exc:
+        raise ParseError(name, line_no, "an epoch line ' YY MM DD HH MM SS.SSSSSSS  F NNN' + satellites (RINEX 2)",
+                         line) from exc
+    return (year, month, day, hour, minute, sec), flag, count
+
+
+def _is_special_v2(line: str) -> bool:
+    """RINEX 2 event record with blank date (flag 4 header splice, etc.)."""
+    return len(line) >= 29 and line[1:26].strip() == "" and line[28:29].isdigit()
+
+
+class _EpochStats:
+    """First, last, count, backward steps and a histogram of steps, in constant memory (a 1 GiB file has
+    millions of epochs: keeping them all would cost more than the upload itself)."""
+
+    def __init__(self):
+        self.count = 0
+        self.backwards = 0
+        self.steps: Counter[float] = Counter()
+        self._first: tuple[int, float] | None = None
+        self._prev: tuple[int, float] | None = None
+
+    def add(self, t: tuple) -> None:
+        year, month, day, hour, minute, sec = t
+        whole = int(sec // 1)
+        s = (_days_from_civil(year, month, day) * 86400 + hour * 3600 + minute * 60 + whole, sec - whole)
+        if self._prev is not None:
+            step = (s[0] - self._prev[0]) + (s[1] - self._prev[1])
+            if step < -1e-6:
+                self.backwards += 1
+            if len(self.steps) < 10000 or step in self.steps:
+                self.steps[round(step, 6)] += 1
+        else:
+            self._first = s
+        self._prev = s
+        self.count += 1
+
+    def _time(self, s: tuple[int, float]):
+        from gnssatt.gnss.time import GpsTime
+        return GpsTime(s[0] - _GPS_EPOCH_UNIX_DAYS * 86400, s[1])
+
+    @property
+    def first(self):
+        return self._time(self._first)
+
+    @property
+    def last(self):
+        return self._time(self._prev)
+
+    def median_step_s(self) -> float | None:
+        total = sum(self.steps.values())
+        if not total:
+            return None
+        seen = 0
+        for step in sorted(self.steps):
+            seen += self.steps[step]
+            if seen * 2 >= total:
+                return float(step)
+        return None
+
+
+def _days_from_civil(y: int, m: int, d: int) -> int:
+    """Days since 1970-01-01 (H. Hinnant), scalar and fast for the per-line scan."""
+    y -= m <= 2
+    era = y // 400
+    yoe = y - era * 400
+    doy = (153 * ((m + 9) % 12) + 2) // 5 + d - 1
+    return era * 146097 + yoe * 365 + yoe // 4 - yoe // 100 + doy - 719468
+
+
+_GPS_EPOCH_UNIX_DAYS = 3657
+
+
+def scan_rinex_obs(lines: Iterator[str], name: str, compression: str | None = None) -> dict:
+    """Summary of a RINEX observation file from a line iterator, in bounded memory.
+
+    Returns format, version, marker name, receiver/antenna, time span, interval, epoch count, systems,
+    signals per system, satellites and warnings. Raises ParseError for missing mandatory header lines,
+    malformed epoch lines and truncated epochs.
+    """
+    warnings: list[ParseWarning] = []
+    version = None
+    obs_types: dict[str, list[str]] = {}
+    marker = receiver = antenna = None
+    header_interval = None
+    approx = None
+    line_no = 0
+    pending_sys = None
+    v2_types: list[str] = []
+    v2_count = 0
+    end_of_header = False
+    first_line = None
+    for line in lines:
+        line_no += 1
+        label = line[60:80].strip()
+        if line_no == 1:
+            first_line = line
+            if label != "RINEX VERSION / TYPE":
+                raise ParseError(name, 1, "'RINEX VERSION / TYPE' in columns 61-80 of the first line", line)
+            try:
+                version = float(line[0:9])
+            except ValueError as exc:
+                raise ParseError(name, 1, "the format version as F9.2 in columns 1-9", line) from exc
+            if not (2.0 <= version < 5.0):
+                raise ParseError(name, 1, "RINEX version 2.10-4.02", line[0:9])
+            continue
+        if label == "END OF HEADER":
+            end_of_header = True
+            break
+        if label == "MARKER NAME":
+            marker = line[0:60].strip() or None
+        elif label == "REC # / TYPE / VERS":
+            receiver = line[20:40].strip()
+        elif label == "ANT # / TYPE":
+            antenna = line[20:40].strip()
+        elif label == "INTERVAL":
+            try:
+                header_interval = float(line[0:10])
+            except ValueError:
+                warnings.append(ParseWarning("bad-interval", f"unreadable INTERVAL {line[0:10]!r}", line_no))
+        elif label == "APPROX POSITION XYZ":
+            try:
+                approx = [float(line[0:14]), float(line[14:28]), float(line[28:42])]
+            except ValueError:
+                warnings.append(ParseWarning("bad-approx-position", "unreadable APPROX POSITION XYZ", line_no))
+        elif label == "SYS / # / OBS TYPES":
+            if line[0:1].strip():
+                pending_sys = line[0]
+                try:
+                    n = int(line[3:6])
+                except ValueError as exc:
+                    raise ParseError(name, line_no, "the number of observation types as I3 in columns 4-6",
+                                     line) from exc
+                obs_types[pending_sys] = []
+                obs_types[pending_sys + "#"] = [n]  # type: ignore[list-item]
+            elif pending_sys is None:
+                raise ParseError(name, line_no, "a system letter in column 1 of the first SYS / # / OBS TYPES line",
+                                 line)
+            obs_types[pending_sys].extend(line[7:60].split())
+        elif label == "# / TYPES OF OBSERV":
+            if line[0:6].strip():
+                try:
+                    v2_count = int(line[0:6])
+                except ValueError as exc:
+                    raise ParseError(name, line_no, "the number of observation types as I6", line) from exc
+            v2_types.extend(line[6:60].split())
+    if version is None:
+        raise ParseError(name, 1, "a RINEX header", "an empty file")
+    if not end_of_header:
+        raise ParseError(name, line_no + 1, "an 'END OF HEADER' line closing the header", "end of file")
+    if version < 3:
+        if not v2_types:
+            raise ParseError(name, line_no, "a '# / TYPES OF OBSERV' header line", "none in the header")
+        if len(v2_types) != v2_count:
+            raise ParseError(name, line_no, f"{v2_count} observation types as announced in # / TYPES OF OBSERV",
+                             f"{len(v2_types)} listed")
+        sys_letter = (first_line[40:41] or "G").strip() or "G"
+        systems_declared = "GRESJC" if sys_letter == "M" else sys_letter
+        obs_types = {s: list(v2_types) for s in systems_declared}
+    else:
+        counts = {k[0]: v[0] for k, v in obs_types.items() if k.endswith("#")}
+        obs_types = {k: v for k, v in obs_types.items() if not k.endswith("#")}
+        if not obs_types:
+            raise ParseError(name, line_no, "at least one 'SYS / # / OBS TYPES' header line", "none in the header")
+        for s, n in counts.items():
+            if len(obs_types[s]) != n:
+                raise ParseError(name, line_no, f"{n} observation types for system {s} as announced",
+                                 f"{len(obs_types[s])} listed")
+    if marker is None:
+        warnings.append(ParseWarning("missing-marker-name", "no MARKER NAME in the header"))
+    if antenna is not None and antenna.lower().startswith("unknown"):
+        warnings.append(ParseWarning("unknown-antenna", f"antenna type {antenna!r}: no phase-centre model applies"))
+
+    # Data section.
+    epochs = _EpochStats()
+    sats: set[str] = set()
+    events = 0
+    it = iter(lines)
+    v3 = version >= 3
+
+    def need(count: int, what: str, epoch_line: int, events: bool = False) -> Iterator[str]:
+        nonlocal line_no
+        got = 0
+        while got < count:
+            try:
+                line = next(it)
+            except StopIteration:
+                raise ParseError(name, line_no + 1, f"{count} {what} after the epoch line {epoch_line}",
+                                 f"end of file after {got}") from None
+            line_no += 1
+            if not events and line[60:80].strip() == "COMMENT" and (not v3 or not line[0:3].strip()[:1].isalpha()
+                                                     or line[0:1] == " "):
+                continue
+            got += 1
+            yield line
+
+    v2_lines_per_sat = (max(len(v) for v in obs_types.values()) + 4) // 5 if not v3 else 1
+    for line in it:
+        line_no += 1
+        if not line.strip():
+            continue
+        if v3:
+            if not line.startswith(">"):
+                if line[60:80].strip() == "COMMENT":
+                    continue
+                raise ParseError(name, line_no, "an epoch line starting with '>'", line)
+            t, flag, count = _epoch_v3(line, name, line_no)
+            if flag in (0, 1):
+                for rec in need(count, "satellite records", line_no):
+                    sid = rec[0:3].replace(" ", "0")
+                    if not (sid[0].isalpha() and sid[1:].isdigit()):
+                        raise ParseError(name, line_no, "a satellite record starting with a satellite id like G01",
+                                         rec)
+                    sats.add(sid)
+                epochs.add(t)
+            else:
+                events += 1
+                for _ in need(count, "event records", line_no, events=True):
+                    pass
+        else:
+            if _is_special_v2(line):
+                _, flag, count = _epoch_v2(" 00  1  1  0  0  0.0000000" + line[26:], name, line_no)
+                events += 1
+                for _ in need(count, "event records", line_no, events=True):
+                    pass
+                continue
+            t, flag, count = _epoch_v2(line, name, line_no)
+            if flag not in (0, 1):
+                events += 1
+                for _ in need(count, "event records", line_no, events=True):
+                    pass
+                continue
+            sat_ids = [line[32 + 3 * i:35 + 3 * i] for i in range(min(count, 12))]
+            epoch_line = line_no
+            if count > 12:
+                for cont in need((count - 1) // 12, "satellite list continuation lines", epoch_line):
+                    sat_ids += [cont[32 + 3 * i:35 + 3 * i] for i in range(12)]
+                sat_ids = sat_ids[:count]
+            for sid in sat_ids:
+                sid = (sid[0] if sid[0] != " " else "G") + sid[1:].replace(" ", "0")
+                if not sid[1:].isdigit():
+                    raise ParseError(name, epoch_line, "satellite ids like G01 in columns 33-68", line)
+                sats.add(sid)
+            for _ in need(count * v2_lines_per_sat, "observation lines", epoch_line):
+                pass
+            epochs.add(t)
+    if not epochs.count:
+        raise ParseError(name, line_no + 1, "at least one epoch with observations", "none")
+    if epochs.backwards:
+        warnings.append(ParseWarning("epochs-not-increasing", f"{epochs.backwards} epochs go back in time"))
+    interval = epochs.median_step_s()
+    if header_interval is None:
+        warnings.append(ParseWarning("missing-interval", "no INTERVAL in the header; taken from the data"))
+    elif interval is not None and abs(header_interval - interval) > 1e-3:
+        warnings.append(ParseWarning("interval-mismatch",
+                                     f"header INTERVAL {header_interval:g} s but the data step is {interval:g} s"))
+    systems = sorted({s[0] for s in sats})
+    return {
+        "format": "RINEX observation", "version": version, "compression": compression,
+        "marker_name": marker, "receiver_type": receiver, "antenna_type": antenna,
+        "approx_position_ecef_m": approx,
+        "time_first": epochs.first.iso(), "time_last": epochs.last.iso(),
+        "duration_s": float(epochs.last - epochs.first), "interval_s": interval, "header_interval_s": header_interval,
+        "n_epochs": epochs.count, "n_events": events,
+        "systems": systems, "signals": {s: obs_types.get(s, []) for s in systems},
+        "satellites": sorted(sats),
+        "warnings": [w.to_dict() for w in warnings],
+    }
