@@ -103,7 +103,7 @@ def run_mode(d: Path, mode: str, extra: dict | None = None) -> dict:
     P.run_filter = timed
     try:
         t0 = time.perf_counter()
-        sol = process(load_inputs(files_of(d)), AttitudeSettings(**{**selection, **cfg}))
+        sol = process(load_inputs(files_of(d)), AttitudeSettings.preset("seed000", **{**selection, **cfg}))
         prods = all_products(sol)
         wall = time.perf_counter() - t0
     finally:
@@ -198,7 +198,7 @@ def run_slews(tmp: Path, seeds=(SEED,)) -> list[str]:
             simulate_scenario("slew", d, seed=seed, overrides={**over, **CLEAN})
             inputs = load_inputs(files_of(d))
             for name, cfg in SLEW_SETTINGS.items():
-                sol = process(inputs, AttitudeSettings(mode="dynamic", **cfg, **ALL_PHASES))
+                sol = process(inputs, AttitudeSettings.preset("seed000", mode="dynamic", **cfg, **ALL_PHASES))
                 ang, de = errors(d, sol)
                 f = sol.att_fixed
                 t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]

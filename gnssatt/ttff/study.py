@@ -111,7 +111,7 @@ def _filter_runs(ss: StudySet, cfg: str, method: str, opts: StudyOptions) -> lis
     kw.update(opts.filter_settings_by_configuration.get(cfg, {}))
     if method == "filter-constrained":
         kw["ambiguity_search"] = "constrained"
-    settings = AttitudeSettings(signals=sigs, **kw)
+    settings = AttitudeSettings.preset("seed000", signals=sigs, **kw)
     pobs = subset_signals(ss.pobs, sigs)
     attitude_fn = None
     if len(ss.bl_idx) >= 2:
@@ -234,11 +234,9 @@ def _epoch_runs(ss: StudySet, cfg: str, methods: list[str], opts: StudyOptions) 
 
 def constrained_filter_available() -> bool:
     """True when the attitude filter offers ambiguity_search="constrained"."""
-    from dataclasses import fields
+    from gnssatt.attitude.settings import FLAT_TO_NESTED
 
-    from gnssatt.attitude.settings import AttitudeSettings
-
-    return any(f.name == "ambiguity_search" for f in fields(AttitudeSettings))
+    return "ambiguity_search" in FLAT_TO_NESTED
 
 
 def run_set(ss: StudySet, opts: StudyOptions) -> dict:

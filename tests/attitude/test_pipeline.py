@@ -34,7 +34,7 @@ def test_registry_and_config():
     assert jt.pipeline == "worker.pipelines.attitude:run" and jt.min_sets == 1 and jt.max_sets == 1
     cfg = AttitudeConfig()
     st = cfg.to_settings()
-    assert st.mode == "dynamic" and st.cn0_mask_dbhz == {"L1": 35.0, "L2": 30.0} and st.elevation_mask_antenna_deg == 0.0 and st.sigma_phase_m == 0.003
+    assert st.mode == "dynamic" and st.table2.cn0_mask_dbhz == {"L1": 35.0, "L2": 30.0} and st.table2.elevation_mask_antenna_deg == 0.0 and st.table1.sigma_phase_m == 0.003
     with pytest.raises(ValidationError):
         AttitudeConfig(signals=["L5"])
     with pytest.raises(ValidationError):

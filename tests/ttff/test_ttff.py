@@ -239,7 +239,7 @@ def test_filter_integers_scored_against_truth(study_set):
 
     ss = study_set
     fr = run_filter(ss.pobs, ss.geom, ss.bl_idx, ss.body_baselines_m, ss.boresight_body,
-                    AttitudeSettings(signals=["L1", "L2"]), ss.R_ref_from_ecef[0])
+                    AttitudeSettings.preset("seed000", signals=["L1", "L2"]), ss.R_ref_from_ecef[0])
     log = fr.fix_log
     assert log["epoch"].size >= 10
     w = filter_integer_errors(ss, log, ["L1", "L2"])
