@@ -41,7 +41,7 @@ def test_registry_and_config():
         AttitudeConfig(mode="static")
     cal = AttitudeConfig(calibrated_baselines={"platform": "x", "frames": "body", "baselines": [
         {"from": "GPS-2", "to": "GPS-0", "a_priori_m": [1, 0, 0], "calibrated_m": [1.001, 0, 0]}]}).to_settings()
-    assert cal.calibrated_baselines[("GPS-2", "GPS-0")] == [1.001, 0, 0]
+    assert cal.calibration.calibrated_baselines[("GPS-2", "GPS-0")] == [1.001, 0, 0]
 
 
 def test_pipeline_writes_products(tmp_path, clean_pass):

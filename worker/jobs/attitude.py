@@ -41,7 +41,9 @@ _TABLE2_JOB = {
 _GROUP_MODELS = {g: _model_of(t, f"Attitude{t.__name__}", _TABLE2_JOB if g == "table2" else None)
                  for g, t in GROUPS.items()}
 #: legacy flat keys of the job config -> "group.field" (the settings' FLAT_TO_NESTED + the job's L1/L2 masks)
-JOB_FLAT_TO_NESTED = {**FLAT_TO_NESTED, "cn0_mask_l1_dbhz": "table2.cn0_mask_l1_dbhz",
+JOB_FLAT_TO_NESTED = {**{k: v for k, v in FLAT_TO_NESTED.items()
+                         if v.split(".")[1] in _GROUP_MODELS[v.split(".")[0]].model_fields},
+                      "cn0_mask_l1_dbhz": "table2.cn0_mask_l1_dbhz",
                       "cn0_mask_l2_dbhz": "table2.cn0_mask_l2_dbhz"}
 
 
