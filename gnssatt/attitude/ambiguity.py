@@ -148,7 +148,7 @@ def resolve_first_fix(x: np.ndarray, P: np.ndarray, groups: list[tuple[np.ndarra
     """The first-fix attempt of one baseline with the search the settings ask for (``ambiguity_search``):
     ``"lambda"``: `resolve_lambda` (seed 000 sec. 2: MLAMBDA + length, ``min_ratio``); ``"constrained"``:
     `resolve_constrained` (C-LAMBDA with the known length, Teunissen 2010; ratio ``min_ratio_constrained``)."""
-    mode = getattr(settings, "ambiguity_search", "lambda")
+    mode = settings.ambiguity.ambiguity_search
     if mode == "constrained":
         return resolve_constrained(x, P, groups, b_idx, known_length_m, settings.ambiguity.max_length_error_m,
                                    max(settings.ambiguity.min_ratio_constrained, settings.ambiguity.min_ratio))

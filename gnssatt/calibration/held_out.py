@@ -22,7 +22,7 @@ __all__ = ["ANGLES", "map_documents", "filter_errors", "cut_percent", "filter_co
 
 def map_documents(grid: Grid2D, maps_m: dict) -> dict:
     """(first, second, signal) -> map dict (CONVENTIONS layout: bin centres, values in mm rounded to 0.1 um as
-    published, None where empty) of flat maps in metres (NaN empty), for AttitudeSettings.pcv_maps."""
+    published, None where empty) of flat maps in metres (NaN empty), for AttitudeSettings.calibration.pcv_maps."""
     out = {}
     for key, m in maps_m.items():
         v = np.round(np.asarray(m, float).reshape(grid.shape) * 1e3, 4)

@@ -97,3 +97,12 @@ def test_each_preset_validates(name):
         assert s.table2.elevation_mask_antenna_deg == -90.0 and s.table2.cn0_mask_dbhz == {"L1": 0.0, "L2": 0.0}
     with pytest.raises(ValueError, match="nope"):
         AttitudeSettings.preset("nope")
+
+
+def test_held_out_default_preset_equals_the_former_flat_default():
+    from worker.jobs.calibration import HELD_OUT_ATTITUDE_DEFAULT
+
+    former = {"smoother": True, "elevation_mask_antenna_deg": -90.0, "cn0_mask_l1_dbhz": 0.0,
+              "cn0_mask_l2_dbhz": 0.0, "cn0_mask_default_dbhz": 0.0}
+    assert (AttitudeConfig.model_validate(HELD_OUT_ATTITUDE_DEFAULT).to_settings()
+            == AttitudeConfig.model_validate(former).to_settings())

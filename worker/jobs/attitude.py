@@ -157,7 +157,7 @@ JOB_TYPE = JobType(
 
 
 def maps_for_settings(docs: list[tuple[str, dict]], baselines: list[tuple[str, str]]) -> dict:
-    """(first, second, frequency) -> map dict for AttitudeSettings.pcv_maps from (map id, CONVENTIONS JSON)
+    """(first, second, frequency) -> map dict for AttitudeSettings.calibration.pcv_maps from (map id, CONVENTIONS JSON)
     pairs; ValueError naming the map when one is malformed, is not for a baseline of the platform, or repeats a
     (pair, frequency)."""
     from gnssatt.gnss.io.errors import ParseError
