@@ -13,18 +13,18 @@ from __future__ import annotations
 
 import numpy as np
 
-SECONDS_PER_DAY = 86400
+# The fixed offsets of TAI / TT / BDT / GST from GPS time and the JD of the GPS epoch are definitions of
+# gnssatt.gnss.constants (IS-GPS-200 sec. 3.3.4, IAU 2000 B1.9, BDS ICD B1I 4.1.2, Galileo OS SIS ICD 5.1.2),
+# re-exported here under the names this module always had.
+from gnssatt.gnss.constants import (  # noqa: F401
+    BDT_MINUS_GPST_S, BDT_WEEK_OFFSET, GST_MINUS_GPST_S, GST_WEEK_OFFSET, JD_GPS_EPOCH, TAI_MINUS_GPS_S,
+    TT_MINUS_GPS_S,
+)
+
+SECONDS_PER_DAY = 86400  # int: whole-second arithmetic (gnssatt.gnss.constants.SECONDS_PER_DAY is the float)
 SECONDS_PER_WEEK = 604800
 # Days from 1970-01-01 to the GPS epoch 1980-01-06.
 _GPS_EPOCH_UNIX_DAYS = 3657
-# Julian date of the GPS epoch, and the fixed offsets of TAI / TT / BDT / GST from GPS time.
-JD_GPS_EPOCH = 2444244.5
-TAI_MINUS_GPS_S = 19.0  # IS-GPS-200 sec. 3.3.4
-TT_MINUS_GPS_S = 51.184  # TT = TAI + 32.184 s (IAU 2000 B1.9)
-BDT_MINUS_GPST_S = -14.0  # BDS ICD B1I v3.0 sec. 4.1.2
-BDT_WEEK_OFFSET = 1356  # GPS week of the BDT epoch
-GST_MINUS_GPST_S = 0.0  # Galileo OS SIS ICD 5.1.2 (GGTO neglected)
-GST_WEEK_OFFSET = 1024  # GPS week of the GST epoch (1999-08-22)
 
 
 def days_from_civil(year, month, day) -> np.ndarray:

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from gnssatt.gnss.constants import BDT_MINUS_GPST_S, BDT_WEEK_OFFSET
 from gnssatt.gnss.io.compression import read_text_bytes
 from gnssatt.gnss.io.errors import ParseError, ParseWarning
 from gnssatt.gnss.leap_seconds import EXPIRES as LEAP_TABLE_EXPIRES, gps_minus_utc_at_utc_s
@@ -49,10 +50,9 @@ __all__ = [
 
 # --- constants -------------------------------------------------------------------------------------
 
-#: BDT week 0 begins 2006-01-01T00:00:00 BDT = GPS week 1356 + 14 s (BDS-SIS-ICD-2.0 sec. 4.2).
-BDT_WEEK0_GPS_WEEK = 1356
-#: BDT - GPST in seconds (BDT started 14 s behind GPST and has no leap seconds since).
-BDT_MINUS_GPST_S = -14.0
+#: BDT week 0 begins 2006-01-01T00:00:00 BDT = GPS week 1356 + 14 s (BDS-SIS-ICD-2.0 sec. 4.2); BDT - GPST in
+#: seconds (BDT started 14 s behind GPST and has no leap seconds since): gnssatt.gnss.constants.
+BDT_WEEK0_GPS_WEEK = BDT_WEEK_OFFSET
 
 # Default half validity of a broadcast ephemeris around its toe, per system, in seconds. GPS/QZSS: half the
 # nominal 4 h curve-fit interval (IS-GPS-200 sec. 20.3.4.4; IS-QZSS-PNT sec. 4.1.2); Galileo 4 h and BeiDou
