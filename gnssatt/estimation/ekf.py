@@ -4,6 +4,7 @@ The attitude filter (gnssatt.attitude.filter) keeps a fixed-layout state with in
 measurement matrices whose rows touch only a few states (a baseline, a clock, one ambiguity). `joseph_update_sparse`
 exploits that: H is given as (m, k) column indices and (m, k) coefficients, so P H^T and H P H^T are gathers, not
 dense products, and only the O(n^2 m) products of the Joseph form remain (bench/design notes in docs/attitude.md).
+The textbook forms (dense Joseph update, RK4 rotation) live in gnssatt.estimation.ekf_reference, re-exported here.
 
 Implements: Kalman (1960) update; Joseph form P+ = (I - K H) P (I - K H)^T + K R K^T (Bucy & Joseph 1968;
 Gelb 1974 eq. 4.2-21), valid for any gain, so it also serves the zero-variance ambiguity pseudo-measurement;

@@ -93,7 +93,7 @@ def test_noise_estimators_equal_numpy_over_many_epochs():
         close(est_k.var_phase_m2, est_ref.var_phase_m2, rtol=1e-9, what="phase variance (m^2)")
         same(est_k.n_growth.astype(np.int64), est_ref.n_growth.astype(np.int64), "n_growth")
         same(est_k.n_white.astype(np.int64), est_ref.n_white.astype(np.int64), "n_white")
-    assert np.all(est_k.n_growth > NOISE.min_epochs) and not np.all(est_k.gamma == 1.0)    # gamma was estimated
+    assert np.all(est_k.n_growth > NOISE.min_epochs) and np.any(np.abs(est_k.gamma - 1.0) > 1e-3)   # gamma estimated
     assert 0.3 < est_k.gamma[0, 0] < 1.5      # code noise grows with the factor^1 put in (slope of ln|e|)
 
 

@@ -68,8 +68,8 @@ def test_propagation_equals_the_former_calls():
         x3, P3 = RP.reset_white_clocks(x, P, white, var)
         close(x2, x3, atol=REL, what="x reset")
         assert _cov_err(P2, P3) < REL
-        assert np.all(x2[white] == 0) and np.allclose(P2[np.ix_(white, white)], var * np.eye(white.size),
-                                                      rtol=REL, atol=0)
+        close(x2[white], 0.0, atol=1e-300, what="reset clocks")
+        close(P2[np.ix_(white, white)], var * np.eye(white.size), rtol=REL, atol=REL * var, what="reset P")
 
 
 def test_clip_pair_is_np_clip():
@@ -244,7 +244,7 @@ def test_qc_epoch_and_td_checks_equal_the_numpy_qc_over_many_epochs():
         prev_ub = ub
     assert all(v > 0 for v in seen.values()), str(seen)                     # every branch was exercised
     assert np.all(est_k.n_growth > NOISE.min_epochs)                       # the noise estimators ran
-    assert not np.all(est_k.gamma == 1.0)
+    assert np.any(np.abs(est_k.gamma - 1.0) > 1e-3)
 
 
 def test_record_epoch_equals_the_former_records():
