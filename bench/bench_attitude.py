@@ -198,7 +198,7 @@ def run_slews(tmp: Path, seeds=(SEED,)) -> list[str]:
             simulate_scenario("slew", d, seed=seed, overrides={**over, **CLEAN})
             inputs = load_inputs(files_of(d))
             for name, cfg in SLEW_SETTINGS.items():
-                sol = process(inputs, AttitudeSettings.preset("seed000", mode="dynamic", **cfg, **ALL_PHASES))
+                sol = process(inputs, AttitudeSettings.preset("all-phases", mode="dynamic", **cfg))
                 ang, de = errors(d, sol)
                 f = sol.att_fixed
                 t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]

@@ -453,8 +453,8 @@ def held_out_budget(held: Path, prod: dict, extra: dict | None = None, twins: bo
         res = {}
         for tag, b, m in runs if sk == "held" else [r for r in runs if r[0] in (
                 "a_priori", "calibrated_baselines_and_maps", "true_baselines_and_maps_full_grid")]:
-            res[tag] = filter_errors(inputs, AttitudeSettings.preset("seed000", mode="dynamic", calibrated_baselines=b, pcv_maps=m,
-                                                              **(extra or {})))
+            res[tag] = filter_errors(inputs, AttitudeSettings.preset("seed000", mode="dynamic", **(extra or {}))
+                                     .override(calibration={"calibrated_baselines": b, "pcv_maps": m}))
             if tag != "a_priori":
                 res[tag]["cut"] = cut_percent(res["a_priori"], res[tag])
             print(sk, tag, {a: (res[tag][a]["bias_deg"], res[tag][a]["std_deg"]) for a in ("yaw", "pitch", "roll")},

@@ -123,7 +123,7 @@ def slews(pitch_up_pass, slew_pass):
     out = {}
     for name, d in (("pitch", pitch_up_pass), ("yawroll", slew_pass)):
         inputs = load_inputs(set_files(d))
-        out[name] = (d, {on: process(inputs, AttitudeSettings.preset("seed000", mode="dynamic", adaptive_omega_noise=on))
+        out[name] = (d, {on: process(inputs, AttitudeSettings.preset("seed000", mode="dynamic", adaptive={"enabled": on}))
                          for on in (False, True)})
     return out
 

@@ -125,13 +125,13 @@ def test_effective_signals_and_masks():
                 AttitudeSettings.preset("seed000", signals=["E:E6"])):
         with pytest.raises(ValueError):
             effective_signals(bad)
-    s = AttitudeSettings.preset("seed000", cn0_mask_dbhz={"L1": 38.0, "L2": 31.0, "C:B2I": 20.0})
+    s = AttitudeSettings.preset("seed000", table2={"cn0_mask_dbhz": {"L1": 38.0, "L2": 31.0, "C:B2I": 20.0}})
     assert cn0_mask_of(s, "L1") == 38.0 and cn0_mask_of(s, "G:L1") == 38.0      # the alias masks GPS L1 too
     assert cn0_mask_of(s, "G:L2") == 31.0 and cn0_mask_of(s, "C:B2I") == 20.0
     assert cn0_mask_of(s, "E:E1") == 35.0 and cn0_mask_of(s, "E:E5b") == 30.0  # default: Table 2 style per system
-    t2 = AttitudeSettings.preset("seed000", cn0_mask_dbhz={"L1": 38.0}, cn0_mask_default_dbhz=0.0)
+    t2 = AttitudeSettings.preset("seed000", table2={"cn0_mask_dbhz": {"L1": 38.0}, "cn0_mask_default_dbhz": 0.0})
     assert cn0_mask_of(t2, "E:E1") == 0.0 and cn0_mask_of(t2, "E:E5b") == 0.0    # 0: no mask (noise model)
-    assert cn0_mask_of(AttitudeSettings.preset("seed000", cn0_mask_dbhz={"G:L1": 40.0}), "L1") == 40.0
+    assert cn0_mask_of(AttitudeSettings.preset("seed000", table2={"cn0_mask_dbhz": {"G:L1": 40.0}}), "L1") == 40.0
 
 
 def test_filter_state_has_one_code_bias_per_extra_signal():

@@ -36,8 +36,7 @@ def nagoya(tmp_path_factory):
     plat.write_text(json.dumps(PLATFORM))
     files = [("base.obs", "rinex_obs", d / "base.obs"), ("rover.obs", "rinex_obs", d / "rover.obs"),
              ("base.nav", "rinex_nav", d / "base.nav"), ("platform.json", "platform", plat)]
-    return process(load_inputs(files), AttitudeSettings.preset("seed000", mode="kinematic", weighting="elevation",
-                                                        systems=["G", "E", "C", "J"]))
+    return process(load_inputs(files), AttitudeSettings.preset("seed000", mode="kinematic", systems=["G", "E", "C", "J"], noise={"weighting": "elevation"}))
 
 
 def test_nagoya_every_epoch_fixed_from_the_first(nagoya):

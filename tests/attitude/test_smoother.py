@@ -12,7 +12,7 @@ from tests.attitude.conftest import CLEAN, _simulate, set_files
 from tests.attitude.test_adaptive import _lag_deg
 from tests.attitude.test_attitude_sim import errors
 from gnssatt.attitude.process import load_inputs, process
-from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
+from gnssatt.attitude.settings import AttitudeSettings
 from gnssatt.attitude.smoother import acceleration_noise_rate, rts_smooth
 
 
@@ -99,8 +99,8 @@ PITCH_UP = {"start_gps": "2018-06-06T16:31:00", "duration_s": 200.0,
 def pitch_up(tmp_path_factory):
     d = _simulate(tmp_path_factory, "pitch_up", "slew", 0, {**PITCH_UP, **CLEAN})
     inputs = load_inputs(set_files(d))
-    sols = {sm: process(inputs, AttitudeSettings.preset("seed000", mode="dynamic", smoother=sm, **ALL_PHASES)) for sm in (False, True)}
-    sols["adaptive"] = process(inputs, AttitudeSettings.preset("seed000", mode="dynamic", smoother_adaptive_noise=True, **ALL_PHASES))
+    sols = {sm: process(inputs, AttitudeSettings.preset("all-phases", mode="dynamic", smoothing={"enabled": sm})) for sm in (False, True)}
+    sols["adaptive"] = process(inputs, AttitudeSettings.preset("all-phases", mode="dynamic", smoothing={"adaptive_noise": True}))
     return d, sols
 
 
@@ -171,7 +171,7 @@ def test_second_pass_with_table1_noise_reproduces_the_first(pitch_up, monkeypatc
         return orig(*a, **k)
 
     monkeypatch.setattr(P, "run_filter", spy)
-    P.process(load_inputs(set_files(d)), AttitudeSettings.preset("seed000", mode="dynamic", smoother=True, **ALL_PHASES))
+    P.process(load_inputs(set_files(d)), AttitudeSettings.preset("all-phases", mode="dynamic", smoothing={"enabled": True}))
     (args, kw), = calls
     a = orig(*args, **kw)
     n = a.fixed.shape[0]
