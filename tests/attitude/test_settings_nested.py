@@ -106,3 +106,11 @@ def test_held_out_default_preset_equals_the_former_flat_default():
               "cn0_mask_l2_dbhz": 0.0, "cn0_mask_default_dbhz": 0.0}
     assert (AttitudeConfig.model_validate(HELD_OUT_ATTITUDE_DEFAULT).to_settings()
             == AttitudeConfig.model_validate(former).to_settings())
+
+
+def test_flat_read_is_transitional_and_warns():
+    s = AttitudeSettings.preset("seed000", table1={"sigma_code_m": 0.4})
+    with pytest.warns(DeprecationWarning, match="table1.sigma_code_m"):
+        assert s.sigma_code_m == 0.4
+    with pytest.raises(AttributeError):
+        s.no_such_setting
