@@ -160,7 +160,7 @@ def test_adaptive_noise_leaves_a_slow_manoeuvre_alone(slews):
 def test_job_config_passes_the_option_and_defaults_to_table_1():
     from worker.jobs.attitude import AttitudeConfig
 
-    assert AttitudeConfig().to_settings().adaptive_omega_noise is False
+    assert AttitudeConfig().to_settings().adaptive.enabled is False
     s = AttitudeConfig(adaptive_omega_noise=True, adaptive_omega_threshold=6.0, adaptive_omega_hold_epochs=20)
     s = s.to_settings()
     assert s.adaptive.enabled and s.adaptive.threshold == 6.0 and s.adaptive.hold_epochs == 20

@@ -136,7 +136,7 @@ def test_smoother_removes_the_lag_of_the_pitch_up(pitch_up):
 def test_smoother_changes_nothing_but_the_baselines_omega_and_their_covariance(pitch_up):
     _, sols = pitch_up
     a, b = sols[False].fr, sols[True].fr
-    assert AttitudeSettings().smoother is False and a.smoother_data is None
+    assert AttitudeSettings().smoothing.enabled is False and a.smoother_data is None
     assert "smoother" not in sols[False].summary
     assert sols[True].summary["smoother"]["epochs_smoothed"] == int((np.linalg.norm(
         a.b_ecef_m - b.b_ecef_m, axis=-1).max(axis=1) > 0).sum())
@@ -151,10 +151,10 @@ def test_smoother_changes_nothing_but_the_baselines_omega_and_their_covariance(p
 def test_job_config_passes_the_smoother_setting():
     from worker.jobs.attitude import AttitudeConfig
 
-    assert AttitudeConfig.model_validate({"smoother": True}).to_settings().smoother is True
-    assert AttitudeConfig.model_validate({}).to_settings().smoother is False
-    assert AttitudeConfig.model_validate({"smoother_adaptive_noise": True}).to_settings().smoother_adaptive_noise
-    assert AttitudeConfig.model_validate({}).to_settings().smoother_adaptive_noise is False
+    assert AttitudeConfig.model_validate({"smoother": True}).to_settings().smoothing.enabled is True
+    assert AttitudeConfig.model_validate({}).to_settings().smoothing.enabled is False
+    assert AttitudeConfig.model_validate({"smoother_adaptive_noise": True}).to_settings().smoothing.adaptive_noise
+    assert AttitudeConfig.model_validate({}).to_settings().smoothing.adaptive_noise is False
 
 
 def test_second_pass_with_table1_noise_reproduces_the_first(pitch_up, monkeypatch):
