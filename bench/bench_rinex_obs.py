@@ -295,7 +295,7 @@ def main() -> None:
     if args.child:
         child(args.child[0], args.child[1:])
         return
-    from tests.gnss.test_rinex_obs_helpers import compare_with_georinex
+    from bench.georinex_check import compare_with_georinex
 
     args.workdir.mkdir(parents=True, exist_ok=True)
     inputs: list[tuple[str, list[Path]]] = [("set106 (3 x RINEX 3.04, 106 min 1 Hz, 12 GPS)", make_set106(args.workdir))]

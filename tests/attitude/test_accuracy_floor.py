@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from tests.attitude.conftest import set_files
-from tests.attitude.floor import true_integer_floor, used_phase_mask
+from gnssatt.attitude.floor import true_integer_floor, used_phase_mask
 from gnssatt.attitude.process import load_inputs, process
 from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
 
@@ -29,7 +29,7 @@ def _angles_deg(b, t):
 
 
 def _true_baselines(d, sol):
-    from tests.attitude.test_attitude_sim import truth_at
+    from gnssatt.attitude.truth import truth_at
     from gnssatt.gnss import rotations as rot
 
     q, _ = truth_at(d, sol)      # at sol.att_epochs
