@@ -348,7 +348,7 @@ def main() -> None:
                                                                             "30 min" if args.hard else "") + ". "
              "gnssatt runs the \"all phases\" selection (`settings.ALL_PHASES`: no C/N0 or antenna-frame mask; the "
              "job's defaults keep seed 000 Table 2's masks).",
-             "", CMD_LINE, "", "Floor rows: tests/attitude/floor.py, every SD phase both antennas track, the TRUE "
+             "", CMD_LINE, "", "Floor rows: gnssatt/attitude/floor.py, every SD phase both antennas track, the TRUE "
              "integers from truth/arcs.csv, b + one clock per signal by least squares per epoch (what any epoch-wise "
              "estimator with the right integers computes; RTKLIB's fixed solution is the uniform one, gnssatt "
              "kinematic the weighted one), over the epochs gnssatt kinematic calls fixed; its CPU s excludes the "

@@ -1,5 +1,5 @@
 """gnssatt's kinematic (epoch-wise) baselines against the independent true-integer least-squares floor
-(tests/attitude/floor.py) on the short clean pass (issue 6: the kinematic fixed solution must match an epoch-wise
+(gnssatt/attitude/floor.py) on the short clean pass (issue 6: the kinematic fixed solution must match an epoch-wise
 double-difference solution such as RTKLIB's; dynamic mode must do better).
 
 On white-noise data with the right integers an epoch-wise estimator cannot beat weighted least squares on the
