@@ -356,11 +356,15 @@ def main() -> None:
     spec = cache / "inputs" / "simulate.json"
     spec.parent.mkdir(parents=True, exist_ok=True)
     spec.write_text(json.dumps(sims, indent=1))
-    base_out, cur_out = cache / "products" / sha[:12], cache / "products" / "current"
+    # products per set of cases (a change of passes or minutes is another directory) and, for the current tree, per
+    # checkout (two worktrees may run the harness on one cache at once)
+    key = hashlib.sha256(json.dumps([{**j, "files": str(j["files"])} for j in jobs], sort_keys=True).encode())
+    key_hex = key.hexdigest()[:12]
+    base_out = cache / "products" / f"{sha[:12]}-{key_hex}"
+    cur_out = cache / "products" / f"current-{hashlib.sha256(str(ROOT).encode()).hexdigest()[:8]}-{key_hex}"
     if not args.compare_only:
         run_in(tree, ["simulate", str(spec)], log)                 # once, by the baseline tree
-        key = hashlib.sha256(json.dumps([{**j, "files": str(j["files"])} for j in jobs], sort_keys=True).encode())
-        done = base_out / f"done-{key.hexdigest()[:16]}"
+        done = base_out / "done"
         if args.rerun_baseline or not done.exists():
             run_cases(tree, jobs, base_out, log)
             done.write_text("")
