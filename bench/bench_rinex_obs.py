@@ -37,12 +37,11 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from bench._report import cpu_model  # noqa: E402
+from gnssatt.gnss.signals import WAVELENGTH_GPS_L1_M as LAMBDA_L1_M, WAVELENGTH_GPS_L2_M as LAMBDA_L2_M  # noqa: E402
 
 SEED = 20240624
 GPS_UNIX_OFFSET_S = 315964800  # 1980-01-06T00:00:00 - 1970-01-01T00:00:00 (RTKLIB gtime_t.time is "unix-like")
 CODES = ["C1C", "L1C", "D1C", "S1C", "C2W", "L2W", "D2W", "S2W"]
-LAMBDA_L1_M = 299792458.0 / 1575.42e6
-LAMBDA_L2_M = 299792458.0 / 1227.60e6
 
 
 # --- inputs ----------------------------------------------------------------------------------------------
