@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from gnssatt.estimation.constrained_search import DDBlock, FloatSolution, dd_geometry, single_epoch_float
-from gnssatt.gnss.constants import WAVELENGTH_GPS_L1_M, WAVELENGTH_GPS_L2_M
+from gnssatt.gnss.signals import WAVELENGTH_GPS_L1_M, WAVELENGTH_GPS_L2_M
 
 #: GPS L1 and L2 wavelengths, metres (c / 1575.42 MHz, c / 1227.60 MHz).
 L1_WAVELENGTH_M = WAVELENGTH_GPS_L1_M
