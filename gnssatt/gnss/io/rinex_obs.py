@@ -496,6 +496,27 @@ def _h_signal_strength_unit(hdr: ObsHeader, cur: _HeaderCursor) -> None:
     hdr.signal_strength_unit = cur.line[:20].strip() or None
 
 
+def _type_codes(cur: _HeaderCursor, n: int, fields, blank_cols: int, so_far: str) -> list[str]:
+    """The `n` observation codes of a types record and its continuation lines (same label, `blank_cols` blank).
+
+    fields: the code fields of one line; so_far: the error's count text, '{}' for the codes read so far.
+    """
+    line, label = cur.line, cur.line[60:80].strip()
+    codes: list[str] = []
+    while True:
+        codes += [c.strip() for c in fields(line)]
+        codes = [c for c in codes if c]
+        if len(codes) >= n:
+            return codes
+        line = cur.next_line()
+        if line is None:
+            return codes
+        if line[60:80].strip() != label or line[0:blank_cols].strip():
+            sep = " " if label == "SYS / # / OBS TYPES" else ", "
+            raise ParseError(cur.name, cur.line_no, f"a continuation line of {label} ({n} types{sep}"
+                             + so_far.format(len(codes)) + ")", line)
+
+
 def _h_obs_types_v3(hdr: ObsHeader, cur: _HeaderCursor) -> None:
     """SYS / # / OBS TYPES (A1,2X,I3,13(1X,A3), continued on lines with a blank column 1): RINEX 3.05 Table A2."""
     name, line_no, line = cur.name, cur.line_no, cur.line
@@ -505,18 +526,8 @@ def _h_obs_types_v3(hdr: ObsHeader, cur: _HeaderCursor) -> None:
     if sys_letter not in _SYSTEMS:
         raise ParseError(name, line_no, f"a satellite system letter ({_SYSTEMS}) in column 1", line, column=1)
     n = int(line[3:6])
-    codes: list[str] = []
-    while True:
-        codes += [line[7 + 4 * k:10 + 4 * k].strip() for k in range(13)]
-        codes = [c for c in codes if c]
-        if len(codes) >= n:
-            break
-        line = cur.next_line()
-        if line is None:
-            break
-        if line[60:80].strip() != "SYS / # / OBS TYPES" or line[0:1].strip():
-            raise ParseError(name, cur.line_no, f"a continuation line of SYS / # / OBS TYPES ({n} types "
-                             f"for {sys_letter}, {len(codes)} so far: 13 per line, columns 8-58)", line)
+    codes = _type_codes(cur, n, lambda ln: [ln[7 + 4 * k:10 + 4 * k] for k in range(13)], 1,
+                        f"for {sys_letter}, {{}} so far: 13 per line, columns 8-58")
     if len(codes) != n:
         raise ParseError(name, line_no, f"{n} observation types for system {sys_letter}",
                          f"{len(codes)}: {' '.join(codes)}")
@@ -535,18 +546,8 @@ def _h_obs_types_v2(hdr: ObsHeader, cur: _HeaderCursor) -> None:
     if cur.major != 2:
         raise ParseError(name, line_no, "'SYS / # / OBS TYPES' in a RINEX 3/4 file", line)
     n = int(line[0:6])
-    codes: list[str] = []
-    while True:
-        codes += [line[10 + 6 * k:12 + 6 * k].strip() for k in range(9)]
-        codes = [c for c in codes if c]
-        if len(codes) >= n:
-            break
-        line = cur.next_line()
-        if line is None:
-            break
-        if line[60:80].strip() != "# / TYPES OF OBSERV" or line[0:6].strip():
-            raise ParseError(name, cur.line_no, f"a continuation line of # / TYPES OF OBSERV ({n} types, "
-                             f"{len(codes)} so far: 9 per line, columns 11-60)", line)
+    codes = _type_codes(cur, n, lambda ln: [ln[10 + 6 * k:12 + 6 * k] for k in range(9)], 6,
+                        "{} so far: 9 per line, columns 11-60")
     if len(codes) != n:
         raise ParseError(name, line_no, f"{n} observation types", f"{len(codes)}: {' '.join(codes)}")
     bad = [c for c in codes if len(c) != 2 or c[0] not in "CLDSP" or not c[1].isdigit()]
