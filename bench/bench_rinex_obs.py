@@ -50,7 +50,7 @@ def make_set106(workdir: Path) -> list[Path]:
     """Three RINEX 3.04 files (antennas GPS-0/1/2), 6360 epochs at 1 Hz, 12 GPS satellites, from SEED."""
     from types import SimpleNamespace
 
-    from gnssatt.gnss.io.rinex_obs_write import write_rinex_obs
+    from gnssatt.gnss.io.rinex_obs_write import ObsWriteHeader, write_rinex_obs
     from gnssatt.gnss.time import GpsTime
 
     paths = []
@@ -90,7 +90,7 @@ def make_set106(workdir: Path) -> list[Path]:
                                                      approx_position_ecef_m=None, antenna_delta_hen_m=None,
                                                      interval_s=1.0, glonass_slots={}))
         path = workdir / f"GPS-{a}.rnx"
-        write_rinex_obs(path, obs, 3.04, comments=(f"bench_rinex_obs.py SEED={SEED} antenna {a}",))
+        write_rinex_obs(path, obs, 3.04, ObsWriteHeader(comments=(f"bench_rinex_obs.py SEED={SEED} antenna {a}",)))
         paths.append(path)
     return paths
 
