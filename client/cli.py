@@ -39,7 +39,7 @@ def cmd_serve(args) -> None:
     import uvicorn
 
     from app.main import create_app
-    from app.settings import Settings
+    from core.settings import Settings
 
     settings = Settings()
     uvicorn.run(create_app(settings), host=args.host, port=args.port, log_level=settings.log_level.lower(),
@@ -51,16 +51,16 @@ def cmd_worker(args) -> None:
     # per-epoch matrices only oversubscribes the cores (measured 4-8x slower fan-out tasks on 2 cores).
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
-    from app.settings import Settings
+    from core.settings import Settings
     from worker.main import run_worker
 
     run_worker(Settings(), concurrency=args.concurrency)
 
 
 def _admin_session():
-    from app.db import make_engine, make_sessionmaker
-    from app.migrate import migrate
-    from app.settings import Settings
+    from core.db import make_engine, make_sessionmaker
+    from core.migrate import migrate
+    from core.settings import Settings
 
     settings = Settings()
     engine = make_engine(settings)

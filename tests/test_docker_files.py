@@ -7,7 +7,7 @@ import re
 
 import yaml
 
-from app.settings import Settings
+from core.settings import Settings
 from tests.conftest import REPO_ROOT
 
 
@@ -28,7 +28,12 @@ def test_compose_services_and_settings():
 def test_dockerfile_copies_every_package():
     text = (REPO_ROOT / "docker" / "Dockerfile").read_text()
     copied = set(re.findall(r"^COPY (\S+) ", text, re.M))
-    for pkg in ("app", "worker", "client", "migrations", "pyproject.toml"):
+    import tomllib
+
+    include = tomllib.loads((REPO_ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"]["find"]
+    packages = {pattern.rstrip("*") for pattern in include["include"]}
+    assert {"gnssatt", "core", "app", "worker", "client", "migrations"} <= packages, packages
+    for pkg in packages | {"pyproject.toml"}:
         assert pkg in copied, pkg
 
 

@@ -23,7 +23,7 @@ from sqlalchemy import func, select, update
 from sqlalchemy.dialects.postgresql import insert as pg_insert
 from sqlalchemy.dialects.sqlite import insert as sqlite_insert
 
-from app.models import Job, JobTask, utcnow
+from core.models import Job, JobTask, utcnow
 from worker.context import InputSet
 from worker.inprocess import load_task_function, log_task_records, task_record
 from worker.queue import enqueue_task

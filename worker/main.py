@@ -4,10 +4,10 @@ from __future__ import annotations
 import logging
 import threading
 
-from app.db import make_engine, make_sessionmaker
-from app.migrate import migrate
-from app.settings import Settings
-from app.store.blobs import BlobStore
+from core.blobs import BlobStore
+from core.db import make_engine, make_sessionmaker
+from core.migrate import migrate
+from core.settings import Settings
 from worker import fanout, runner
 from worker.queue import make_huey
 

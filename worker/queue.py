@@ -9,7 +9,7 @@ from typing import Callable
 
 from huey import Huey, RedisHuey, SqliteHuey
 
-from app.settings import Settings
+from core.settings import Settings
 
 TASK_NAME = "gnssatt.run_job"
 TASK_NAME_FANOUT = "gnssatt.run_task"

@@ -20,9 +20,9 @@ from datetime import datetime, timedelta
 
 from sqlalchemy import select, update
 
-from app.models import Job, Product, utcnow
-from app.settings import Settings
-from app.store.pcv import add_pcv_map
+from core.models import Job, Product, utcnow
+from core.pcv_store import add_pcv_map
+from core.settings import Settings
 from worker.context import JobContext
 from worker.errors import JobCancelled, LeaseLost, is_permanent, problem_for_exception
 from worker.fanout import gather, reap_tasks

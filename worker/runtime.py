@@ -12,9 +12,9 @@ from sqlalchemy import select
 from sqlalchemy.engine import Engine
 from sqlalchemy.orm import Session, sessionmaker
 
-from app.models import Job, JobSet, ObservationSet, PcvMap
-from app.settings import Settings
-from app.store.blobs import BlobStore
+from core.blobs import BlobStore
+from core.models import Job, JobSet, ObservationSet, PcvMap
+from core.settings import Settings
 from worker.context import InputFile, InputSet
 
 
