@@ -11,8 +11,8 @@ its block of the "Calibration" section of docs/BENCHMARKS.md.
 
 Inputs: `--sets` calibration passes + 1 held-out pass of the `calibration` preset, durations cycling over
 45..100 min, 35 mm p-p PCV per antenna (~50 mm differential), Table 3 offsets, reference attitude 2 arcsec,
-seed 2024 (each pass simulated as its own run, see tests/calibration/_campaign.py). Truth: the injected antenna
-offsets, PCO and PCV expressed in the calibration's baseline/map split (tests/calibration/_campaign.py
+seed 2024 (each pass simulated as its own run, see gnssatt/calibration/simulated.py). Truth: the injected antenna
+offsets, PCO and PCV expressed in the calibration's baseline/map split (gnssatt/calibration/simulated.py
 `truth_split`, gnssatt/calibration/decomposition.py); `--twin` also calibrates a noiseless twin campaign (no noise,
 no multipath, no reference noise). `--ekf`: the attitude filter on the held-out set with a priori baselines,
 calibrated baselines, and calibrated baselines + the PCV maps. `--budget`: the held-out error budget (a priori,
@@ -39,8 +39,9 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from tests.calibration._campaign import (compare_maps_mm, input_set, simulate_campaign, truth_of,  # noqa: E402
-                                         truth_split)
+from bench.local_jobs import input_set, job_context, product_bytes  # noqa: E402
+from gnssatt.calibration.simulated import (compare_maps_mm, simulate_campaign, truth_of,  # noqa: E402
+                                           truth_split)
 
 SEED = 2024
 
@@ -65,28 +66,27 @@ def simulate(root: Path, n: int, overrides: dict) -> list[Path]:
 
 
 def run_inprocess(dirs: list[Path], cfg: dict, tag: str, work: Path) -> tuple[dict, float, object]:
-    from tests.calibration.test_pipeline import _ctx, _products
     from worker.jobs.calibration import CalibrationConfig
     from worker.pipelines.calibration import run
 
     sets = [input_set(d, set_id=f"{tag}{i:03d}") for i, d in enumerate(dirs)]
-    ctx = _ctx(work / tag, sets)
+    ctx = job_context(work / tag, sets)
     t0 = time.perf_counter()
     run(ctx, CalibrationConfig(**cfg))
-    return _products(ctx), time.perf_counter() - t0, ctx
+    return product_bytes(ctx), time.perf_counter() - t0, ctx
 
 
 def run_service(dirs: list[Path], cfg: dict, workers: int, work: Path) -> dict:
     import httpx
 
-    from tests.e2e.conftest import Service
+    from client.local_service import LocalService
 
     db = os.environ.get("GNSSATT_TEST_DATABASE_URL")
     queue = os.environ.get("GNSSATT_TEST_QUEUE_URL")
     tmp = work / f"svc{workers}"
     shutil.rmtree(tmp, ignore_errors=True)  # a fresh database and queue per run
     tmp.mkdir(parents=True)
-    svc = Service(tmp, "pg" if db else "sqlite", db, queue)
+    svc = LocalService(tmp, "pg" if db else "sqlite", db, queue)
     try:
         svc.start_api()
         for _ in range(workers):
@@ -140,7 +140,7 @@ class ScaleService:
     campaign uploaded once; the number of worker processes is changed between jobs (workers wait idle, warm)."""
 
     def __init__(self, work: Path, pg: tuple[str, str] | None, own_session: bool = False):
-        from tests.e2e.conftest import Service
+        from client.local_service import LocalService
 
         self.scratch_db = None
         self.admin_engine = None
@@ -159,7 +159,7 @@ class ScaleService:
             db_url = make_url(base_db).set(database=self.scratch_db).render_as_string(hide_password=False)
         shutil.rmtree(work, ignore_errors=True)
         work.mkdir(parents=True)
-        self.svc = Service(work, "pg" if pg else "sqlite", db_url, queue_url)
+        self.svc = LocalService(work, "pg" if pg else "sqlite", db_url, queue_url)
         if own_session:
             # each worker in its own session, as separate service units would be: with the kernel's autogroup
             # scheduling (sched_autogroup_enabled=1) all processes of one session share ONE fair CPU share, so on

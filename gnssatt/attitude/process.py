@@ -19,6 +19,7 @@ from gnssatt.attitude.update_kernels import quest_dcm
 from gnssatt.gnss import rotations as rot
 from gnssatt.gnss.frames import (R_enu_from_ecef, R_gcrf_from_ecef, R_ned_from_ecef, R_orbital_from_ecef,
                                 ecef_to_geodetic)
+from gnssatt.gnss.leap_seconds import expiry_warning
 from gnssatt.gnss.time import GpsTime
 
 __all__ = ["AttitudeInputs", "AttitudeSolution", "InputProblem", "load_inputs", "process"]
@@ -298,6 +299,9 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
         R_be = rot.quat_to_dcm(q_e)
         t_ep = pobs.time[ep]
         R_gcrf_ecef = R_gcrf_from_ecef(t_ep)
+        leap_warning = expiry_warning(t_ep)  # GCRF needs UT1 via UTC: stale after the leap table's expiry
+        if leap_warning:
+            sol.inputs.warnings.append(f"attitude in GCRF: {leap_warning}")
         R_bi = R_be @ np.swapaxes(R_gcrf_ecef, -1, -2)
         q_i = rot.dcm_to_quat(R_bi)
         R_b_ref = R_be @ np.swapaxes(R_ref_from_ecef[ep], -1, -2)

@@ -5,46 +5,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-#: Signals the filter knows, per name: system letter, (code, phase, C/N0) RINEX 3 codes in order of preference,
-#: carrier frequency (Hz) and the default C/N0 mask (dB-Hz). Names are system-qualified ("E:E5b"); "L1" and "L2"
-#: are the GPS signals under their historical names (every GPS-only config, product and test keeps them).
-#: Frequencies: IS-GPS-200N 3.3.1.1, IS-GPS-705 3.3.1.1 (L5), Galileo OS SIS ICD 2.1 Table 2, BDS-SIS-ICD-B1I 3.0
-#: 4.2 (B1I 1561.098 MHz), BDS-SIS-ICD-B2I/B3I (1207.14 / 1268.52 MHz), IS-QZSS-PNT-005 (as GPS). RINEX 3.04
-#: Table 4-8 codes (BeiDou B1I is band "2": C2I; B2I band "7", B3I band "6").
-_GPS_L1 = {"system": "G", "code": ["C1C"], "phase": ["L1C"], "snr": ["S1C"], "freq_hz": 1575.42e6,
-           "cn0_mask_dbhz": 35.0}
-_GPS_L2 = {"system": "G", "code": ["C2W", "C2L", "C2X", "C2S"], "phase": ["L2W", "L2L", "L2X", "L2S"],
-           "snr": ["S2W", "S2L", "S2X", "S2S"], "freq_hz": 1227.60e6, "cn0_mask_dbhz": 30.0}
-
-
-def _spec(system: str, bands: str, attrs: str, freq_hz: float, cn0: float) -> dict:
-    """A SIGNALS entry: every (band, attribute) pair in preference order, e.g. bands '7', attrs 'QXI'."""
-    pairs = [b + a for b in bands for a in attrs]
-    return {"system": system, "code": ["C" + p for p in pairs], "phase": ["L" + p for p in pairs],
-            "snr": ["S" + p for p in pairs], "freq_hz": freq_hz, "cn0_mask_dbhz": cn0}
-
-
-SIGNALS: dict[str, dict] = {
-    "L1": _GPS_L1,
-    "L2": _GPS_L2,
-    "G:L1": _GPS_L1,
-    "G:L2": _GPS_L2,
-    "G:L5": _spec("G", "5", "QXI", 1176.45e6, 30.0),
-    "E:E1": _spec("E", "1", "CXB", 1575.42e6, 35.0),
-    "E:E5a": _spec("E", "5", "QXI", 1176.45e6, 30.0),
-    "E:E5b": _spec("E", "7", "QXI", 1207.14e6, 30.0),
-    "C:B1I": _spec("C", "2", "IXQ", 1561.098e6, 35.0),
-    "C:B2I": _spec("C", "7", "IXQ", 1207.14e6, 30.0),
-    "C:B3I": _spec("C", "6", "IXQ", 1268.52e6, 30.0),
-    "J:L1": _spec("J", "1", "CXZ", 1575.42e6, 35.0),
-    "J:L2": _spec("J", "2", "LXS", 1227.60e6, 30.0),
-    "J:L5": _spec("J", "5", "QXI", 1176.45e6, 30.0),
-}
-#: historical names -> system-qualified names
-SIGNAL_ALIASES = {"L1": "G:L1", "L2": "G:L2"}
-#: the `systems` preset: per system its first two frequency slots as RTKLIB 2.4.3 numbers them ("L1+L2":
-#: GPS/QZSS L1 + L2, Galileo E1 + E5b, BeiDou B1I + B2I). GLONASS (FDMA) is not supported.
-SYSTEM_SIGNALS = {"G": ("G:L1", "G:L2"), "E": ("E:E1", "E:E5b"), "C": ("C:B1I", "C:B2I"), "J": ("J:L1", "J:L2")}
+# The signals the filter knows (system, RINEX 3 codes in order of preference, frequency, wavelength, default C/N0
+# mask), the historical aliases "L1"/"L2" and the `systems` presets live in the one signal table,
+# gnssatt.gnss.signals; they stay importable from here under the names this module always had.
+from gnssatt.gnss.signals import SIGNAL_ALIASES, SIGNALS, SYSTEM_SIGNALS  # noqa: F401  (public re-export)
 
 
 def signal_system(name: str) -> str:

@@ -58,9 +58,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gnssatt.gnss.constants import C_M_S, FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ, OMEGA_EARTH_RAD_S, PI_GPS
+from gnssatt.gnss.constants import C_M_S, OMEGA_EARTH_RAD_S, PI_GPS
 from gnssatt.gnss.frames import R_enu_from_ecef, ecef_to_geodetic
 from gnssatt.gnss.geometry import sagnac_rotate
+from gnssatt.gnss.signals import FREQ_BY_SYSTEM_BAND_HZ, FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ
 from gnssatt.gnss.time import GpsTime
 
 __all__ = ["SppSolution", "spp", "klobuchar_l1_delay_s", "saastamoinen_delay_m", "select_code",
@@ -99,8 +100,8 @@ GF_SLIP_M = 0.10
 #: The smoother restarts when the code departs from its phase-propagated prediction by more than this (m):
 #: ~10 sigma of the ionosphere-free code noise; catches gross slips and code-only 1 ms clock jumps (300 km).
 SMOOTH_RESET_M = 20.0
-BAND_FREQ_HZ = {("G", 1): FREQ_GPS_L1_HZ, ("G", 2): FREQ_GPS_L2_HZ, ("J", 1): FREQ_GPS_L1_HZ,
-                ("J", 2): FREQ_GPS_L2_HZ}
+#: carrier frequency of each (system, band number) of the code/phase preferences (gnssatt.gnss.signals)
+BAND_FREQ_HZ = {(s, b): FREQ_BY_SYSTEM_BAND_HZ[(s, str(b))] for s, b in CODE_PREFERENCE}
 
 #: Noise gain of the L1/L2 ionosphere-free combination: sqrt(g1^2 + g2^2), g1 = f1^2/(f1^2-f2^2) = 2.546.
 _G1 = FREQ_GPS_L1_HZ ** 2 / (FREQ_GPS_L1_HZ ** 2 - FREQ_GPS_L2_HZ ** 2)

@@ -81,7 +81,7 @@ def filter_integer_errors(ss: StudySet, fix_log: dict, signals: list[str]) -> np
 
     Every constraint of the filter's fix_log (DD SD(sat) - SD(ref) of a baseline and signal, from its epoch to its
     last_epoch) against the truth DD (N_b,sat - N_a,sat) - (N_b,ref - N_a,ref) of the arcs covering each epoch
-    (the simulator's receiver and satellite phase biases cancel in it; tests/attitude/truth.py does the same).
+    (the simulator's receiver and satellite phase biases cancel in it; gnssatt/attitude/truth.py does the same).
     """
     if ss.truth is None or ss.truth.n_cyc is None or fix_log is None:
         return None

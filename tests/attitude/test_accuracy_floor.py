@@ -1,5 +1,5 @@
 """gnssatt's kinematic (epoch-wise) baselines against the independent true-integer least-squares floor
-(tests/attitude/floor.py) on the short clean pass (issue 6: the kinematic fixed solution must match an epoch-wise
+(gnssatt/attitude/floor.py) on the short clean pass (issue 6: the kinematic fixed solution must match an epoch-wise
 double-difference solution such as RTKLIB's; dynamic mode must do better).
 
 On white-noise data with the right integers an epoch-wise estimator cannot beat weighted least squares on the
@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from tests.attitude.conftest import set_files
-from tests.attitude.floor import true_integer_floor, used_phase_mask
+from gnssatt.attitude.floor import true_integer_floor, used_phase_mask
 from gnssatt.attitude.process import load_inputs, process
 from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
 
@@ -29,7 +29,7 @@ def _angles_deg(b, t):
 
 
 def _true_baselines(d, sol):
-    from tests.attitude.test_attitude_sim import truth_at
+    from gnssatt.attitude.truth import truth_at
     from gnssatt.gnss import rotations as rot
 
     q, _ = truth_at(d, sol)      # at sol.att_epochs

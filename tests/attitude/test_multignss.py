@@ -217,7 +217,7 @@ def test_job_with_systems_preset_runs_end_to_end(tmp_path):
     import hashlib
     import json
 
-    from tests.attitude.test_real_nagoya import PLATFORM
+    from bench.real_sets import NAGOYA_PLATFORM as PLATFORM
     from tests.conftest import real_set
     from worker.context import InputFile, InputSet, JobContext
     from worker.jobs.attitude import AttitudeConfig

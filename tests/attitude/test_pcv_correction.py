@@ -108,7 +108,7 @@ def true_maps(d: Path) -> dict:
 
 
 def test_true_maps_remove_the_attitude_bias(pcv_pass):
-    from tests.attitude.test_attitude_sim import errors
+    from gnssatt.attitude.truth import attitude_errors_deg
     from gnssatt.attitude.process import load_inputs, process
     from gnssatt.attitude.settings import AttitudeSettings
 
@@ -118,7 +118,7 @@ def test_true_maps_remove_the_attitude_bias(pcv_pass):
     out = {}
     for name, st in (("raw", AttitudeSettings()), ("maps", AttitudeSettings(pcv_maps=maps))):
         sol = process(inputs, st)
-        ang, de = errors(pcv_pass, sol)
+        ang, de = attitude_errors_deg(pcv_pass, sol)
         f = sol.att_fixed
         assert f.mean() > 0.9 and ang[f].max() < 3.0, name
         out[name] = (de[f].mean(axis=0), np.median(ang[f]))

@@ -56,7 +56,7 @@ def test_gps_only_rtklib_agrees_with_gnssatt_not_with_the_multi_gnss_readme(tmp_
     test_real_nagoya.py::test_nagoya_matches_rtklib_level runs gnssatt with Galileo, BeiDou and QZSS."""
     import json
 
-    from tests.attitude.test_real_nagoya import PLATFORM
+    from bench.real_sets import NAGOYA_PLATFORM as PLATFORM
     from gnssatt.attitude.process import load_inputs, process
     from gnssatt.attitude.settings import AttitudeSettings
 
@@ -84,7 +84,7 @@ def test_multi_gnss_gnssatt_agrees_with_rtklib_epoch_by_epoch(tmp_path):
     scatter 0.031 / 0.065 deg against RTKLIB's 0.037 / 0.086 deg."""
     import json
 
-    from tests.attitude.test_real_nagoya import PLATFORM
+    from bench.real_sets import NAGOYA_PLATFORM as PLATFORM
     from gnssatt.attitude.process import load_inputs, process
     from gnssatt.attitude.settings import TABLE2_MASKS, AttitudeSettings
 

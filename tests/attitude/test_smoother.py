@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 from tests.attitude.conftest import CLEAN, _simulate, set_files
-from tests.attitude.test_adaptive import _lag_deg
-from tests.attitude.test_attitude_sim import errors
+from gnssatt.attitude.truth import attitude_errors_deg, lag_deg
 from gnssatt.attitude.process import load_inputs, process
 from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
 from gnssatt.attitude.smoother import acceleration_noise_rate, rts_smooth
@@ -110,13 +109,13 @@ def test_smoother_removes_the_lag_of_the_pitch_up(pitch_up):
     for sm, sol in sols.items():
         if sm == "adaptive":
             continue
-        ang, _ = errors(d, sol)
+        ang, _ = attitude_errors_deg(d, sol)
         f = sol.att_fixed
         t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]
         t0 = t[int(np.argmax(f))]
         assert f[int(np.argmax(f)):].mean() > 0.99 and "fix_lost" not in sol.summary["events"]
         late = f & (t > t0 + 30.0)
-        out[sm] = ang[late].max(), _lag_deg(d, sol, t0 + 30.0), sol
+        out[sm] = ang[late].max(), lag_deg(d, sol, t0 + 30.0), sol
     (max_f, lag_f, _), (max_s, lag_s, sol_s) = out[False], out[True]
     # the forward filter with Table 1's random walk lags the pitch-up (the paper: up to 1 deg)
     assert lag_f > 0.4 and max_f > 0.6, (lag_f, max_f)
@@ -126,7 +125,7 @@ def test_smoother_removes_the_lag_of_the_pitch_up(pitch_up):
     # its sigmas are not optimistic after convergence: std(error / sigma) per angle not above 1.2 (measured
     # 0.50 / 0.64 / 0.46: conservative, as the forward filter's on white-noise data, because the multipath model's
     # share is kept at its filtered value; the forward filter's pitch 1.70 with its lag)
-    _, de = errors(d, sol_s)
+    _, de = attitude_errors_deg(d, sol_s)
     t = np.asarray(sol_s.pobs.time - sol_s.pobs.time[0], float)[sol_s.att_epochs]
     late = sol_s.att_fixed & (t > t[int(np.argmax(sol_s.att_fixed))] + 30.0)
     z = (de / sol_s.sigma_euler_deg)[late]
@@ -221,7 +220,7 @@ def test_adaptive_noise_keeps_the_pitch_up_below_0_3_deg(pitch_up):
     out = {}
     for key in (True, "adaptive"):
         sol = sols[key]
-        ang, de = errors(d, sol)
+        ang, de = attitude_errors_deg(d, sol)
         f = sol.att_fixed
         t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]
         t0 = t[int(np.argmax(f))]
