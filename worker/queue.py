@@ -33,8 +33,20 @@ def make_huey(settings: Settings, *, immediate: bool = False,
         huey = SqliteHuey(settings.queue_name, filename=str(settings.data_dir / "queue.db"), results=False,
                           immediate=immediate, timeout=30)
 
-    huey.run_job = huey.task(name=TASK_NAME)(run_job)  # type: ignore[attr-defined]
-    huey.run_task = huey.task(name=TASK_NAME_FANOUT)(run_task)  # type: ignore[attr-defined]
+    job_body, task_body = run_job, run_task
+
+    # defined here, not registered directly: Huey names a task after the module of its function, and the API and
+    # the worker must agree on the name (worker.queue.gnssatt.run_job) whatever bodies they pass
+    @huey.task(name=TASK_NAME)
+    def _run_job(job_id: str) -> None:
+        job_body(job_id)
+
+    @huey.task(name=TASK_NAME_FANOUT)
+    def _run_task(task_id: str) -> None:
+        task_body(task_id)
+
+    huey.run_job = _run_job  # type: ignore[attr-defined]
+    huey.run_task = _run_task  # type: ignore[attr-defined]
     return huey
 
 
