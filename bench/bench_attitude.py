@@ -102,7 +102,7 @@ def run_mode(d: Path, mode: str, extra: dict | None = None) -> dict:
     P.run_filter = timed
     try:
         t0 = time.perf_counter()
-        sol = process(load_inputs(files_of(d)), AttitudeSettings(**{**selection, **cfg}))
+        sol = process(load_inputs(files_of(d)), AttitudeSettings.preset("seed000", **{**selection, **cfg}))
         prods = all_products(sol)
         wall = time.perf_counter() - t0
     finally:
@@ -166,7 +166,7 @@ def run_slews(tmp: Path, seeds=(SEED,)) -> list[str]:
     (max of the 15-s running mean of the Euler errors), 95 % error, std(error / predicted sigma) after 30 s."""
     from gnssatt.attitude.truth import attitude_errors_deg, lag_deg
     from gnssatt.attitude.process import load_inputs, process
-    from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
+    from gnssatt.attitude.settings import AttitudeSettings  # the benches measure the "all phases" selection
     from gnssatt.sim import simulate_scenario
 
     lines = ["", f"Slews (seed 000 Fig. 6; clean, simulator seed{'s' if len(seeds) > 1 else ''} "
@@ -189,7 +189,7 @@ def run_slews(tmp: Path, seeds=(SEED,)) -> list[str]:
             simulate_scenario("slew", d, seed=seed, overrides={**over, **CLEAN})
             inputs = load_inputs(files_of(d))
             for name, cfg in SLEW_SETTINGS.items():
-                sol = process(inputs, AttitudeSettings(mode="dynamic", **cfg, **ALL_PHASES))
+                sol = process(inputs, AttitudeSettings.preset("all-phases", mode="dynamic", **cfg))
                 ang, de = attitude_errors_deg(d, sol)
                 f = sol.att_fixed
                 t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]

@@ -162,10 +162,10 @@ def run_floor(d: Path, sol, truth: dict, weighted: bool) -> dict:
 def run_gnssatt(d: Path, mode: str, truth: dict, keep: dict | None = None) -> dict:
     from gnssatt.attitude.process import load_inputs, process
     from gnssatt.attitude.products import all_products
-    from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
+    from gnssatt.attitude.settings import AttitudeSettings  # the benches measure the "all phases" selection
 
     t0, c0 = time.perf_counter(), time.process_time()
-    sol = process(load_inputs(files_of(d)), AttitudeSettings(mode=mode, **ALL_PHASES))
+    sol = process(load_inputs(files_of(d)), AttitudeSettings.preset("all-phases", mode=mode))
     all_products(sol)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     if keep is not None:
@@ -209,7 +209,7 @@ def run_rtklib(d: Path, truth: dict, work: Path, basesig_m: float = 0.05, weight
 def real_sets(work: Path) -> list[dict]:
     """gnssatt kinematic vs RTKLIB kinematic (GPS only, L1+L2, same files) on the real one-baseline sets."""
     from bench.real_sets import NAGOYA, NAGOYA_PLATFORM, REAL_DATA_DIR, UPC, UPC_PLATFORM, nagoya_files, upc_files
-    from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
+    from gnssatt.attitude.settings import AttitudeSettings  # the benches measure the "all phases" selection
 
     rows = []
     nag = REAL_DATA_DIR / NAGOYA
@@ -221,7 +221,7 @@ def real_sets(work: Path) -> list[dict]:
         base = {"ant2-postype": "llh", "ant2-pos1": "35.134707705", "ant2-pos2": "136.977577939",
                 "ant2-pos3": "104.853"}
         rows.append(_real_row("Nagoya 0.99 m, 5 min", files, nag / "rover.obs", nag / "base.obs", nag / "base.nav",
-                              base, work, AttitudeSettings(mode="kinematic", elevation_mask_local_deg=10.0, **ALL_PHASES),
+                              base, work, AttitudeSettings.preset("all-phases", mode="kinematic", table2={"elevation_mask_local_deg": 10.0}),
                               {"pos1-elmask": "10"}, (0.9902, 193.03, 0.56)))
         rows.append(_real_row("Nagoya, RTKLIB G+E+J+C (README/issue figures)", None, nag / "rover.obs",
                               nag / "base.obs", nag / "base.nav", base, work, None,
@@ -238,7 +238,7 @@ def real_sets(work: Path) -> list[dict]:
         base = {"ant2-postype": "xyz", "ant2-pos1": "4789013.0077", "ant2-pos2": "176610.1555",
                 "ant2-pos3": "4195034.8091"}
         rows.append(_real_row("UPC 37.95 m, 1 h", files, plain["UPC20770.11o"], plain["UPC10770.11o"],
-                              upc / "brdc0770.11n", base, work, AttitudeSettings(mode="kinematic", **ALL_PHASES), {},
+                              upc / "brdc0770.11n", base, work, AttitudeSettings.preset("all-phases", mode="kinematic"), {},
                               (37.946, 226.263, -0.046)))
     return rows
 

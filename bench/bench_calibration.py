@@ -386,7 +386,7 @@ def ekf_held_out(d: Path, calibrated: dict, maps: dict | None = None, config: di
         runs.append(("calibrated_baselines_and_maps_empty_bins_kept", calibrated, maps, "keep"))
     for tag, cal, pcv, empty in runs:
         t0 = time.perf_counter()
-        sol = process(inp, AttitudeSettings(**{"mode": "dynamic", **_settings_of(config or {}),
+        sol = process(inp, AttitudeSettings.preset("seed000", **{"mode": "dynamic", **_settings_of(config or {}),
                                                "calibrated_baselines": cal, "pcv_maps": pcv,
                                                "pcv_empty_bins": empty}))
         ref = sol.summary.get("reference", {}).get("fixed", {})
@@ -453,8 +453,8 @@ def held_out_budget(held: Path, prod: dict, extra: dict | None = None, twins: bo
         res = {}
         for tag, b, m in runs if sk == "held" else [r for r in runs if r[0] in (
                 "a_priori", "calibrated_baselines_and_maps", "true_baselines_and_maps_full_grid")]:
-            res[tag] = filter_errors(inputs, AttitudeSettings(mode="dynamic", calibrated_baselines=b, pcv_maps=m,
-                                                              **(extra or {})))
+            res[tag] = filter_errors(inputs, AttitudeSettings.preset("seed000", mode="dynamic", **(extra or {}))
+                                     .override(calibration={"calibrated_baselines": b, "pcv_maps": m}))
             if tag != "a_priori":
                 res[tag]["cut"] = cut_percent(res["a_priori"], res[tag])
             print(sk, tag, {a: (res[tag][a]["bias_deg"], res[tag][a]["std_deg"]) for a in ("yaw", "pitch", "roll")},

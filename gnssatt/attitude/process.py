@@ -223,7 +223,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     bl_idx = [(ant_index[a], ant_index[b]) for a, b in baselines]
     body = []
     for a, b in baselines:
-        cal = settings.calibrated_baselines.get((a, b))
+        cal = settings.calibration.calibrated_baselines.get((a, b))
         body.append(np.asarray(cal, float) if cal is not None else plat.baseline_body_m(a, b))
     body = np.array(body)
     boresight = np.array([plat.antennas[a].boresight_body for a in antennas])
@@ -256,7 +256,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
                 q, _ = attitude_quaternion(b[None], body, settings.attitude_method)
                 return rot.quat_to_dcm(q[0])
     prog(0.15, "filtering")
-    two_pass = settings.mode == "dynamic" and settings.smoother_adaptive_noise
+    two_pass = settings.mode == "dynamic" and settings.smoothing.adaptive_noise
     span = 0.375 if two_pass else 0.75
     fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
                     progress=lambda f: prog(0.15 + span * f))

@@ -111,7 +111,7 @@ def slews(pitch_up_pass, slew_pass):
     out = {}
     for name, d in (("pitch", pitch_up_pass), ("yawroll", slew_pass)):
         inputs = load_inputs(set_files(d))
-        out[name] = (d, {on: process(inputs, AttitudeSettings(mode="dynamic", adaptive_omega_noise=on))
+        out[name] = (d, {on: process(inputs, AttitudeSettings.preset("seed000", mode="dynamic", adaptive={"enabled": on}))
                          for on in (False, True)})
     return out
 
@@ -148,7 +148,7 @@ def test_adaptive_noise_leaves_a_slow_manoeuvre_alone(slews):
 def test_job_config_passes_the_option_and_defaults_to_table_1():
     from worker.jobs.attitude import AttitudeConfig
 
-    assert AttitudeConfig().to_settings().adaptive_omega_noise is False
+    assert AttitudeConfig().to_settings().adaptive.enabled is False
     s = AttitudeConfig(adaptive_omega_noise=True, adaptive_omega_threshold=6.0, adaptive_omega_hold_epochs=20)
     s = s.to_settings()
-    assert s.adaptive_omega_noise and s.adaptive_omega_threshold == 6.0 and s.adaptive_omega_hold_epochs == 20
+    assert s.adaptive.enabled and s.adaptive.threshold == 6.0 and s.adaptive.hold_epochs == 20

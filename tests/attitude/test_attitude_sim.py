@@ -21,7 +21,7 @@ from gnssatt.attitude.truth import (attitude_errors_deg, clock_jump_match, score
 @pytest.fixture(scope="module")
 def clean_solutions(clean_pass):
     inputs = load_inputs(set_files(clean_pass))
-    return {m: process(inputs, AttitudeSettings(mode=m)) for m in ("kinematic", "dynamic")}
+    return {m: process(inputs, AttitudeSettings.preset("seed000", mode=m)) for m in ("kinematic", "dynamic")}
 
 
 def test_clean_pass_fixes_quickly_and_never_wrongly(clean_pass, clean_solutions):
@@ -109,7 +109,7 @@ def test_products_follow_conventions_and_aem_parses(clean_solutions):
 
 
 def test_slew_keeps_the_fix(slew_pass):
-    sol = process(load_inputs(set_files(slew_pass)), AttitudeSettings(mode="dynamic"))
+    sol = process(load_inputs(set_files(slew_pass)), AttitudeSettings.preset("seed000", mode="dynamic"))
     ang, _ = attitude_errors_deg(slew_pass, sol)
     f = sol.att_fixed
     first = int(np.argmax(f))
@@ -119,7 +119,7 @@ def test_slew_keeps_the_fix(slew_pass):
 
 
 def test_hard_pass_completes_and_reports_every_event(hard_pass):
-    sol = process(load_inputs(set_files(hard_pass)), AttitudeSettings(mode="kinematic"))
+    sol = process(load_inputs(set_files(hard_pass)), AttitudeSettings.preset("seed000", mode="kinematic"))
     ev = sol.summary["events"]
     # every integer the filter fixed is the truth's, over the whole time it was held (slips after a fix included)
     sc = score_fixes(sol, hard_pass / "truth")
@@ -149,7 +149,7 @@ def test_realistic_pass_right_integers_and_honest_sigma(realistic_pass, mode):
     """Multipath, PCV and C/N0-dependent noise: every fixed integer is the truth's and the errors' scatter matches
     the predicted sigma (noise model: C/N0 growth of the white noise + off-boresight multipath variance, inflated
     for its time correlation in dynamic mode; docs/attitude.md)."""
-    sol = process(load_inputs(set_files(realistic_pass)), AttitudeSettings(mode=mode))
+    sol = process(load_inputs(set_files(realistic_pass)), AttitudeSettings.preset("seed000", mode=mode))
     sc = score_fixes(sol, realistic_pass / "truth")
     assert sc["constraints"] > 10 and sc["wrong_constraints"] == 0, sc["details"]
     # the simulator's noise grows as 10^((45 - C/N0)/20) in sigma: the estimated variance exponent is ~1
@@ -166,7 +166,7 @@ def test_realistic_pass_right_integers_and_honest_sigma(realistic_pass, mode):
 def test_ml_attitude_is_more_accurate_than_quest_in_kinematic_mode(clean_pass, clean_solutions):
     """attitude_method "ml" on the same filter run: lower error rms than QUEST, and its predicted sigmas honest."""
     sol_q = clean_solutions["kinematic"]
-    sol_m = process(load_inputs(set_files(clean_pass)), AttitudeSettings(mode="kinematic", attitude_method="ml"))
+    sol_m = process(load_inputs(set_files(clean_pass)), AttitudeSettings.preset("seed000", mode="kinematic", attitude_method="ml"))
     assert np.array_equal(sol_q.att_fixed, sol_m.att_fixed)
     f = sol_q.att_fixed
     ang_q, _ = attitude_errors_deg(clean_pass, sol_q)

@@ -116,7 +116,7 @@ def test_true_maps_remove_the_attitude_bias(pcv_pass):
     maps = true_maps(pcv_pass)
     assert len(maps) == 4
     out = {}
-    for name, st in (("raw", AttitudeSettings()), ("maps", AttitudeSettings(pcv_maps=maps))):
+    for name, st in (("raw", AttitudeSettings()), ("maps", AttitudeSettings.preset("seed000", calibration={"pcv_maps": maps}))):
         sol = process(inputs, st)
         ang, de = attitude_errors_deg(pcv_pass, sol)
         f = sol.att_fixed
@@ -186,7 +186,7 @@ def test_empty_bins_exclude_or_keep(pcv_pass):
     code = {v: k for k, v in REASONS.items()}["pcv_empty"]
     n_empty = {}
     for mode in ("exclude", "keep"):
-        sol = process(inputs, AttitudeSettings(pcv_maps=holed, pcv_empty_bins=mode))
+        sol = process(inputs, AttitudeSettings.preset("seed000", calibration={"pcv_maps": holed, "pcv_empty_bins": mode}))
         n_empty[mode] = int(np.sum(sol.fr.residuals["reason"] == code))
         assert sol.att_fixed.mean() > 0.9
     assert n_empty["exclude"] > 100 and n_empty["keep"] == 0, n_empty

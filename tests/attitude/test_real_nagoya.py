@@ -25,8 +25,8 @@ def nagoya(tmp_path_factory):
     plat = tmp_path_factory.mktemp("nagoya") / "platform.json"
     plat.write_text(json.dumps(NAGOYA_PLATFORM))
     files = nagoya_files(d, plat)
-    return process(load_inputs(files), AttitudeSettings(mode="kinematic", weighting="elevation",
-                                                        systems=["G", "E", "C", "J"]))
+    return process(load_inputs(files), AttitudeSettings.preset("seed000", mode="kinematic", systems=["G", "E", "C", "J"],
+                                                               noise={"weighting": "elevation"}))
 
 
 def test_nagoya_every_epoch_fixed_from_the_first(nagoya):

@@ -11,7 +11,7 @@ import pytest
 from tests.attitude.conftest import CLEAN, _simulate, set_files
 from gnssatt.attitude.truth import attitude_errors_deg, lag_deg
 from gnssatt.attitude.process import load_inputs, process
-from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
+from gnssatt.attitude.settings import AttitudeSettings
 from gnssatt.attitude.smoother import acceleration_noise_rate, rts_smooth
 
 
@@ -98,8 +98,8 @@ PITCH_UP = {"start_gps": "2018-06-06T16:31:00", "duration_s": 200.0,
 def pitch_up(tmp_path_factory):
     d = _simulate(tmp_path_factory, "pitch_up", "slew", 0, {**PITCH_UP, **CLEAN})
     inputs = load_inputs(set_files(d))
-    sols = {sm: process(inputs, AttitudeSettings(mode="dynamic", smoother=sm, **ALL_PHASES)) for sm in (False, True)}
-    sols["adaptive"] = process(inputs, AttitudeSettings(mode="dynamic", smoother_adaptive_noise=True, **ALL_PHASES))
+    sols = {sm: process(inputs, AttitudeSettings.preset("all-phases", mode="dynamic", smoothing={"enabled": sm})) for sm in (False, True)}
+    sols["adaptive"] = process(inputs, AttitudeSettings.preset("all-phases", mode="dynamic", smoothing={"adaptive_noise": True}))
     return d, sols
 
 
@@ -135,7 +135,7 @@ def test_smoother_removes_the_lag_of_the_pitch_up(pitch_up):
 def test_smoother_changes_nothing_but_the_baselines_omega_and_their_covariance(pitch_up):
     _, sols = pitch_up
     a, b = sols[False].fr, sols[True].fr
-    assert AttitudeSettings().smoother is False and a.smoother_data is None
+    assert AttitudeSettings().smoothing.enabled is False and a.smoother_data is None
     assert "smoother" not in sols[False].summary
     assert sols[True].summary["smoother"]["epochs_smoothed"] == int((np.linalg.norm(
         a.b_ecef_m - b.b_ecef_m, axis=-1).max(axis=1) > 0).sum())
@@ -150,10 +150,10 @@ def test_smoother_changes_nothing_but_the_baselines_omega_and_their_covariance(p
 def test_job_config_passes_the_smoother_setting():
     from worker.jobs.attitude import AttitudeConfig
 
-    assert AttitudeConfig.model_validate({"smoother": True}).to_settings().smoother is True
-    assert AttitudeConfig.model_validate({}).to_settings().smoother is False
-    assert AttitudeConfig.model_validate({"smoother_adaptive_noise": True}).to_settings().smoother_adaptive_noise
-    assert AttitudeConfig.model_validate({}).to_settings().smoother_adaptive_noise is False
+    assert AttitudeConfig.model_validate({"smoother": True}).to_settings().smoothing.enabled is True
+    assert AttitudeConfig.model_validate({}).to_settings().smoothing.enabled is False
+    assert AttitudeConfig.model_validate({"smoother_adaptive_noise": True}).to_settings().smoothing.adaptive_noise
+    assert AttitudeConfig.model_validate({}).to_settings().smoothing.adaptive_noise is False
 
 
 def test_second_pass_with_table1_noise_reproduces_the_first(pitch_up, monkeypatch):
@@ -170,7 +170,7 @@ def test_second_pass_with_table1_noise_reproduces_the_first(pitch_up, monkeypatc
         return orig(*a, **k)
 
     monkeypatch.setattr(P, "run_filter", spy)
-    P.process(load_inputs(set_files(d)), AttitudeSettings(mode="dynamic", smoother=True, **ALL_PHASES))
+    P.process(load_inputs(set_files(d)), AttitudeSettings.preset("all-phases", mode="dynamic", smoothing={"enabled": True}))
     (args, kw), = calls
     a = orig(*args, **kw)
     n = a.fixed.shape[0]

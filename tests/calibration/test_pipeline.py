@@ -181,7 +181,7 @@ def test_held_out_comparison_is_the_attitude_filter_with_the_published_calibrati
     assert doc["attitude_config"] == HELD_OUT_ATTITUDE_DEFAULT
     settings = AttitudeConfig(**HELD_OUT_ATTITUDE_DEFAULT,
                               calibrated_baselines=json.loads(prod["baselines.json"])).to_settings()
-    settings.pcv_maps = maps_for_settings(maps, list(inputs.platform.baselines))
+    settings.calibration.pcv_maps = maps_for_settings(maps, list(inputs.platform.baselines))
     job = filter_errors(inputs, settings)
     for a in ("yaw", "pitch", "roll"):
         assert job[a]["bias_deg"] == w1[a]["bias_deg"] and job[a]["std_deg"] == w1[a]["std_deg"], (a, job, w1)
