@@ -25,7 +25,7 @@ sys.path[:] = [str(TREE)] + [p for p in sys.path if p not in ("", _HERE, str(TRE
 
 #: where each piece lives, newest layout first (the first that imports from this tree wins)
 CANDIDATES = {
-    "run": ["worker.pipelines.attitude:run", "worker.jobs.attitude:run"],
+    "run": ["worker.jobs.attitude:run", "worker.pipelines.attitude:run"],
     "config": ["worker.jobs.attitude:AttitudeConfig"],
     "context": ["worker.context:JobContext", "core.context:JobContext", "worker.runtime.context:JobContext"],
     "simulate": ["gnssatt.sim:simulate_scenario", "worker.sim:simulate_scenario"],

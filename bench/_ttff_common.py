@@ -19,11 +19,11 @@ def set_files(d: Path) -> list:
 
 def study_payloads(count: int, seed: int, duration_s: float, realistic: bool = True,
                    methods: list | None = None) -> list[dict]:
-    """The same payloads the `ttff` job builds for a `simulate` block (worker.pipelines.ttff.payloads)."""
+    """The same payloads the `ttff` job builds for a `simulate` block (worker.jobs.ttff.payloads)."""
     from types import SimpleNamespace
 
     from worker.jobs.ttff import TtffConfig
-    from worker.pipelines.ttff import payloads
+    from worker.jobs.ttff import payloads
 
     cfg = TtffConfig.model_validate({"simulate": {"count": count, "seed": seed, "realistic": realistic},
                                      "duration_s": duration_s, **({"methods": methods} if methods else {})})

@@ -6,7 +6,7 @@ antennas, L1 C/A + L2 P(Y), 1 Hz), clean ({"pcv": false, "pco": false, "multipat
 "noise_grows_with_cn0": false}) and realistic (preset as it is), each in kinematic and dynamic mode.
 
 - filter: CPU time (time.process_time) of gnssatt.attitude.filter.run_filter, epochs / s; median of --runs runs;
-- job: the attitude pipeline itself (worker.pipelines.attitude.run on a JobContext like the runner builds: parse
+- job: the attitude pipeline itself (worker.jobs.attitude.run on a JobContext like the runner builds: parse
   the uploaded files, geometry, filter, attitude, every product text, PNG plots, report.html, each product
   hashed as the blob store does), CPU and wall time, median of --runs runs, and CPU per stage (the pipeline's
   StageClock line of the job log);
@@ -56,7 +56,7 @@ def run_job(d: Path, mode: str, work: Path) -> dict:
     import gnssatt.attitude.process as P
     from bench.local_jobs import files_set, job_context
     from worker.jobs.attitude import AttitudeConfig
-    from worker.pipelines.attitude import run
+    from worker.jobs.attitude import run
 
     ctx = job_context(work, [files_set(files_of(d), name=d.name)], job_id="bench-speed")
     filt = {}
@@ -256,9 +256,9 @@ def main() -> None:
         ratio = f"{r['job_cpu_s'] / p['cpu_s']:.2f}" if p else "-"
         lines.append(f"| {r['pass']} | {r['mode']} | {r['epochs']} | {r['filter_cpu_s']:.2f} | "
                      f"{r['filter_eps']:.0f} | {r['job_cpu_s']:.1f} | {r['job_wall_s']:.1f} | {peer} | {ratio} |")
-    lines += ["", "Job = worker.pipelines.attitude.run on a JobContext (as the runner builds it): parsing, geometry, "
+    lines += ["", "Job = worker.jobs.attitude.run on a JobContext (as the runner builds it): parsing, geometry, "
               "filter, attitude, products " + ", ".join(table[0]["products"]) + " (each hashed as stored).", "",
-              "CPU s per stage of the job (the pipeline's own stage clock, worker.pipelines.attitude.StageClock, "
+              "CPU s per stage of the job (the pipeline's own stage clock, worker.jobs.attitude.StageClock, "
               "as logged by the worker):", "",
               "| stage | " + " | ".join(f"{r['pass']} {r['mode']}" for r in table) + " |",
               "|---|" + "---|" * len(table)]

@@ -67,7 +67,7 @@ def simulate(root: Path, n: int, overrides: dict) -> list[Path]:
 
 def run_inprocess(dirs: list[Path], cfg: dict, tag: str, work: Path) -> tuple[dict, float, object]:
     from worker.jobs.calibration import CalibrationConfig
-    from worker.pipelines.calibration import run
+    from worker.jobs.calibration import run
 
     sets = [input_set(d, set_id=f"{tag}{i:03d}") for i, d in enumerate(dirs)]
     ctx = job_context(work / tag, sets)

@@ -35,7 +35,7 @@ SEED_000_TABLE5 = {  # instant-fix share [%] and mean non-zero TTFF [s], baselin
     "L2": {"instant": (75, 50), "mean": (7.1, 10.9)},
 }
 def _task(payload: dict) -> dict:
-    from worker.pipelines.ttff import set_task
+    from worker.jobs.ttff import set_task
     return set_task(payload, [])
 
 

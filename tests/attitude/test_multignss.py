@@ -221,7 +221,7 @@ def test_job_with_systems_preset_runs_end_to_end(tmp_path):
     from tests.conftest import real_set
     from worker.context import InputFile, InputSet, JobContext
     from worker.jobs.attitude import AttitudeConfig
-    from worker.pipelines.attitude import run
+    from worker.jobs.attitude import run
 
     d = real_set("static_1m_mosaicx5_nagoya_2024")
     plat = tmp_path / "platform.json"

@@ -143,7 +143,7 @@ def _ctx(tmp_path, files, store: dict):
 
 
 def test_job_config_resolves_maps_from_the_store(tmp_path, pcv_pass):
-    from worker.pipelines.attitude import run
+    from worker.jobs.attitude import run
 
     maps = true_maps(pcv_pass)
     store = {f"map-{i}": {**doc, "values_mm": doc["values_mm"]} for i, doc in enumerate(maps.values())}

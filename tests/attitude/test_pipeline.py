@@ -31,7 +31,7 @@ def _ctx(tmp_path, files):
 
 def test_registry_and_config():
     jt = job_types()["attitude"]
-    assert jt.pipeline == "worker.pipelines.attitude:run" and jt.min_sets == 1 and jt.max_sets == 1
+    assert jt.pipeline == "worker.jobs.attitude:run" and jt.min_sets == 1 and jt.max_sets == 1
     cfg = AttitudeConfig()
     st = cfg.to_settings()
     assert st.mode == "dynamic" and st.table2.cn0_mask_dbhz == {"L1": 35.0, "L2": 30.0} and st.table2.elevation_mask_antenna_deg == 0.0 and st.table1.sigma_phase_m == 0.003
@@ -45,7 +45,7 @@ def test_registry_and_config():
 
 
 def test_pipeline_writes_products(tmp_path, clean_pass):
-    from worker.pipelines.attitude import run
+    from worker.jobs.attitude import run
 
     ctx, calls = _ctx(tmp_path, set_files(clean_pass))
     run(ctx, AttitudeConfig(mode="kinematic"))
@@ -58,7 +58,7 @@ def test_pipeline_writes_products(tmp_path, clean_pass):
 
 
 def test_pipeline_without_platform_is_an_input_error(tmp_path, clean_pass):
-    from worker.pipelines.attitude import run
+    from worker.jobs.attitude import run
 
     files = [f for f in set_files(clean_pass) if f[1] != "platform"]
     ctx, _ = _ctx(tmp_path, files)
@@ -69,7 +69,7 @@ def test_pipeline_without_platform_is_an_input_error(tmp_path, clean_pass):
 
 def test_pipeline_cancellation_happens_at_progress(tmp_path, clean_pass):
     from worker.errors import JobCancelled
-    from worker.pipelines.attitude import run
+    from worker.jobs.attitude import run
 
     ctx, _ = _ctx(tmp_path, set_files(clean_pass))
     ctx.cancel_requested.set()

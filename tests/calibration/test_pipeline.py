@@ -13,7 +13,7 @@ from bench.local_jobs import input_set, job_context, product_bytes
 from gnssatt.calibration.simulated import compare_maps_mm, simulate_campaign, truth_map_mm, truth_of, truth_split
 from worker.errors import JobInputError
 from worker.jobs.calibration import HELD_OUT_ATTITUDE_DEFAULT, CalibrationConfig
-from worker.pipelines.calibration import run
+from worker.jobs.calibration import run
 
 BENIGN = {"noise": False, "multipath": False, "cn0_jitter_db": 0.0}
 FAST_CFG = {"azimuth_step_deg": 10.0, "elevation_step_deg": 5.0, "min_count": 10}

@@ -5,7 +5,7 @@ import csv
 import io
 from datetime import datetime, timedelta, timezone
 
-from worker.pipelines.calibration import (STAGE_PASS1, STAGE_PASS2, _longest_first, _map_in_order, tasks_csv,
+from worker.jobs.calibration import (STAGE_PASS1, STAGE_PASS2, _longest_first, _map_in_order, tasks_csv,
                                           workers_summary)
 
 

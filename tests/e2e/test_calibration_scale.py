@@ -34,7 +34,7 @@ def campaign(tmp_path_factory) -> list[Path]:
 def in_process(campaign, tmp_path_factory) -> dict[str, str]:
     """sha256 of the compared products of the same campaign run in-process (fan-out run locally)."""
     from worker.jobs.calibration import CalibrationConfig
-    from worker.pipelines.calibration import run
+    from worker.jobs.calibration import run
 
     ctx = job_context(tmp_path_factory.mktemp("cal_scale_job"), [input_set(d) for d in campaign])
     run(ctx, CalibrationConfig(**CFG))

@@ -13,7 +13,7 @@ from tests.attitude.conftest import set_files
 from worker.context import JobContext
 from worker.errors import JobInputError
 from worker.jobs.ttff import TtffConfig
-from worker.pipelines.ttff import payloads, run
+from worker.jobs.ttff import payloads, run
 from gnssatt.sim import simulate_scenario
 from gnssatt.ttff.data import load_study_set, subset_signals
 from gnssatt.ttff.single_epoch import SingleEpochOptions, epoch_problem, solve_constrained, solve_lambda
@@ -198,7 +198,7 @@ def test_payloads_are_deterministic():
     a = payloads(SimpleNamespace(sets=[]), cfg)
     assert a == payloads(SimpleNamespace(sets=[]), cfg) and len(a) == 3
     assert "pcv" not in a[0]["overrides"]          # realism is the preset's own
-    from worker.pipelines.ttff import _options
+    from worker.jobs.ttff import _options
     assert _options(a[0]["options"]).filter_settings_by_configuration == {"L2": {"ambiguity": {"min_ratio_first_fix": 2.0}}}
     b = payloads(SimpleNamespace(sets=[]), TtffConfig.model_validate({"simulate": {"count": 3, "seed": 2,
                                                                                    "realistic": False}}))

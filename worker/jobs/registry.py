@@ -1,7 +1,7 @@
 """Job types are plug-ins: one module in worker/jobs/ per type declares a `JOB_TYPE = JobType(...)`.
 
-A JobType names its pipeline by dotted path ("module:function"), so the API can list types and
-validate configs without importing any numerics. Duplicate names are refused.
+The same module holds the pipeline run(ctx, config), named by dotted path ("module:function"); it imports the
+science inside its functions, so the API can list types and validate configs without importing any numerics. Duplicate names are refused.
 """
 from __future__ import annotations
 
