@@ -11,6 +11,7 @@ import tempfile
 from pathlib import Path
 from typing import Callable
 
+from gnssatt.gnss.io.observation_set import IdentifiedFile, SetProblem, set_summary
 from gnssatt.gnss.io.sniff import identify
 from worker.context import InputFile, InputSet, JobContext
 from worker.errors import JobInputError
@@ -21,7 +22,8 @@ __all__ = ["local_set", "run_job_locally", "stderr_progress"]
 
 def local_set(paths: list[Path], set_id: str) -> InputSet:
     """An InputSet of local files (a directory stands for every file under it), each identified by its content
-    as an upload is (gnssatt.gnss.io.sniff.identify)."""
+    and the set checked and summarised as an upload is (gnssatt.gnss.io.sniff.identify,
+    gnssatt.gnss.io.observation_set.set_summary)."""
     files: list[InputFile] = []
     for path in paths:
         path = Path(path)
@@ -30,7 +32,11 @@ def local_set(paths: list[Path], set_id: str) -> InputSet:
             name = str(p.relative_to(path)) if path.is_dir() else p.name
             kind, summary = identify(p, name)
             files.append(InputFile(name, kind, p, summary))
-    return InputSet(id=set_id, name=None, files=files, summary={})
+    try:
+        summary = set_summary([IdentifiedFile(f.name, f.kind, f.summary, f.path) for f in files])
+    except SetProblem as exc:
+        raise JobInputError(exc.title, exc.detail, file=exc.file, field=exc.field) from exc
+    return InputSet(id=set_id, name=None, files=files, summary=summary)
 
 
 def stderr_progress(fraction: float, stage: str | None) -> None:

@@ -10,7 +10,7 @@ from app.store.uploads import StagedUpload
 from core.blobs import BlobStore
 from core.models import ObservationSet, SetFile
 from gnssatt.gnss.io.errors import ParseError
-from gnssatt.gnss.io.platform import match_observation_files, parse_platform
+from gnssatt.gnss.io.observation_set import IdentifiedFile, SetProblem, set_summary
 from gnssatt.gnss.io.sniff import identify
 
 
@@ -41,40 +41,12 @@ def validate_staged(staged: StagedUpload) -> tuple[list[ValidatedFile], dict]:
             raise ProblemError(422, "unreadable-file", f"{f.name} could not be read", f"{f.name}: {exc}",
                                file=f.name) from exc
         files.append(ValidatedFile(f.name, kind, summary, f.sha256, f.size_bytes, f.path))
-    obs = {f.name: f.summary.get("marker_name") for f in files if f.kind == "rinex_obs"}
-    if not obs:
-        raise ProblemError(422, "no-observations", "No observation file",
-                           "An observation set needs at least one RINEX observation file (one per antenna); "
-                           f"the upload holds: {', '.join(sorted(f.name + ' (' + f.kind + ')' for f in files))}.",
-                           field="files")
-    platforms = [f for f in files if f.kind == "platform"]
-    if len(platforms) > 1:
-        raise ProblemError(422, "several-platforms", "More than one platform.json",
-                           f"An observation set describes one platform; found {[p.name for p in platforms]}.",
-                           file=platforms[1].name)
-    summary: dict = {"n_files": len(files), "kinds": sorted({f.kind for f in files}), "warnings": []}
-    if platforms:
-        pf = platforms[0]
-        try:
-            platform = parse_platform(pf.path.read_bytes(), pf.name)
-            matched = match_observation_files(platform, obs, pf.name)
-        except ParseError as exc:
-            raise _parse_problem(exc) from exc
-        summary.update(platform=platform.name, platform_kind=platform.kind, antennas=matched,
-                       baselines=[f"{a}>{b}" for a, b in platform.baselines])
-        unused = sorted(set(obs) - set(matched.values()))
-        if unused:
-            summary["warnings"].append({"code": "unused-observation-file",
-                                        "message": f"observation files not matched to any antenna: {unused}"})
-    else:
-        summary["warnings"].append({"code": "no-platform", "message": "no platform.json: the set can be inspected, "
-                                    "but attitude and calibration jobs need one"})
-    obs_summaries = [f.summary for f in files if f.kind == "rinex_obs"]
-    summary["time_first"] = min(s["time_first"] for s in obs_summaries)
-    summary["time_last"] = max(s["time_last"] for s in obs_summaries)
-    for f in files:
-        for w in f.summary.get("warnings", []) or []:
-            summary["warnings"].append({"file": f.name, **w})
+    try:
+        summary = set_summary([IdentifiedFile(f.name, f.kind, f.summary, f.path) for f in files])
+    except SetProblem as exc:
+        raise ProblemError(422, exc.code, exc.title, exc.detail, file=exc.file, field=exc.field) from exc
+    except ParseError as exc:
+        raise _parse_problem(exc) from exc
     return files, summary
 
 
