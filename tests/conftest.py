@@ -1,14 +1,13 @@
 """Shared fixtures: where the real recorded data lives, and temp dirs."""
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import pytest
 
+from bench.real_sets import REAL_DATA_DIR
+
 REPO_ROOT = Path(__file__).resolve().parents[1]
-SHARED_DIR = Path(os.environ.get("GNSSATT_SHARED_DIR", REPO_ROOT.parent / "shared"))
-REAL_DATA_DIR = SHARED_DIR / "data" / "real"
 
 
 def real_set(name: str) -> Path:

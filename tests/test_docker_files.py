@@ -4,10 +4,11 @@ settings the README documents, and the Dockerfile copies every package the proje
 from __future__ import annotations
 
 import re
+import tomllib
 
 import yaml
 
-from app.settings import Settings
+from core.settings import Settings
 from tests.conftest import REPO_ROOT
 
 
@@ -28,8 +29,12 @@ def test_compose_services_and_settings():
 def test_dockerfile_copies_every_package():
     text = (REPO_ROOT / "docker" / "Dockerfile").read_text()
     copied = set(re.findall(r"^COPY (\S+) ", text, re.M))
-    for pkg in ("app", "worker", "client", "migrations", "pyproject.toml"):
-        assert pkg in copied, pkg
+    # every top-level package pyproject installs (its `include` patterns), read from pyproject itself
+    include = tomllib.loads((REPO_ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"]["find"]
+    packages = {pattern.rstrip("*") for pattern in include["include"]}
+    assert {"gnssatt", "core", "app", "worker", "client", "migrations"} <= packages, packages
+    for pkg in sorted(packages | {"pyproject.toml"}):
+        assert pkg in copied, f"docker/Dockerfile does not COPY {pkg}"
 
 
 def test_readme_documents_every_setting():

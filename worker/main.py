@@ -4,11 +4,11 @@ from __future__ import annotations
 import logging
 import threading
 
-from app.db import make_engine, make_sessionmaker
-from app.migrate import migrate
-from app.settings import Settings
-from app.store.blobs import BlobStore
-from worker import runner
+from core.blobs import BlobStore
+from core.db import make_engine, make_sessionmaker
+from core.migrate import migrate
+from core.settings import Settings
+from worker import fanout, runner
 from worker.queue import make_huey
 
 log = logging.getLogger("gnssatt.worker")
@@ -19,7 +19,9 @@ def build_runtime(settings: Settings, *, immediate: bool = False, name: str | No
     engine = make_engine(settings)
     migrate(engine, settings)
     rt = runner.Runtime(settings=settings, engine=engine, Session=make_sessionmaker(engine),
-                        blobs=BlobStore(settings.blobs_dir), huey=make_huey(settings, immediate=immediate),
+                        blobs=BlobStore(settings.blobs_dir),
+                        huey=make_huey(settings, immediate=immediate, run_job=runner.run_claimed_job_message,
+                                       run_task=fanout.run_task_message),
                         worker_name=name or runner.default_worker_name())
     runner.set_runtime(rt)
     return rt

@@ -180,7 +180,7 @@ class FilterRun:
         n_ant, self.n_ep, self.n_sat, self.n_sig = pobs.code_m.shape
         n_bl = self.n_bl = len(baselines)
         self.dynamic = s.mode == "dynamic"
-        self.st = FilterState(n_bl, self.n_sat, self.n_sig, self.dynamic, s.separate_phase_clock)
+        self.st = FilterState(n_bl, self.n_sat, self.n_sig, self.dynamic, s.noise.separate_phase_clock)
         self.lam = np.ascontiguousarray(pobs.wavelength_m, dtype=np.float64)
         t_s = (pobs.time - pobs.time[0]) if self.n_ep else np.zeros(0)
         self.t_s = np.asarray(t_s, dtype=np.float64)
@@ -204,31 +204,31 @@ class FilterRun:
         for j in range(self.n_bl):
             o = st.b_off[j]
             st.x[o:o + 3] = b0[j]
-            sig0 = max(s.sigma0_baseline_m, 1.2 * self.lengths[j])
+            sig0 = max(s.table1.sigma0_baseline_m, 1.2 * self.lengths[j])
             st.P[np.arange(o, o + 3), np.arange(o, o + 3)] = sig0 ** 2
-            st.P[st.bias[j, 1:], st.bias[j, 1:]] = s.sigma0_code_bias_m ** 2
+            st.P[st.bias[j, 1:], st.bias[j, 1:]] = s.table1.sigma0_code_bias_m ** 2
         if self.dynamic:
-            st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
+            st.P[0:3, 0:3] = np.eye(3) * (s.table1.sigma0_omega_deg_s * DEG) ** 2
 
     def _init_noise_model(self, q_omega):
         """Process noise (Table 1, the manoeuvre detector) and the measurement noise model's estimator state."""
         s, n_bl, n_sig = self.s, self.n_bl, self.n_sig
-        self.q_w = q_w = (s.sigma_omega_deg_s * DEG) ** 2 / s.tau_omega_s          # rad^2/s^2 per s
+        self.q_w = q_w = (s.table1.sigma_omega_deg_s * DEG) ** 2 / s.table1.tau_omega_s          # rad^2/s^2 per s
         self.adapter = ManoeuvreDetector(
-            q_w, (s.adaptive_omega_sigma_deg_s * DEG) ** 2 / s.tau_omega_s, n_bl, s.adaptive_omega_threshold,
-            s.adaptive_omega_mix_at, s.adaptive_omega_sigma_acc_deg_s2 * DEG, s.adaptive_omega_hold_epochs,
-            s.rk4_step_s, not (s.smoother or s.smoother_adaptive_noise)) \
-            if self.dynamic and s.adaptive_omega_noise else None
-        self.q_b = s.sigma_baseline_kinematic_m ** 2 / s.tau_baseline_s       # m^2 per s
-        self.var_clk = (s.sigma_clock_s * C_M_S) ** 2
+            q_w, (s.adaptive.sigma_omega_raised_deg_s * DEG) ** 2 / s.table1.tau_omega_s, n_bl, s.adaptive.threshold,
+            s.adaptive.mix_at, s.adaptive.sigma_acc_deg_s2 * DEG, s.adaptive.hold_epochs,
+            s.rk4_step_s, not (s.smoothing.enabled or s.smoothing.adaptive_noise)) \
+            if self.dynamic and s.adaptive.enabled else None
+        self.q_b = s.table1.sigma_baseline_kinematic_m ** 2 / s.table1.tau_baseline_s       # m^2 per s
+        self.var_clk = (s.table1.sigma_clock_s * C_M_S) ** 2
         self.Qw_iso = np.eye(3) * q_w
         self.q_omega = np.ascontiguousarray(q_omega, dtype=np.float64) if q_omega is not None else None
-        self.cn0_growth = s.weighting == "cn0" or s.noise_cn0_growth
-        self.mp_model = max(s.sigma_multipath_phase_m) > 0 or max(s.sigma_multipath_code_m) > 0
-        self.mp_infl = s.multipath_correlation_factor if self.dynamic else 1.0
-        self.mp_sig = np.array([*s.sigma_multipath_code_m, *s.sigma_multipath_phase_m], dtype=np.float64)
-        self.elev_w = s.weighting == "elevation"
-        self.var_c_floor, self.var_p_floor = s.sigma_code_m ** 2, s.sigma_phase_m ** 2
+        self.cn0_growth = s.noise.weighting == "cn0" or s.noise.noise_cn0_growth
+        self.mp_model = max(s.noise.sigma_multipath_phase_m) > 0 or max(s.noise.sigma_multipath_code_m) > 0
+        self.mp_infl = s.noise.multipath_correlation_factor if self.dynamic else 1.0
+        self.mp_sig = np.array([*s.noise.sigma_multipath_code_m, *s.noise.sigma_multipath_phase_m], dtype=np.float64)
+        self.elev_w = s.noise.weighting == "elevation"
+        self.var_c_floor, self.var_p_floor = s.table1.sigma_code_m ** 2, s.table1.sigma_phase_m ** 2
         # C/N0 growth exponent per (code, phase) and signal, estimated from the triple differences (starts at 1)
         self.gamma = np.ones((2, n_sig)) if self.cn0_growth else np.zeros((2, n_sig))
         self.gam_n = np.zeros((2, n_sig))
@@ -236,8 +236,8 @@ class FilterRun:
         self.mp_scale, self.mp_n_ep = 1.0, 0   # adaptive scale of the multipath variance (1 = the configured sigmas)
         # per-signal white-noise estimates (variance of one SD) from the triple differences: robust, exponentially
         # weighted over NOISE_EPOCHS epochs; used once NOISE_MIN_SAMPLES TDs have been seen
-        self.est_var_c = np.full(n_sig, s.sigma_code_m ** 2)
-        self.est_var_p = np.full(n_sig, s.sigma_phase_m ** 2)
+        self.est_var_c = np.full(n_sig, s.table1.sigma_code_m ** 2)
+        self.est_var_p = np.full(n_sig, s.table1.sigma_phase_m ** 2)
         self.est_n = np.zeros(n_sig)
 
     def _init_outputs(self):
@@ -251,7 +251,7 @@ class FilterRun:
         self.out_ratio = np.full((n_ep, n_bl), np.nan)
         self.out_w = np.full((n_ep, 3), np.nan)
         n_sub = self.n_sub = 3 + 3 * n_bl
-        self.record = self.dynamic and (self.s.smoother or self.s.smoother_adaptive_noise)
+        self.record = self.dynamic and (self.s.smoothing.enabled or self.s.smoothing.adaptive_noise)
         if self.record:
             self.sm_xp, self.sm_xf = np.full((n_ep, n_sub), np.nan), np.full((n_ep, n_sub), np.nan)
             self.sm_Pp, self.sm_Pf = np.full((n_ep, n_sub, n_sub), np.nan), np.full((n_ep, n_sub, n_sub), np.nan)
@@ -287,8 +287,8 @@ class FilterRun:
         self.blk_lw = None
         # differential PCV maps per (baseline, signal), applied to fixed baselines (gnssatt.attitude.pcv_correction)
         s = self.s
-        self.pcv_tables = pcv_tables_for(s.pcv_maps, list(self.pobs.antennas), self.baselines,
-                                         list(self.pobs.signals)) if s.pcv_maps else {}
+        self.pcv_tables = pcv_tables_for(s.calibration.pcv_maps, list(self.pobs.antennas), self.baselines,
+                                         list(self.pobs.signals)) if s.calibration.pcv_maps else {}
         if self.pcv_tables:
             from gnssatt.gnss.geometry import R_antenna_from_body
             self.R_ant_first = R_antenna_from_body(self.boresight_body[self.ia])             # (n_bl, 3, 3)

@@ -28,7 +28,7 @@ def ambiguity_resolution(run: FilterRun, ep: EpochData) -> None:
     for j in range(run.n_bl):
         if ep.n_used[j] and run.first_data[j] < 0:
             run.first_data[j] = k
-        if not ep.pa[j] or ep.n_used[j] < s.ar_min_sats or not ep.n_unfixed[j]:
+        if not ep.pa[j] or ep.n_used[j] < s.ambiguity.min_sats or not ep.n_unfixed[j]:
             continue
         if not ep.has_fix[j]:                                  # no signal of baseline j fixed yet
             _first_fix(run, ep, j, joint_ar)
@@ -46,14 +46,14 @@ def _joint_first_fix(run: FilterRun, ep: EpochData) -> dict:
     """ambiguity_search "constrained": one MC-LAMBDA first fix of all baselines together (accepted outcomes by
     baseline), when nothing is fixed yet and at least two baselines have enough DDs."""
     s = run.s
-    if not (s.ambiguity_search == "constrained" and run.n_bl >= 2 and ep.mp_n and not run.st.amb_fixed.any()):
+    if not (s.ambiguity.ambiguity_search == "constrained" and run.n_bl >= 2 and ep.mp_n and not run.st.amb_fixed.any()):
         return {}
     gb = {}
     for j in range(run.n_bl):
-        if ep.pa[j] and ep.n_used[j] >= s.ar_min_sats:
+        if ep.pa[j] and ep.n_used[j] >= s.ambiguity.min_sats:
             idx_j, sig_j, el_j = _phase_rows_of(ep, j)
             gb[j] = first_fix_groups(idx_j, sig_j, el_j, run.n_sig)
-    gb = {j: g for j, g in gb.items() if g and sum(x.size - 1 for x, _ in g) >= s.ar_min_dd}
+    gb = {j: g for j, g in gb.items() if g and sum(x.size - 1 for x, _ in g) >= s.ambiguity.min_dd}
     if len(gb) < 2:
         return {}
     return {j: o for j, o in resolve_joint_constrained(run.st.x, run.st.P, gb, run.b_idx, run.body_baselines_m,
@@ -65,7 +65,7 @@ def _first_fix(run: FilterRun, ep: EpochData, j: int, joint_ar: dict) -> None:
     update (with the omega reset when the fix turned the baseline)."""
     s, st, k = run.s, run.st, ep.k
     groups = first_fix_groups(*_phase_rows_of(ep, j), run.n_sig)
-    if not groups or sum(g.size - 1 for g, _ in groups) < s.ar_min_dd:
+    if not groups or sum(g.size - 1 for g, _ in groups) < s.ambiguity.min_dd:
         return
     outcome = joint_ar.get(j) or resolve_first_fix(st.x, st.P, groups, run.b_idx[j], run.lengths[j], s)
     run.out_ratio[k, j] = outcome.ratio
@@ -97,7 +97,7 @@ def _reset_omega(run: FilterRun, k: int, j: int, turn_deg: float) -> None:
     st = run.st
     st.P[0:3, :] = 0.0
     st.P[:, 0:3] = 0.0
-    st.P[0:3, 0:3] = np.eye(3) * (run.s.sigma0_omega_deg_s * DEG) ** 2
+    st.P[0:3, 0:3] = np.eye(3) * (run.s.table1.sigma0_omega_deg_s * DEG) ** 2
     run.events.add(k, "omega_reset", j, detail=f"the fix turned the baseline by {turn_deg:.2f} deg")
     run.mark_segment_start(k)
     if run.adapter is not None:
@@ -109,8 +109,8 @@ def _fix_newcomers(run: FilterRun, ep: EpochData, j: int) -> None:
     in place (DD pseudo-measurements as in pseudo_update, as scalar Joseph updates)."""
     s, st, k = run.s, run.st, ep.k
     nw, rf, vals = fix_newcomers(st.x, st.P, st.amb_key, st.amb_fixed, st.n_fixed_part, ep.cols, ep.mc_n, ep.jp,
-                                 ep.sp, ep.fp, ep.el_loc, run.n_sig, j, s.new_amb_round_sigma_cyc,
-                                 s.new_amb_round_frac_cyc, PSEUDO_VAR_CYC2)
+                                 ep.sp, ep.fp, ep.el_loc, run.n_sig, j, s.ambiguity.new_amb_round_sigma_cyc,
+                                 s.ambiguity.new_amb_round_frac_cyc, PSEUDO_VAR_CYC2)
     if nw.size:
         ep.ar_changed = True
         run.fix_rows.extend(zip([k] * nw.size, st.amb_arc[nw - st.n_fixed_part].tolist(),

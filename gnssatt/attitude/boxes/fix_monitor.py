@@ -69,7 +69,7 @@ def reset_baseline(run: FilterRun, k: int, j: int, why: str) -> None:
     bi = run.b_idx[j]
     st.P[bi, :] = 0.0
     st.P[:, bi] = 0.0
-    st.P[bi, bi] = max(s.sigma0_baseline_m, 1.2 * run.lengths[j]) ** 2
+    st.P[bi, bi] = max(s.table1.sigma0_baseline_m, 1.2 * run.lengths[j]) ** 2
     run.bad_fix[j] = 0
     if run.adapter is not None:
         run.adapter.reset()

@@ -41,7 +41,7 @@ def _update(run: FilterRun, ep: EpochData) -> None:
     the update as scalar updates in turn; the post-fit residuals and the sums of the multipath scale."""
     st, s, k, n_bl = run.st, run.s, ep.k, run.n_bl
     ep.vc_f, ep.vp_f = white_variances_cp(run.est_var_c, run.est_var_p, run.est_n, run.var_c_floor, run.var_p_floor,
-                                          NOISE_MIN_EPOCHS, s.noise_estimation)
+                                          NOISE_MIN_EPOCHS, s.noise.noise_estimation)
     watch_w = run.adapter is not None and run.ever_fixed.all() and ep.prev_t is not None
     if watch_w:
         sub_prior, P_sub_prior = st.x[run.sub_w_b], st.P[run.ix_sub]          # (fancy indexing: copies)
@@ -63,7 +63,7 @@ def _update(run: FilterRun, ep: EpochData) -> None:
         rep = run.adapter.observe(sub_prior, P_sub_prior, st.x[run.sub_w_b], st.P[run.ix_sub], ep.t)
         if rep is not None:        # a manoeuvre: the (omega, baselines) sub-state the detector gives
             st.x[run.sub_w_b], st.P[run.ix_sub] = rep
-    if run.mp_model and s.multipath_adaptive and good and n_mp >= 6:
+    if run.mp_model and s.noise.multipath_adaptive and good and n_mp >= 6:
         # scale of the multipath variance from the post-fit residuals of fixed phases:
         # E[r^2] = R_true (1 - h), h = (H P+ H^T)_ii / R_model (leverage); R_true = white + scale * mp
         a = 1.0 / min(run.mp_n_ep + 1.0, NOISE_EPOCHS)

@@ -21,7 +21,7 @@ def output(run: FilterRun, ep: EpochData) -> None:
     is fixed; the residual rows; the previous-epoch memory."""
     st, k = run.st, ep.k
     fixed_now = store_outputs(st.x, st.P, run.all_b_idx, k, run.out_b, run.out_P, run.out_w, run.dynamic, ep.pa,
-                              ep.n_used, run.ever_fixed, ep.n_fixed_used, run.s.fixed_min_sats, run.out_ok,
+                              ep.n_used, run.ever_fixed, ep.n_fixed_used, run.s.ambiguity.fixed_min_sats, run.out_ok,
                               run.out_fixed, run.out_n)
     if run.record:
         run.sm_xf[k], run.sm_Pf[k] = st.x[run.sub_w_b], st.P[run.ix_sub]
@@ -55,9 +55,9 @@ def filter_result(run: FilterRun) -> FilterResult:
                "sat": arcs[a_arc, 1], "ref_sat": arcs[r_arc, 1], "dd_cyc": fl[:, 3],
                "last_epoch": np.minimum(arcs[a_arc, 4], arcs[r_arc, 4])}
     signals = run.pobs.signals
-    noise = {"sigma_phase_white_m": {sg: float(np.sqrt(max(run.est_var_p[f], s.sigma_phase_m ** 2)))
+    noise = {"sigma_phase_white_m": {sg: float(np.sqrt(max(run.est_var_p[f], s.table1.sigma_phase_m ** 2)))
                                      for f, sg in enumerate(signals)},
-             "sigma_code_white_m": {sg: float(np.sqrt(max(run.est_var_c[f], s.sigma_code_m ** 2)))
+             "sigma_code_white_m": {sg: float(np.sqrt(max(run.est_var_c[f], s.table1.sigma_code_m ** 2)))
                                     for f, sg in enumerate(signals)},
              "cn0_gamma_code": {sg: float(run.gamma[0, f]) for f, sg in enumerate(signals)},
              "cn0_gamma_phase": {sg: float(run.gamma[1, f]) for f, sg in enumerate(signals)},

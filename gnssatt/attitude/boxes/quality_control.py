@@ -38,7 +38,7 @@ def load_epoch(run: FilterRun, ep: EpochData) -> None:
     blk = run.blk
     if blk is None or k - blk.k0 >= blk.pa.shape[0]:
         blk = run.blk = sd_block(run.pobs, run.geom, run.ia, run.ib, k, min(k + BLOCK_EPOCHS, run.n_ep),
-                                 run.s.elevation_mask_local_deg * DEG, run.sig_cn0)
+                                 run.s.table2.elevation_mask_local_deg * DEG, run.sig_cn0)
         run.blk_lw = np.log(cn0_factor(blk.cn0))               # ln of the full C/N0 factor
         rows = run.res_n + int(blk.avail_c.sum() + blk.avail_p.sum())           # residual rows of the block
         if rows > run.res_i.shape[1]:
@@ -68,7 +68,7 @@ def epoch_geometry_and_pcv(run: FilterRun, ep: EpochData) -> None:
     ep.pcv_m, ep.empty, ep.pcv_on = run.pcv_zero, run.no_pcv, False
     if run.pcv_tables and run.R_mask is not None and ep.t - run.R_mask_t <= PCV_ATTITUDE_AGE_S:
         ep.pcv_m, ep.empty = pcv_epoch(run.pcv_tables, los_b, run.R_ant_first, run.n_sig, run.ever_fixed)
-        ep.pcv_on = run.s.pcv_empty_bins == "exclude"
+        ep.pcv_on = run.s.calibration.pcv_empty_bins == "exclude"
 
 
 def pcv_epoch(tables, los_b, R_ant_first, n_sig, fixed):
@@ -92,7 +92,7 @@ def edit_epoch(run: FilterRun, ep: EpochData) -> None:
     ep.consecutive = ep.prev_t is not None and (t - ep.prev_t) <= TD_MAX_DT_S
     ep.do_td = ep.consecutive and run.prev_b is not None
     n_jump, n_common = qc_epoch(
-        ep.asn, ep.az, run.R_mask is not None, run.ever_fixed, run.s.elevation_mask_antenna_deg * DEG,
+        ep.asn, ep.az, run.R_mask is not None, run.ever_fixed, run.s.table2.elevation_mask_antenna_deg * DEG,
         run.blk.reason[ep.i], ep.empty, ep.pcv_on, run.blk.low_cn0[ep.i], ep.avail_p, ep.sdc, ep.sdp, ep.cfac, ep.ub,
         run.prev_ub, ep.do_td, run.prev_sdc, run.prev_sdp, ep.pa, ep.lli, t, run.clk_state, CLOCK_JUMP_M,
         TD_MAX_DT_S, *run.views[:3], run.w_reason, run.wb, run.wf, run.w_clk, run.w_jump, run.w_mcp)
@@ -147,12 +147,12 @@ def triple_differences(run: FilterRun, ep: EpochData) -> None:
     or where no triple difference could check it, drop states of satellites no longer observed or unused for
     max_gap_s."""
     k, st, s = ep.k, run.st, run.s
-    ep.noise_on = s.noise_estimation and ep.do_td
+    ep.noise_on = s.noise.noise_estimation and ep.do_td
     wfac = noise_weights(run, ep)
     n_td, n_lli, ep.n_gap, ep.n_drop, ep.n_need = td_checks(
-        ep.do_td, ep.noise_on, wfac, run.est_var_c, run.est_var_p, run.est_n, NOISE_EPOCHS, s.td_code_m,
-        s.td_phase_cyc, run.lam, ep.avail_p, ep.lli, ep.reason, run.wb, run.wf, run.w_mcp, ep.consecutive,
-        run.prev_sdp, st.amb_index, st.amb_last_t, st.n_fixed_part, ep.t, s.max_gap_s, run.w_ev, run.w_bk)
+        ep.do_td, ep.noise_on, wfac, run.est_var_c, run.est_var_p, run.est_n, NOISE_EPOCHS, s.table2.td_code_m,
+        s.table2.td_phase_cyc, run.lam, ep.avail_p, ep.lli, ep.reason, run.wb, run.wf, run.w_mcp, ep.consecutive,
+        run.prev_sdp, st.amb_index, st.amb_last_t, st.n_fixed_part, ep.t, s.ambiguity.max_gap_s, run.w_ev, run.w_bk)
     # every slip is reported, also on phases not in use; an LLI on the first epoch of an arc is an acquisition
     for n, evm, how in ((n_td, run.w_ev[0], "triple-difference test"), (n_lli, run.w_ev[1], "loss-of-lock indicator")):
         if n:
@@ -176,4 +176,4 @@ def ambiguity_bookkeeping(run: FilterRun, ep: EpochData) -> None:
     if n_need:
         jj, ss, ff = np.nonzero(need)
         vals = (ep.sdp_c[jj, ss, ff] - ep.sdc_c[jj, ss, ff]) / lam[ff]
-        st.add_ambiguities(np.stack([jj, ss, ff], 1), vals, run.s.sigma0_ambiguity_cyc, ep.t)
+        st.add_ambiguities(np.stack([jj, ss, ff], 1), vals, run.s.table1.sigma0_ambiguity_cyc, ep.t)

@@ -16,10 +16,10 @@ def validate_first_fix(run: FilterRun, ep: EpochData, j: int, outcome) -> None:
     the angle test; after ANGLE_FAIL_RESET angle failures in a row the partners' fix is queued for withdrawal
     (run.pending_reset, carried out by the fix monitor)."""
     s, st = run.s, run.st
-    if outcome.accepted and not (outcome.ratio >= s.ar_min_ratio_first_fix):
+    if outcome.accepted and not (outcome.ratio >= s.ambiguity.min_ratio_first_fix):
         outcome.accepted = False
-        outcome.reason = f"ratio {outcome.ratio:.2f} < {s.ar_min_ratio_first_fix:.2f} (first fix)"
-    if not (outcome.accepted and run.n_bl > 1 and s.max_angle_error_m > 0):
+        outcome.reason = f"ratio {outcome.ratio:.2f} < {s.ambiguity.min_ratio_first_fix:.2f} (first fix)"
+    if not (outcome.accepted and run.n_bl > 1 and s.ambiguity.max_angle_error_m > 0):
         return
     partners = [j2 for j2 in range(run.n_bl) if j2 != j and st.baseline_has_fix(j2)]
     if not partners:
@@ -27,7 +27,7 @@ def validate_first_fix(run: FilterRun, ep: EpochData, j: int, outcome) -> None:
     b_cand = fixed_baseline_vector(st.x, st.P, outcome.D, outcome.a_fix, run.b_idx[j])
     body = run.body_baselines_m
     ok_ang, worst = angle_test_against_fixed(b_cand, body[j], st.x[run.b_idx[partners]], body[partners],
-                                             s.max_angle_error_m)
+                                             s.ambiguity.max_angle_error_m)
     if ok_ang:
         run.angle_fail[j] = 0
         return
