@@ -20,7 +20,7 @@ import shutil
 import numpy as np
 import pytest
 
-from tests.conftest import real_set
+from tests.conftest import real_set, require_module
 from gnssatt.attitude.process import load_inputs, process
 from gnssatt.attitude.settings import AttitudeSettings
 
@@ -68,7 +68,7 @@ def upc(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def rtklib_upc(tmp_path_factory):
-    pytest.importorskip("pyrtklib", reason="pyrtklib (RTKLIB 2.4.3 b34 bindings) not installed")
+    require_module("pyrtklib", "RTKLIB 2.4.3 b34 bindings")
     from bench.rtklib_runner import options_for, run_postpos
 
     d = real_set(UPC)

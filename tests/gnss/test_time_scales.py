@@ -6,6 +6,8 @@ import datetime as dt
 import erfa
 import numpy as np
 import pytest
+
+from tests.conftest import missing
 from hypothesis import given, settings, strategies as st
 
 from gnssatt.gnss import leap_seconds as L
@@ -49,7 +51,7 @@ def test_all_sources_agree_and_freshest_chosen():
     try:
         tables.append(L._from_astropy_iers_data())
     except Exception as exc:  # pragma: no cover - only when the data package is missing
-        pytest.skip(f"astropy-iers-data not importable: {exc}")
+        missing(f"astropy-iers-data not importable: {exc}")
     n = min(len(t.mjd_utc) for t in tables)
     for t in tables[1:]:
         np.testing.assert_array_equal(t.mjd_utc[:n], tables[0].mjd_utc[:n])
