@@ -17,13 +17,12 @@ The clean pass of the Done-when is the preset with {"pcv": false, "pco": false, 
 Also the `hard` preset (30 min: free-running clocks with 1 ms jumps, slips with and without LLI, gaps, outages,
 strong multipath, 25 mm PCV) as it is, the same events without multipath/PCV/PCO/C/N0 noise ("hard events"),
 and a clean 30-minute pass with the same 1 deg wobble as its reference. Every integer the filter fixed is
-checked against truth/arcs.csv (tests/attitude/truth.py): "wrong integers" counts constraints that differ from
+checked against truth/arcs.csv (gnssatt/attitude/truth.py): "wrong integers" counts constraints that differ from
 the truth at any epoch they were held; "> 1 deg fixed" is the issue's wrong-fix count (error > 1 deg while fixed).
 """
 from __future__ import annotations
 
 import argparse
-import csv
 import os
 import sys
 import tempfile
@@ -86,7 +85,7 @@ def run_mode(d: Path, mode: str, extra: dict | None = None) -> dict:
     from gnssatt.attitude.process import load_inputs, process
     from gnssatt.attitude.products import all_products
     from gnssatt.attitude.settings import ALL_PHASES, TABLE2_MASKS, AttitudeSettings
-    from gnssatt.gnss import rotations as rot
+    from gnssatt.attitude.truth import attitude_errors_deg, score_fixes
 
     cfg = dict(extra or {"mode": mode})
     selection = TABLE2_MASKS if cfg.pop("table2", False) else ALL_PHASES   # the benches' default: "all phases"
@@ -103,20 +102,14 @@ def run_mode(d: Path, mode: str, extra: dict | None = None) -> dict:
     P.run_filter = timed
     try:
         t0 = time.perf_counter()
-        sol = process(load_inputs(files_of(d)), AttitudeSettings(**{**selection, **cfg}))
+        sol = process(load_inputs(files_of(d)), AttitudeSettings.preset("seed000", **{**selection, **cfg}))
         prods = all_products(sol)
         wall = time.perf_counter() - t0
     finally:
         P.run_filter = orig
     n = len(sol.pobs.time)
-    rows = {r["time_gps"]: r for r in csv.DictReader(open(d / "truth" / "attitude.csv"))}
-    iso = np.asarray(sol.pobs.time.iso(3))[sol.att_epochs]
-    qt = np.array([[float(rows[t][k]) for k in ("qe_w", "qe_x", "qe_y", "qe_z")] for t in iso])
-    et = np.array([[float(rows[t][k]) for k in ("yaw_deg", "pitch_deg", "roll_deg")] for t in iso])
-    ang = rot.attitude_error_deg(sol.q_body_from_ecef, qt)
-    de = (sol.euler_deg - et + 180.0) % 360.0 - 180.0
+    ang, de = attitude_errors_deg(d, sol)
     f = sol.att_fixed
-    from tests.attitude.truth import score_fixes
     sc = score_fixes(sol, d / "truth")
     t_att = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]
     out = {"epochs": n, "filter_s": tf[0], "epochs_per_s": n / tf[0], "wall_s": wall,
@@ -133,13 +126,12 @@ def run_mode(d: Path, mode: str, extra: dict | None = None) -> dict:
 def event_check(sol, d: Path) -> dict:
     """Truth slips a single difference can see (phase on both antennas of a baseline at the slip epoch and the one
     before) and truth clock jumps, against events.csv."""
-    from tests.attitude.test_attitude_sim import _slips_formed_by_sd
+    from gnssatt.attitude.truth import clock_jump_match, slips_seen_by_single_differences
 
     t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)
     seen = [(e["sat"], e["signal"], t[e["epoch"]]) for e in sol.fr.events if e["event"] == "cycle_slip"]
-    slips = _slips_formed_by_sd(sol, d / "truth")
+    slips = slips_seen_by_single_differences(sol, d / "truth")
     found = sum(any(s == x[0] and f == x[1] and abs(tt - x[2]) < 1.5 for s, f, tt in seen) for x in slips)
-    from tests.attitude.test_attitude_sim import clock_jump_match
     jumps, missed, spurious = clock_jump_match(sol, d / "truth")
     return {"slips_truth": len(slips), "slips_found": int(found), "jumps_truth": len(jumps),
             "jumps_found": len(jumps) - len(missed), "jump_spurious": len(spurious)}
@@ -172,10 +164,9 @@ def run_slews(tmp: Path, seeds=(SEED,)) -> list[str]:
     """Dynamic mode on the two slews with each of SLEW_SETTINGS: max error over fixed epochs (with its time after
     the first fix and that epoch's predicted sigma), max error after the first 30 s of fix (the convergence), the lag
     (max of the 15-s running mean of the Euler errors), 95 % error, std(error / predicted sigma) after 30 s."""
-    from tests.attitude.test_adaptive import _lag_deg
-    from tests.attitude.test_attitude_sim import errors
+    from gnssatt.attitude.truth import attitude_errors_deg, lag_deg
     from gnssatt.attitude.process import load_inputs, process
-    from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
+    from gnssatt.attitude.settings import AttitudeSettings  # the benches measure the "all phases" selection
     from gnssatt.sim import simulate_scenario
 
     lines = ["", f"Slews (seed 000 Fig. 6; clean, simulator seed{'s' if len(seeds) > 1 else ''} "
@@ -198,12 +189,12 @@ def run_slews(tmp: Path, seeds=(SEED,)) -> list[str]:
             simulate_scenario("slew", d, seed=seed, overrides={**over, **CLEAN})
             inputs = load_inputs(files_of(d))
             for name, cfg in SLEW_SETTINGS.items():
-                sol = process(inputs, AttitudeSettings(mode="dynamic", **cfg, **ALL_PHASES))
-                ang, de = errors(d, sol)
+                sol = process(inputs, AttitudeSettings.preset("all-phases", mode="dynamic", **cfg))
+                ang, de = attitude_errors_deg(d, sol)
                 f = sol.att_fixed
                 t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]
                 t0 = t[int(np.argmax(f))]
-                lag = _lag_deg(d, sol, t0 + 30.0)
+                lag = lag_deg(d, sol, t0 + 30.0)
                 late = f & (t > t0 + 30.0)
                 i = np.flatnonzero(f)[int(np.argmax(ang[f]))]
                 tilt = float(np.hypot(sol.sigma_euler_deg[i, 1], sol.sigma_euler_deg[i, 2]))

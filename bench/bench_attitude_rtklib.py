@@ -141,10 +141,10 @@ def files_of(d: Path) -> list:
 
 
 def run_floor(d: Path, sol, truth: dict, weighted: bool) -> dict:
-    """The independent floor (tests/attitude/floor.py): epoch-wise least squares of every tracked SD phase with the
+    """The independent floor (gnssatt/attitude/floor.py): epoch-wise least squares of every tracked SD phase with the
     TRUE integers (simulator truth/arcs.csv), b + one clock per signal; uniform weights or the simulator's per-signal
     white noise (L1 3 mm, L2 4.5 mm per receiver). Uses gnssatt's parsed observations and line of sight only."""
-    from tests.attitude.floor import true_integer_floor
+    from gnssatt.attitude.floor import true_integer_floor
 
     c0 = time.process_time()
     b = true_integer_floor(sol, d / "truth", np.sqrt(2.0) * np.array([0.003, 0.0045]) if weighted else None)
@@ -162,10 +162,10 @@ def run_floor(d: Path, sol, truth: dict, weighted: bool) -> dict:
 def run_gnssatt(d: Path, mode: str, truth: dict, keep: dict | None = None) -> dict:
     from gnssatt.attitude.process import load_inputs, process
     from gnssatt.attitude.products import all_products
-    from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
+    from gnssatt.attitude.settings import AttitudeSettings  # the benches measure the "all phases" selection
 
     t0, c0 = time.perf_counter(), time.process_time()
-    sol = process(load_inputs(files_of(d)), AttitudeSettings(mode=mode, **ALL_PHASES))
+    sol = process(load_inputs(files_of(d)), AttitudeSettings.preset("all-phases", mode=mode))
     all_products(sol)
     wall, cpu = time.perf_counter() - t0, time.process_time() - c0
     if keep is not None:
@@ -208,28 +208,25 @@ def run_rtklib(d: Path, truth: dict, work: Path, basesig_m: float = 0.05, weight
 
 def real_sets(work: Path) -> list[dict]:
     """gnssatt kinematic vs RTKLIB kinematic (GPS only, L1+L2, same files) on the real one-baseline sets."""
-    from tests.conftest import REAL_DATA_DIR
-    from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings  # the benches measure the "all phases" selection
+    from bench.real_sets import NAGOYA, NAGOYA_PLATFORM, REAL_DATA_DIR, UPC, UPC_PLATFORM, nagoya_files, upc_files
+    from gnssatt.attitude.settings import AttitudeSettings  # the benches measure the "all phases" selection
 
     rows = []
-    nag = REAL_DATA_DIR / "static_1m_mosaicx5_nagoya_2024"
-    upc = REAL_DATA_DIR / "upc1_upc2_38m_barcelona_2010"
+    nag = REAL_DATA_DIR / NAGOYA
+    upc = REAL_DATA_DIR / UPC
     if nag.is_dir():
-        from tests.attitude.test_real_nagoya import PLATFORM as NAG_PLATFORM
         plat = work / "nagoya.json"
-        plat.write_text(json.dumps(NAG_PLATFORM))
-        files = [("base.obs", "rinex_obs", nag / "base.obs"), ("rover.obs", "rinex_obs", nag / "rover.obs"),
-                 ("base.nav", "rinex_nav", nag / "base.nav"), ("platform.json", "platform", plat)]
+        plat.write_text(json.dumps(NAGOYA_PLATFORM))
+        files = nagoya_files(nag, plat)
         base = {"ant2-postype": "llh", "ant2-pos1": "35.134707705", "ant2-pos2": "136.977577939",
                 "ant2-pos3": "104.853"}
         rows.append(_real_row("Nagoya 0.99 m, 5 min", files, nag / "rover.obs", nag / "base.obs", nag / "base.nav",
-                              base, work, AttitudeSettings(mode="kinematic", elevation_mask_local_deg=10.0, **ALL_PHASES),
+                              base, work, AttitudeSettings.preset("all-phases", mode="kinematic", table2={"elevation_mask_local_deg": 10.0}),
                               {"pos1-elmask": "10"}, (0.9902, 193.03, 0.56)))
         rows.append(_real_row("Nagoya, RTKLIB G+E+J+C (README/issue figures)", None, nag / "rover.obs",
                               nag / "base.obs", nag / "base.nav", base, work, None,
                               {"pos1-navsys": "57", "pos2-armode": "instantaneous"}, (0.9902, 193.03, 0.56)))
     if upc.is_dir():
-        from tests.attitude.test_real_upc import PLATFORM as UPC_PLATFORM
         plat = work / "upc.json"
         plat.write_text(json.dumps(UPC_PLATFORM))
         plain = {}
@@ -237,13 +234,11 @@ def real_sets(work: Path) -> list[dict]:
             with gzip.open(upc / f"{n}.gz") as src, open(work / n, "wb") as dst:
                 shutil.copyfileobj(src, dst)
             plain[n] = work / n
-        files = [("UPC10770.11o.gz", "rinex_obs", upc / "UPC10770.11o.gz"),
-                 ("UPC20770.11o.gz", "rinex_obs", upc / "UPC20770.11o.gz"),
-                 ("brdc0770.11n", "rinex_nav", upc / "brdc0770.11n"), ("platform.json", "platform", plat)]
+        files = upc_files(upc, plat)
         base = {"ant2-postype": "xyz", "ant2-pos1": "4789013.0077", "ant2-pos2": "176610.1555",
                 "ant2-pos3": "4195034.8091"}
         rows.append(_real_row("UPC 37.95 m, 1 h", files, plain["UPC20770.11o"], plain["UPC10770.11o"],
-                              upc / "brdc0770.11n", base, work, AttitudeSettings(mode="kinematic", **ALL_PHASES), {},
+                              upc / "brdc0770.11n", base, work, AttitudeSettings.preset("all-phases", mode="kinematic"), {},
                               (37.946, 226.263, -0.046)))
     return rows
 
@@ -353,7 +348,7 @@ def main() -> None:
                                                                             "30 min" if args.hard else "") + ". "
              "gnssatt runs the \"all phases\" selection (`settings.ALL_PHASES`: no C/N0 or antenna-frame mask; the "
              "job's defaults keep seed 000 Table 2's masks).",
-             "", CMD_LINE, "", "Floor rows: tests/attitude/floor.py, every SD phase both antennas track, the TRUE "
+             "", CMD_LINE, "", "Floor rows: gnssatt/attitude/floor.py, every SD phase both antennas track, the TRUE "
              "integers from truth/arcs.csv, b + one clock per signal by least squares per epoch (what any epoch-wise "
              "estimator with the right integers computes; RTKLIB's fixed solution is the uniform one, gnssatt "
              "kinematic the weighted one), over the epochs gnssatt kinematic calls fixed; its CPU s excludes the "

@@ -23,7 +23,6 @@ antennas, L1 C/A + L2 P(Y), 1 Hz), clean ({"pcv": false, "pco": false, "multipat
 from __future__ import annotations
 
 import argparse
-import hashlib
 import os
 import sys
 import tempfile
@@ -55,17 +54,11 @@ def files_of(d: Path) -> list[tuple[str, str, Path]]:
 def run_job(d: Path, mode: str, work: Path) -> dict:
     """One attitude job through its pipeline; CPU/wall of the whole job and of run_filter."""
     import gnssatt.attitude.process as P
-    from worker.context import InputFile, InputSet, JobContext
+    from bench.local_jobs import files_set, job_context
     from worker.jobs.attitude import AttitudeConfig
     from worker.pipelines.attitude import run
 
-    def store(path):
-        data = path.read_bytes()
-        return hashlib.sha256(data).hexdigest(), len(data)
-
-    s = InputSet(id="set-1", name=d.name, files=[InputFile(n, k, p, {}) for n, k, p in files_of(d)], summary={})
-    work.mkdir(parents=True, exist_ok=True)
-    ctx = JobContext(job_id="bench-speed", attempt=1, sets=[s], workdir=work, _store_blob=store)
+    ctx = job_context(work, [files_set(files_of(d), name=d.name)], job_id="bench-speed")
     filt = {}
     orig = P.run_filter
 
@@ -131,11 +124,11 @@ class AttitudeService:
     def __init__(self, work: Path):
         import shutil
 
-        from tests.e2e.conftest import Service
+        from client.local_service import LocalService
 
         shutil.rmtree(work, ignore_errors=True)
         work.mkdir(parents=True)
-        self.svc = Service(work, "sqlite", None, None)
+        self.svc = LocalService(work, "sqlite", None, None)
         for k in ("GNSSATT_LEASE_SECONDS", "GNSSATT_HEARTBEAT_SECONDS", "GNSSATT_REQUEUE_AFTER_SECONDS"):
             self.svc.env.pop(k, None)           # the service's defaults, not the e2e tests' short leases
         self.svc.env["OPENBLAS_NUM_THREADS"] = "1"

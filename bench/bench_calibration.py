@@ -11,8 +11,8 @@ its block of the "Calibration" section of docs/BENCHMARKS.md.
 
 Inputs: `--sets` calibration passes + 1 held-out pass of the `calibration` preset, durations cycling over
 45..100 min, 35 mm p-p PCV per antenna (~50 mm differential), Table 3 offsets, reference attitude 2 arcsec,
-seed 2024 (each pass simulated as its own run, see tests/calibration/_campaign.py). Truth: the injected antenna
-offsets, PCO and PCV expressed in the calibration's baseline/map split (tests/calibration/_campaign.py
+seed 2024 (each pass simulated as its own run, see gnssatt/calibration/simulated.py). Truth: the injected antenna
+offsets, PCO and PCV expressed in the calibration's baseline/map split (gnssatt/calibration/simulated.py
 `truth_split`, gnssatt/calibration/decomposition.py); `--twin` also calibrates a noiseless twin campaign (no noise,
 no multipath, no reference noise). `--ekf`: the attitude filter on the held-out set with a priori baselines,
 calibrated baselines, and calibrated baselines + the PCV maps. `--budget`: the held-out error budget (a priori,
@@ -39,8 +39,9 @@ import numpy as np
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
-from tests.calibration._campaign import (compare_maps_mm, input_set, simulate_campaign, truth_of,  # noqa: E402
-                                         truth_split)
+from bench.local_jobs import input_set, job_context, product_bytes  # noqa: E402
+from gnssatt.calibration.simulated import (compare_maps_mm, simulate_campaign, truth_of,  # noqa: E402
+                                           truth_split)
 
 SEED = 2024
 
@@ -65,28 +66,27 @@ def simulate(root: Path, n: int, overrides: dict) -> list[Path]:
 
 
 def run_inprocess(dirs: list[Path], cfg: dict, tag: str, work: Path) -> tuple[dict, float, object]:
-    from tests.calibration.test_pipeline import _ctx, _products
     from worker.jobs.calibration import CalibrationConfig
     from worker.pipelines.calibration import run
 
     sets = [input_set(d, set_id=f"{tag}{i:03d}") for i, d in enumerate(dirs)]
-    ctx = _ctx(work / tag, sets)
+    ctx = job_context(work / tag, sets)
     t0 = time.perf_counter()
     run(ctx, CalibrationConfig(**cfg))
-    return _products(ctx), time.perf_counter() - t0, ctx
+    return product_bytes(ctx), time.perf_counter() - t0, ctx
 
 
 def run_service(dirs: list[Path], cfg: dict, workers: int, work: Path) -> dict:
     import httpx
 
-    from tests.e2e.conftest import Service
+    from client.local_service import LocalService
 
     db = os.environ.get("GNSSATT_TEST_DATABASE_URL")
     queue = os.environ.get("GNSSATT_TEST_QUEUE_URL")
     tmp = work / f"svc{workers}"
     shutil.rmtree(tmp, ignore_errors=True)  # a fresh database and queue per run
     tmp.mkdir(parents=True)
-    svc = Service(tmp, "pg" if db else "sqlite", db, queue)
+    svc = LocalService(tmp, "pg" if db else "sqlite", db, queue)
     try:
         svc.start_api()
         for _ in range(workers):
@@ -140,7 +140,7 @@ class ScaleService:
     campaign uploaded once; the number of worker processes is changed between jobs (workers wait idle, warm)."""
 
     def __init__(self, work: Path, pg: tuple[str, str] | None, own_session: bool = False):
-        from tests.e2e.conftest import Service
+        from client.local_service import LocalService
 
         self.scratch_db = None
         self.admin_engine = None
@@ -159,7 +159,7 @@ class ScaleService:
             db_url = make_url(base_db).set(database=self.scratch_db).render_as_string(hide_password=False)
         shutil.rmtree(work, ignore_errors=True)
         work.mkdir(parents=True)
-        self.svc = Service(work, "pg" if pg else "sqlite", db_url, queue_url)
+        self.svc = LocalService(work, "pg" if pg else "sqlite", db_url, queue_url)
         if own_session:
             # each worker in its own session, as separate service units would be: with the kernel's autogroup
             # scheduling (sched_autogroup_enabled=1) all processes of one session share ONE fair CPU share, so on
@@ -386,7 +386,7 @@ def ekf_held_out(d: Path, calibrated: dict, maps: dict | None = None, config: di
         runs.append(("calibrated_baselines_and_maps_empty_bins_kept", calibrated, maps, "keep"))
     for tag, cal, pcv, empty in runs:
         t0 = time.perf_counter()
-        sol = process(inp, AttitudeSettings(**{"mode": "dynamic", **_settings_of(config or {}),
+        sol = process(inp, AttitudeSettings.preset("seed000", **{"mode": "dynamic", **_settings_of(config or {}),
                                                "calibrated_baselines": cal, "pcv_maps": pcv,
                                                "pcv_empty_bins": empty}))
         ref = sol.summary.get("reference", {}).get("fixed", {})
@@ -453,8 +453,8 @@ def held_out_budget(held: Path, prod: dict, extra: dict | None = None, twins: bo
         res = {}
         for tag, b, m in runs if sk == "held" else [r for r in runs if r[0] in (
                 "a_priori", "calibrated_baselines_and_maps", "true_baselines_and_maps_full_grid")]:
-            res[tag] = filter_errors(inputs, AttitudeSettings(mode="dynamic", calibrated_baselines=b, pcv_maps=m,
-                                                              **(extra or {})))
+            res[tag] = filter_errors(inputs, AttitudeSettings.preset("seed000", mode="dynamic", **(extra or {}))
+                                     .override(calibration={"calibrated_baselines": b, "pcv_maps": m}))
             if tag != "a_priori":
                 res[tag]["cut"] = cut_percent(res["a_priori"], res[tag])
             print(sk, tag, {a: (res[tag][a]["bias_deg"], res[tag][a]["std_deg"]) for a in ("yaw", "pitch", "roll")},

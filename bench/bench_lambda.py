@@ -1,7 +1,7 @@
 """Ambiguity resolution benchmark: MLAMBDA and constrained-search timings per problem size, and single-epoch
 success rates of rounding / bootstrapping / ILS (MLAMBDA) / C-LAMBDA / MC-LAMBDA on random GPS-like geometry.
 
-Inputs are generated from the seeds named below (tests/estimation/problems.py): random attitude, 8-10 (or
+Inputs are generated from the seeds named below (gnssatt/estimation/synthetic.py): random attitude, 8-10 (or
 fewer) satellites above 10 deg, undifferenced sigmas phase 3 mm / code 0.3 m, CASSIOPE-like (1.05 m, 1.14 m) or
 CubeSat-like (2 x 0.10 m) antennas. One warm-up, then the median of the runs per size.
 
@@ -20,13 +20,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from bench._report import machine_line, replace_section  # noqa: E402
-from tests.estimation.problems import (  # noqa: E402
-    CASSIOPE_BODY_M, CUBESAT_BODY_M, L1_WAVELENGTH_M, L2_WAVELENGTH_M, simulate_epoch,
-)
-from tests.estimation.test_constrained_search import _bootstrap  # noqa: E402
 from gnssatt.estimation.ar_validation import bootstrap_success_rate  # noqa: E402
 from gnssatt.estimation.constrained_search import constrained_search_float  # noqa: E402
-from gnssatt.estimation.lambda_search import AmbiguitySearchError, mlambda  # noqa: E402
+from gnssatt.estimation.lambda_search import AmbiguitySearchError, integer_bootstrap, mlambda  # noqa: E402
+from gnssatt.estimation.synthetic import (  # noqa: E402
+    CASSIOPE_BODY_M, CUBESAT_BODY_M, L1_WAVELENGTH_M, L2_WAVELENGTH_M, simulate_epoch,
+)
 
 SEED_TIMING = 100
 SEED_RATES = 200
@@ -74,7 +73,7 @@ def _rates(body, n_trials, n_sats_range, seed, sigma_code_m=0.3, wavelengths=(L1
                             wavelengths_m=wavelengths)
         s = ep.sol
         hits["round"] += np.array_equal(np.rint(s.a_float_cyc), ep.a_true)
-        hits["boot"] += np.array_equal(_bootstrap(s.a_float_cyc, s.Q_a), ep.a_true)
+        hits["boot"] += np.array_equal(integer_bootstrap(s.a_float_cyc, s.Q_a), ep.a_true)
         r = mlambda(s.a_float_cyc, s.Q_a)
         p_boot.append(bootstrap_success_rate(r.d))
         ok = np.array_equal(r.fixed[0], ep.a_true)

@@ -15,7 +15,7 @@ per input (no warm-up: ~2 min on the 30 MB set). Peak RSS: each tool reads each 
 process (`--child`), which reports its VmHWM (/proc/self/status) after the read, and after imports only
 (baseline). Values: RTKLIB's P and L of every record and frequency slot must equal gnssatt's value of the
 same signal bit for bit; georinex is compared value for value (values, LLI, SSI; epochs within its 1 ms time
-truncation) with tests/gnss/test_rinex_obs_helpers.compare_with_georinex.
+truncation) with bench/georinex_check.py compare_with_georinex.
 """
 from __future__ import annotations
 
@@ -37,12 +37,11 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from bench._report import cpu_model  # noqa: E402
+from gnssatt.gnss.signals import WAVELENGTH_GPS_L1_M as LAMBDA_L1_M, WAVELENGTH_GPS_L2_M as LAMBDA_L2_M  # noqa: E402
 
 SEED = 20240624
 GPS_UNIX_OFFSET_S = 315964800  # 1980-01-06T00:00:00 - 1970-01-01T00:00:00 (RTKLIB gtime_t.time is "unix-like")
 CODES = ["C1C", "L1C", "D1C", "S1C", "C2W", "L2W", "D2W", "S2W"]
-LAMBDA_L1_M = 299792458.0 / 1575.42e6
-LAMBDA_L2_M = 299792458.0 / 1227.60e6
 
 
 # --- inputs ----------------------------------------------------------------------------------------------
@@ -51,7 +50,7 @@ def make_set106(workdir: Path) -> list[Path]:
     """Three RINEX 3.04 files (antennas GPS-0/1/2), 6360 epochs at 1 Hz, 12 GPS satellites, from SEED."""
     from types import SimpleNamespace
 
-    from gnssatt.gnss.io.rinex_obs_write import write_rinex_obs
+    from gnssatt.gnss.io.rinex_obs_write import ObsWriteHeader, write_rinex_obs
     from gnssatt.gnss.time import GpsTime
 
     paths = []
@@ -91,7 +90,7 @@ def make_set106(workdir: Path) -> list[Path]:
                                                      approx_position_ecef_m=None, antenna_delta_hen_m=None,
                                                      interval_s=1.0, glonass_slots={}))
         path = workdir / f"GPS-{a}.rnx"
-        write_rinex_obs(path, obs, 3.04, comments=(f"bench_rinex_obs.py SEED={SEED} antenna {a}",))
+        write_rinex_obs(path, obs, 3.04, ObsWriteHeader(comments=(f"bench_rinex_obs.py SEED={SEED} antenna {a}",)))
         paths.append(path)
     return paths
 
@@ -295,7 +294,7 @@ def main() -> None:
     if args.child:
         child(args.child[0], args.child[1:])
         return
-    from tests.gnss.test_rinex_obs_helpers import compare_with_georinex
+    from bench.georinex_check import compare_with_georinex
 
     args.workdir.mkdir(parents=True, exist_ok=True)
     inputs: list[tuple[str, list[Path]]] = [("set106 (3 x RINEX 3.04, 106 min 1 Hz, 12 GPS)", make_set106(args.workdir))]

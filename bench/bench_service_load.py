@@ -30,8 +30,8 @@ REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
 from bench._report import machine_line, replace_section  # noqa: E402
-from tests.builders.rinex import obs_v3_text, platform_doc  # noqa: E402
-from tests.e2e.conftest import Service  # noqa: E402
+from client.local_service import LocalService  # noqa: E402
+from gnssatt.sim.sample_set import obs_v3_text, platform_doc  # noqa: E402
 
 SEED = 20261124
 START = datetime(2024, 6, 24)
@@ -74,7 +74,7 @@ def make_big_obs(path: Path, target_bytes: int) -> Path:
     return path
 
 
-def load_run(svc: Service, key: str, paths: list[Path], clients: int = 16) -> dict:
+def load_run(svc: LocalService, key: str, paths: list[Path], clients: int = 16) -> dict:
     upload_s: list[float] = []
     poll_s: list[float] = []
     lock = threading.Lock()
@@ -112,7 +112,7 @@ def load_run(svc: Service, key: str, paths: list[Path], clients: int = 16) -> di
             "poll_p99_ms": q(poll_s, n=100)[98] * 1e3, "all_jobs_done_s": wall, "polls": len(poll_s)}
 
 
-def rss_during_upload(svc: Service, key: str, big: Path) -> dict:
+def rss_during_upload(svc: LocalService, key: str, big: Path) -> dict:
     proc = psutil.Process(svc.api.pid)
     base = proc.memory_info().rss
     peak = base
@@ -155,7 +155,7 @@ def main() -> None:
         big = make_big_obs(tmp / "big.rnx", int(args.big_gib * 2**30))
         loads, rss = [], []
         for run in range(args.runs):
-            svc = Service(tmp / f"svc{run}", "sqlite", None, None)
+            svc = LocalService(tmp / f"svc{run}", "sqlite", None, None)
             (tmp / f"svc{run}").mkdir()
             svc.env["GNSSATT_MAX_UPLOAD_BYTES"] = str(3 * 2**30)
             try:
@@ -165,7 +165,7 @@ def main() -> None:
                 loads.append(load_run(svc, key, paths, args.clients))
             finally:
                 svc.shutdown()
-            fresh = Service(tmp / f"big{run}", "sqlite", None, None)  # RSS of an API that serves only this
+            fresh = LocalService(tmp / f"big{run}", "sqlite", None, None)  # RSS of an API that serves only this
             (tmp / f"big{run}").mkdir()
             fresh.env["GNSSATT_MAX_UPLOAD_BYTES"] = str(3 * 2**30)
             try:

@@ -75,7 +75,7 @@ def _row(name, smoothing, sol, data, seconds):
 
 def run_spp(data, runs: int) -> list[dict]:
     from gnssatt.gnss.ephemeris import BroadcastEphemeris, PreciseEphemeris
-    from gnssatt.gnss.positioning import spp
+    from gnssatt.gnss.positioning import SppOptions, spp
 
     rows = []
     cases = [("broadcast", BroadcastEphemeris(data["nav"]), None),
@@ -83,11 +83,11 @@ def run_spp(data, runs: int) -> list[dict]:
              ("CODE SP3/CLK", PreciseEphemeris(data["sp3"], data["clk"]), None),
              ("CODE SP3/CLK", PreciseEphemeris(data["sp3"], data["clk"]), 600.0)]
     for name, eph, smooth in cases:
-        spp(data["obs"], eph, smoothing_window_s=smooth, epochs=slice(0, 50))  # warm-up
+        spp(data["obs"], eph, SppOptions(smoothing_window_s=smooth), epochs=slice(0, 50))  # warm-up
         times, sol = [], None
         for _ in range(runs):
             t0 = time.perf_counter()
-            sol = spp(data["obs"], eph, smoothing_window_s=smooth)
+            sol = spp(data["obs"], eph, SppOptions(smoothing_window_s=smooth))
             times.append(time.perf_counter() - t0)
         rows.append(_row(name, "Hatch 600 s" if smooth else "none", sol, data, statistics.median(times)))
         print(rows[-1], flush=True)
@@ -98,7 +98,7 @@ def run_ablations(data) -> list[dict]:
     """CODE, code only: without the satellite antenna offsets, and with the previous model (elevation weights,
     no variance calibration, no arc screening), one run each."""
     from gnssatt.gnss.ephemeris import PreciseEphemeris
-    from gnssatt.gnss.positioning import spp
+    from gnssatt.gnss.positioning import SppOptions, spp
 
     rows = []
     for label, eph, kw in (
@@ -108,7 +108,7 @@ def run_ablations(data) -> list[dict]:
              PreciseEphemeris(data["sp3"], data["clk"]),
              dict(weighting="elevation", calibrate_variance=False, arc_screening=False, smooth_variance=False))):
         t0 = time.perf_counter()
-        sol = spp(data["obs"], eph, **kw)
+        sol = spp(data["obs"], eph, SppOptions(**kw))
         rows.append(_row(label, "none", sol, data, time.perf_counter() - t0))
         print(rows[-1], flush=True)
     return rows

@@ -27,34 +27,13 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(REPO))
 
+from bench._ttff_common import BASELINES, set_files, study_payloads  # noqa: E402
+
 SEED_000_TABLE5 = {  # instant-fix share [%] and mean non-zero TTFF [s], baselines 0-2 and 1-2
     "L1+L2": {"instant": (90, 85), "mean": (9.0, 3.3)},
     "L1": {"instant": (50, 40), "mean": (18.2, 19.4)},
     "L2": {"instant": (75, 50), "mean": (7.1, 10.9)},
 }
-BASELINES = ("GPS-2>GPS-0", "GPS-2>GPS-1")
-
-
-def set_files(d: Path) -> list:
-    return ([(p.name, "rinex_obs", p) for p in sorted((d / "obs").glob("*.rnx"))]
-            + [("brdc.rnx", "rinex_nav", d / "nav" / "brdc.rnx"), ("platform.sp3", "sp3", d / "platform.sp3"),
-               ("platform.json", "platform", d / "platform.json"),
-               ("reference_attitude.csv", "reference_attitude", d / "reference_attitude.csv")])
-
-
-def study_payloads(count: int, seed: int, duration_s: float, realistic: bool = True,
-                   methods: list | None = None) -> list[dict]:
-    """The same payloads the `ttff` job builds for a `simulate` block (worker.pipelines.ttff.payloads)."""
-    from types import SimpleNamespace
-
-    from worker.jobs.ttff import TtffConfig
-    from worker.pipelines.ttff import payloads
-
-    cfg = TtffConfig.model_validate({"simulate": {"count": count, "seed": seed, "realistic": realistic},
-                                     "duration_s": duration_s, **({"methods": methods} if methods else {})})
-    return payloads(SimpleNamespace(sets=[]), cfg)
-
-
 def _task(payload: dict) -> dict:
     from worker.pipelines.ttff import set_task
     return set_task(payload, [])
@@ -170,14 +149,12 @@ def _proc_cpu_s(pid: int) -> float:
 
 def cmd_job(args) -> None:
     """The `ttff` job over `count` simulated starts on a real service (API + N worker processes)."""
-    import httpx  # noqa: F401 - the Service helper needs it
-
-    from tests.e2e.conftest import Service
+    from client.local_service import LocalService
 
     out = {}
     for n in args.workers:
         tmp = Path(tempfile.mkdtemp(prefix="ttff_job_"))
-        svc = Service(tmp, "sqlite", None, None)
+        svc = LocalService(tmp, "sqlite", None, None)
         try:
             svc.start_api()
             for _ in range(n):

@@ -70,7 +70,7 @@ def score_rtklib(sol, ss, j: int, wrong_deg: float) -> dict:
 
 
 def run(count: int, seed: int, duration_s: float, out: Path, first: int = 0) -> None:
-    from bench.bench_ttff import set_files, study_payloads
+    from bench._ttff_common import set_files, study_payloads
     from bench.rtklib_runner import options_for, run_postpos
     from gnssatt.sim import simulate_scenario
     from gnssatt.ttff.data import load_study_set

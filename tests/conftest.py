@@ -6,16 +6,15 @@ missing input (none today) must say so with a reason starting with NOT_MISSING_I
 Use `missing(reason)` and `require_module(name)` instead of pytest.skip / pytest.importorskip."""
 from __future__ import annotations
 
+import importlib
 import os
 from pathlib import Path
 
-import importlib
-
 import pytest
 
+from bench.real_sets import REAL_DATA_DIR
+
 REPO_ROOT = Path(__file__).resolve().parents[1]
-SHARED_DIR = Path(os.environ.get("GNSSATT_SHARED_DIR", REPO_ROOT.parent / "shared"))
-REAL_DATA_DIR = SHARED_DIR / "data" / "real"
 CI = os.environ.get("CI", "").strip().lower() in ("1", "true", "yes")
 NOT_MISSING_INPUT = "not missing input:"
 

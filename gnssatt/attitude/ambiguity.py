@@ -148,13 +148,14 @@ def resolve_first_fix(x: np.ndarray, P: np.ndarray, groups: list[tuple[np.ndarra
     """The first-fix attempt of one baseline with the search the settings ask for (``ambiguity_search``):
     ``"lambda"``: `resolve_lambda` (seed 000 sec. 2: MLAMBDA + length, ``min_ratio``); ``"constrained"``:
     `resolve_constrained` (C-LAMBDA with the known length, Teunissen 2010; ratio ``min_ratio_constrained``)."""
-    mode = getattr(settings, "ambiguity_search", "lambda")
+    ar = settings.ambiguity
+    mode = ar.ambiguity_search
     if mode == "constrained":
-        return resolve_constrained(x, P, groups, b_idx, known_length_m, settings.max_length_error_m,
-                                   max(settings.min_ratio_constrained, settings.min_ratio))
+        return resolve_constrained(x, P, groups, b_idx, known_length_m, ar.max_length_error_m,
+                                   max(ar.min_ratio_constrained, ar.min_ratio))
     if mode != "lambda":
         raise ValueError(f"ambiguity_search {mode!r}: expected 'lambda' or 'constrained'")
-    return resolve_lambda(x, P, groups, b_idx, known_length_m, settings.max_length_error_m, settings.min_ratio)
+    return resolve_lambda(x, P, groups, b_idx, known_length_m, ar.max_length_error_m, ar.min_ratio)
 
 
 def first_fix_groups(idx: np.ndarray, sig: np.ndarray, elevation: np.ndarray, n_sig: int) -> list:
@@ -175,10 +176,10 @@ def resolve_joint_constrained(x: np.ndarray, P: np.ndarray, groups_by_baseline: 
 
     The DD float of all baselines (gnssatt.estimation.constrained_search.float_from_single_differences), the exact
     MC-LAMBDA minimiser (constrained_search_by_baselines: Teunissen 2007; Giorgi et al. 2010), accepted for all
-    baselines together when the ratio of the constrained objective reaches ``settings.min_ratio_constrained_joint``,
-    every integer-conditioned baseline b_hat(a) passes the length test and every pair the angle test
-    (``settings.max_length_error_m`` / ``settings.max_angle_error_m``, widened to 3 sigma of b_hat(a) where that
-    is larger: gnssatt.estimation.ar_validation.geometric_tolerance_m). The same search and validation as the epoch-wise
+    baselines together when the ratio of the constrained objective reaches
+    ``settings.ambiguity.min_ratio_constrained_joint``, every integer-conditioned baseline b_hat(a) passes the length
+    test and every pair the angle test (``settings.ambiguity.max_length_error_m`` / ``max_angle_error_m``, widened to
+    3 sigma of b_hat(a) where that is larger: gnssatt.estimation.ar_validation.geometric_tolerance_m). The same search and validation as the epoch-wise
     ``epoch-constrained`` method of the ttff study (docs/ttff.md). With several signals and no acceptance, the
     first signal's groups alone are tried (the outcome's ``groups`` then names them).
     """
@@ -223,20 +224,21 @@ def _joint_constrained(x, P, groups_by_baseline, b_idx, body_baselines_m, settin
     try:
         res = constrained_search_by_baselines(sol.a_float_cyc, 0.5 * (sol.Q_a + sol.Q_a.T), sol.b_float_m,
                                               0.5 * (sol.Q_b + sol.Q_b.T), sol.Q_ab, F, rows,
-                                              ratio_cap=max(2.0, 1.34 * settings.min_ratio_constrained_joint),
+                                              ratio_cap=max(2.0, 1.34 * settings.ambiguity.min_ratio_constrained_joint),
                                               max_nodes=50_000)
     except (AmbiguitySearchError, ValueError, np.linalg.LinAlgError) as exc:
         return {j: ArOutcome(False, Ds[j], None, nan, nan, Ds[j].shape[0], f"MC-LAMBDA failed: {str(exc)[:80]}")
                 for j in use}
     B = res.b_unconstrained_m.reshape(-1, 3)
-    tol = geometric_tolerance_m(sol, settings.max_length_error_m, 3.0)
+    tol = geometric_tolerance_m(sol, settings.ambiguity.max_length_error_m, 3.0)
     _, len_ok = baseline_length_test(B, np.linalg.norm(F, axis=1), tol)
-    ang_tol = tol * (max(settings.max_angle_error_m, 2.0 * settings.max_length_error_m) / settings.max_length_error_m)
+    ar = settings.ambiguity
+    ang_tol = tol * (max(ar.max_angle_error_m, 2.0 * ar.max_length_error_m) / ar.max_length_error_m)
     _, ang_ok = baseline_angle_test(B, F, tol_m=ang_tol)
     ratio = float(res.ratio)
     why = []
-    if not ratio >= settings.min_ratio_constrained_joint:
-        why.append(f"joint constrained ratio {ratio:.2f} < {settings.min_ratio_constrained_joint:.2f}")
+    if not ratio >= settings.ambiguity.min_ratio_constrained_joint:
+        why.append(f"joint constrained ratio {ratio:.2f} < {settings.ambiguity.min_ratio_constrained_joint:.2f}")
     if not np.all(len_ok):
         why.append("length of b_hat(a) " + ", ".join(f"{np.linalg.norm(b):.4f}" for b in B) + " m")
     if not np.all(ang_ok):

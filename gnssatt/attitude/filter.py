@@ -89,7 +89,7 @@ class FilterResult:
     # the noise model as estimated at the end: white sigma per signal (at 45 dB-Hz), C/N0 growth exponents, the
     # adaptive multipath scale (summary.json "noise_model")
     noise: dict = None
-    # dynamic mode with settings.smoother: per epoch the (omega, baselines) sub-state after propagation (prior) and
+    # dynamic mode with settings.smoothing.enabled: per epoch the (omega, baselines) sub-state after propagation (prior) and
     # at the output (posterior), the transition matrix from the previous epoch and the segment starts (resets),
     # for the fixed-interval smoother (gnssatt.attitude.smoother)
     smoother_data: dict = None
@@ -184,7 +184,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     n_ant, n_ep, n_sat, n_sig = pobs.code_m.shape
     n_bl = len(baselines)
     dynamic = s.mode == "dynamic"
-    st = _State(n_bl, n_sat, n_sig, dynamic, s.separate_phase_clock)
+    st = _State(n_bl, n_sat, n_sig, dynamic, s.noise.separate_phase_clock)
     lam = np.ascontiguousarray(pobs.wavelength_m, dtype=np.float64)
     t_s = (pobs.time - pobs.time[0]) if n_ep else np.zeros(0)
     t_s = np.asarray(t_s, dtype=np.float64)
@@ -197,25 +197,25 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     for j in range(n_bl):
         o = st.b_off[j]
         st.x[o:o + 3] = b0[j]
-        sig0 = max(s.sigma0_baseline_m, 1.2 * lengths[j])
+        sig0 = max(s.table1.sigma0_baseline_m, 1.2 * lengths[j])
         st.P[np.arange(o, o + 3), np.arange(o, o + 3)] = sig0 ** 2
-        st.P[st.bias[j, 1:], st.bias[j, 1:]] = s.sigma0_code_bias_m ** 2
+        st.P[st.bias[j, 1:], st.bias[j, 1:]] = s.table1.sigma0_code_bias_m ** 2
     if dynamic:
-        st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
-    q_w = (s.sigma_omega_deg_s * DEG) ** 2 / s.tau_omega_s          # rad^2/s^2 per s
-    adapter = ManoeuvreDetector(q_w, (s.adaptive_omega_sigma_deg_s * DEG) ** 2 / s.tau_omega_s, n_bl,
-                                s.adaptive_omega_threshold, s.adaptive_omega_mix_at,
-                                s.adaptive_omega_sigma_acc_deg_s2 * DEG, s.adaptive_omega_hold_epochs,
-                                s.rk4_step_s, not (s.smoother or s.smoother_adaptive_noise)) \
-        if dynamic and s.adaptive_omega_noise else None
-    q_b = s.sigma_baseline_kinematic_m ** 2 / s.tau_baseline_s       # m^2 per s
-    var_clk = (s.sigma_clock_s * C_M_S) ** 2
-    cn0_growth = s.weighting == "cn0" or s.noise_cn0_growth
-    mp_model = max(s.sigma_multipath_phase_m) > 0 or max(s.sigma_multipath_code_m) > 0
-    mp_infl = s.multipath_correlation_factor if dynamic else 1.0
-    mp_sig = np.array([*s.sigma_multipath_code_m, *s.sigma_multipath_phase_m], dtype=np.float64)
-    elev_w = s.weighting == "elevation"
-    var_c_floor, var_p_floor = s.sigma_code_m ** 2, s.sigma_phase_m ** 2
+        st.P[0:3, 0:3] = np.eye(3) * (s.table1.sigma0_omega_deg_s * DEG) ** 2
+    q_w = (s.table1.sigma_omega_deg_s * DEG) ** 2 / s.table1.tau_omega_s          # rad^2/s^2 per s
+    adapter = ManoeuvreDetector(q_w, (s.adaptive.sigma_omega_raised_deg_s * DEG) ** 2 / s.table1.tau_omega_s, n_bl,
+                                s.adaptive.threshold, s.adaptive.mix_at,
+                                s.adaptive.sigma_acc_deg_s2 * DEG, s.adaptive.hold_epochs,
+                                s.rk4_step_s, not (s.smoothing.enabled or s.smoothing.adaptive_noise)) \
+        if dynamic and s.adaptive.enabled else None
+    q_b = s.table1.sigma_baseline_kinematic_m ** 2 / s.table1.tau_baseline_s       # m^2 per s
+    var_clk = (s.table1.sigma_clock_s * C_M_S) ** 2
+    cn0_growth = s.noise.weighting == "cn0" or s.noise.noise_cn0_growth
+    mp_model = max(s.noise.sigma_multipath_phase_m) > 0 or max(s.noise.sigma_multipath_code_m) > 0
+    mp_infl = s.noise.multipath_correlation_factor if dynamic else 1.0
+    mp_sig = np.array([*s.noise.sigma_multipath_code_m, *s.noise.sigma_multipath_phase_m], dtype=np.float64)
+    elev_w = s.noise.weighting == "elevation"
+    var_c_floor, var_p_floor = s.table1.sigma_code_m ** 2, s.table1.sigma_phase_m ** 2
     # C/N0 growth exponent per (code, phase) and signal, estimated from the triple differences (starts at 1)
     gamma = np.ones((2, n_sig)) if cn0_growth else np.zeros((2, n_sig))
     gam_n = np.zeros((2, n_sig))
@@ -230,7 +230,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     out_ratio = np.full((n_ep, n_bl), np.nan)
     out_w = np.full((n_ep, 3), np.nan)
     n_sub = 3 + 3 * n_bl
-    record = dynamic and (s.smoother or s.smoother_adaptive_noise)
+    record = dynamic and (s.smoothing.enabled or s.smoothing.adaptive_noise)
     if record:
         sm_xp, sm_xf = np.full((n_ep, n_sub), np.nan), np.full((n_ep, n_sub), np.nan)
         sm_Pp, sm_Pf = np.full((n_ep, n_sub, n_sub), np.nan), np.full((n_ep, n_sub, n_sub), np.nan)
@@ -256,8 +256,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     R_mask = None                                           # attitude for the antenna-frame mask
     R_mask_t = -np.inf
     # differential PCV maps per (baseline, signal), applied to fixed baselines (gnssatt.attitude.pcv_correction)
-    pcv_tables = pcv_tables_for(s.pcv_maps, list(pobs.antennas), baselines, list(pobs.signals)) \
-        if s.pcv_maps else {}
+    pcv_tables = pcv_tables_for(s.calibration.pcv_maps, list(pobs.antennas), baselines, list(pobs.signals)) \
+        if s.calibration.pcv_maps else {}
     if pcv_tables:
         from gnssatt.gnss.geometry import R_antenna_from_body
         R_ant_first = R_antenna_from_body(boresight_body[ia])             # (n_bl, 3, 3)
@@ -265,8 +265,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     bad_fix = np.zeros(n_bl, np.int64)
     # per-signal white-noise estimates (variance of one SD) from the triple differences: robust, exponentially
     # weighted over NOISE_EPOCHS epochs; used once NOISE_MIN_SAMPLES TDs have been seen
-    est_var_c = np.full(n_sig, s.sigma_code_m ** 2)
-    est_var_p = np.full(n_sig, s.sigma_phase_m ** 2)
+    est_var_c = np.full(n_sig, s.table1.sigma_code_m ** 2)
+    est_var_p = np.full(n_sig, s.table1.sigma_phase_m ** 2)
     est_n = np.zeros(n_sig)
 
     fix_rows: list[tuple[int, int, int, float]] = []        # (epoch, arc, ref arc, integer)
@@ -289,7 +289,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         bi = b_idx[j]
         st.P[bi, :] = 0.0
         st.P[:, bi] = 0.0
-        st.P[bi, bi] = max(s.sigma0_baseline_m, 1.2 * lengths[j]) ** 2
+        st.P[bi, bi] = max(s.table1.sigma0_baseline_m, 1.2 * lengths[j]) ** 2
         bad_fix[j] = 0
         if adapter is not None:
             adapter.reset()
@@ -360,7 +360,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # ---------------- single differences and QC ----------------
         # (the editing is compiled: gnssatt.attitude.qc_kernels; Python loops only over events that happened)
         if blk is None or k - blk.k0 >= blk.pa.shape[0]:
-            blk = sd_block(pobs, geom, ia, ib, k, min(k + BLOCK_EPOCHS, n_ep), s.elevation_mask_local_deg * DEG,
+            blk = sd_block(pobs, geom, ia, ib, k, min(k + BLOCK_EPOCHS, n_ep), s.table2.elevation_mask_local_deg * DEG,
                            sig_cn0)
             blk_lw = np.log(_cn0_factor(blk.cn0))               # ln of the full C/N0 factor
             rows = res_n + int(blk.avail_c.sum() + blk.avail_p.sum())           # residual rows of the block
@@ -386,7 +386,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         pcv_m, empty, pcv_on = pcv_zero, no_pcv, False
         if pcv_tables and R_mask is not None and t - R_mask_t <= PCV_ATTITUDE_AGE_S:
             pcv_m, empty = _pcv_epoch(pcv_tables, los_b, R_ant_first, n_sig, ever_fixed)
-            pcv_on = s.pcv_empty_bins == "exclude"
+            pcv_on = s.calibration.pcv_empty_bins == "exclude"
         # reasons (8 no SD, 1 local horizon, 2 antenna horizon, 10 empty PCV bin, 3 C/N0, 6 half cycle), the epoch
         # clock estimate from code (first signal): c dt0 = median(SD_code + u.b) / (1 - rdot/c) and its jump test
         # against the prediction from the last estimate and the differential drift (free-running clocks drift by up
@@ -395,7 +395,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # with the predicted geometry change, median-referenced)
         consecutive = prev_t is not None and (t - prev_t) <= TD_MAX_DT_S
         do_td = consecutive and prev_b is not None
-        n_jump, n_common = qc_epoch(asn, az, R_mask is not None, ever_fixed, s.elevation_mask_antenna_deg * DEG,
+        n_jump, n_common = qc_epoch(asn, az, R_mask is not None, ever_fixed, s.table2.elevation_mask_antenna_deg * DEG,
                                     blk.reason[i], empty, pcv_on, blk.low_cn0[i], avail_p, sdc, sdp, cfac, ub,
                                     prev_ub, do_td, prev_sdc, prev_sdp, pa, lli, t, clk_state, CLOCK_JUMP_M,
                                     TD_MAX_DT_S, *views[:3], w_reason, wb, wf, w_clk, w_jump, w_mcp)
@@ -416,7 +416,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 mp[j, f] -= n_cyc * lam[f]
                 td_p[j, :, f] -= n_cyc * lam[f]
                 ev(k, "phase_clock_jump", j, sig=pobs.signals[f], detail=f"{n_cyc:.0f} cycles common to all satellites")
-        noise_on = s.noise_estimation and do_td
+        noise_on = s.noise.noise_estimation and do_td
         if noise_on:
             lw = blk_lw[i]
             if cn0_growth:
@@ -439,9 +439,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # code-carrier) on a slip or where no triple difference could check it, drop states of satellites no
         # longer observed or unused for max_gap_s
         n_td, n_lli, n_gap, n_drop, n_need = td_checks(
-            do_td, noise_on, wfac, est_var_c, est_var_p, est_n, NOISE_EPOCHS, s.td_code_m, s.td_phase_cyc, lam,
+            do_td, noise_on, wfac, est_var_c, est_var_p, est_n, NOISE_EPOCHS, s.table2.td_code_m, s.table2.td_phase_cyc, lam,
             avail_p, lli, reason, wb, wf, w_mcp, consecutive, prev_sdp, st.amb_index, st.amb_last_t,
-            st.n_fixed_part, t, s.max_gap_s, w_ev, w_bk)
+            st.n_fixed_part, t, s.ambiguity.max_gap_s, w_ev, w_bk)
         if n_td:
             for j, sat, f in zip(*np.nonzero(w_ev[0])):
                 ev(k, "cycle_slip", j, pobs.sats[sat], pobs.signals[f], "triple-difference test"
@@ -463,7 +463,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         if n_need:
             jj, ss, ff = np.nonzero(need)
             vals = (sdp_c[jj, ss, ff] - sdc_c[jj, ss, ff]) / lam[ff]
-            st.add_ambiguities(np.stack([jj, ss, ff], 1), vals, s.sigma0_ambiguity_cyc, t)
+            st.add_ambiguities(np.stack([jj, ss, ff], 1), vals, s.table1.sigma0_ambiguity_cyc, t)
         # ---------------- measurement update ----------------
         jc, sc, fc = np.nonzero(use_c)
         jp, sp, fp = np.nonzero(use_p)
@@ -478,7 +478,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             # errors (multipath, uncalibrated PCV) growing with the off-boresight angle, scaled adaptively; the
             # update as scalar updates in turn; the post-fit residuals and the sums of the multipath scale
             vc_f, vp_f = white_variances_cp(est_var_c, est_var_p, est_n, var_c_floor, var_p_floor, NOISE_MIN_EPOCHS,
-                                            s.noise_estimation)
+                                            s.noise.noise_estimation)
             watch_w = adapter is not None and ever_fixed.all() and prev_t is not None
             if watch_w:
                 sub_prior, P_sub_prior = st.x[sub_w_b], st.P[ix_sub]          # (fancy indexing: copies)
@@ -498,7 +498,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 rep = adapter.observe(sub_prior, P_sub_prior, st.x[sub_w_b], st.P[ix_sub], t)
                 if rep is not None:        # a manoeuvre: the (omega, baselines) sub-state the detector gives
                     st.x[sub_w_b], st.P[ix_sub] = rep
-            if mp_model and s.multipath_adaptive and good and n_mp >= 6:
+            if mp_model and s.noise.multipath_adaptive and good and n_mp >= 6:
                 # scale of the multipath variance from the post-fit residuals of fixed phases:
                 # E[r^2] = R_true (1 - h), h = (H P+ H^T)_ii / R_model (leverage); R_true = white + scale * mp
                 a = 1.0 / min(mp_n_ep + 1.0, NOISE_EPOCHS)
@@ -515,17 +515,17 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
             n_fixed_used = n_unfixed = n_used
         ar_changed = False     # the AR below changed st.amb_fixed (the stats above are then recomputed)
         joint_ar = {}          # ambiguity_search "constrained": one MC-LAMBDA first fix of all baselines together
-        if s.ambiguity_search == "constrained" and n_bl >= 2 and mp_n and not st.amb_fixed.any():
+        if s.ambiguity.ambiguity_search == "constrained" and n_bl >= 2 and mp_n and not st.amb_fixed.any():
             gb = {j: first_fix_groups(cols[mc_n:, 4][jp == j], fp[jp == j], el_loc[sp[jp == j]], n_sig)
-                  for j in range(n_bl) if pa[j] and n_used[j] >= s.ar_min_sats}
-            gb = {j: g for j, g in gb.items() if g and sum(x.size - 1 for x, _ in g) >= s.ar_min_dd}
+                  for j in range(n_bl) if pa[j] and n_used[j] >= s.ambiguity.min_sats}
+            gb = {j: g for j, g in gb.items() if g and sum(x.size - 1 for x, _ in g) >= s.ambiguity.min_dd}
             if len(gb) >= 2:
                 joint_ar = {j: o for j, o in resolve_joint_constrained(st.x, st.P, gb, b_idx, body_baselines_m,
                                                                       s).items() if o.accepted}
         for j in range(n_bl):
             if n_used[j] and first_data[j] < 0:
                 first_data[j] = k
-            if not pa[j] or n_used[j] < s.ar_min_sats or not n_unfixed[j]:
+            if not pa[j] or n_used[j] < s.ambiguity.min_sats or not n_unfixed[j]:
                 continue
             if not has_fix[j]:                                  # no signal of baseline j fixed yet
                 sel_j = jp == j
@@ -533,20 +533,20 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 el_j = el_loc[sp[sel_j]]
                 sig_j = fp[sel_j]
                 groups = first_fix_groups(idx_j, sig_j, el_j, n_sig)
-                if not groups or sum(g.size - 1 for g, _ in groups) < s.ar_min_dd:
+                if not groups or sum(g.size - 1 for g, _ in groups) < s.ambiguity.min_dd:
                     continue
                 outcome = joint_ar.get(j) or resolve_first_fix(st.x, st.P, groups, b_idx[j], lengths[j], s)
                 out_ratio[k, j] = outcome.ratio
-                if outcome.accepted and not (outcome.ratio >= s.ar_min_ratio_first_fix):
+                if outcome.accepted and not (outcome.ratio >= s.ambiguity.min_ratio_first_fix):
                     outcome.accepted = False
-                    outcome.reason = f"ratio {outcome.ratio:.2f} < {s.ar_min_ratio_first_fix:.2f} (first fix)"
-                if outcome.accepted and n_bl > 1 and s.max_angle_error_m > 0:
+                    outcome.reason = f"ratio {outcome.ratio:.2f} < {s.ambiguity.min_ratio_first_fix:.2f} (first fix)"
+                if outcome.accepted and n_bl > 1 and s.ambiguity.max_angle_error_m > 0:
                     partners = [j2 for j2 in range(n_bl) if j2 != j and st.amb_fixed[st.amb_key[:, 0] == j2].any()]
                     if partners:
                         b_cand = fixed_baseline_vector(st.x, st.P, outcome.D, outcome.a_fix, b_idx[j])
                         ok_ang, worst = angle_test_against_fixed(
                             b_cand, body_baselines_m[j], st.x[b_idx[partners]], body_baselines_m[partners],
-                            s.max_angle_error_m)
+                            s.ambiguity.max_angle_error_m)
                         if not ok_ang:
                             outcome.accepted = False
                             outcome.reason = (f"angle to fixed baseline(s) {partners} off by {worst:.2f} deg "
@@ -574,7 +574,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                         # estimate and covariance (linearised about the wrong baseline) are not to be trusted
                         st.P[0:3, :] = 0.0
                         st.P[:, 0:3] = 0.0
-                        st.P[0:3, 0:3] = np.eye(3) * (s.sigma0_omega_deg_s * DEG) ** 2
+                        st.P[0:3, 0:3] = np.eye(3) * (s.table1.sigma0_omega_deg_s * DEG) ** 2
                         ev(k, "omega_reset", j, detail=f"the fix turned the baseline by {turn_deg:.2f} deg")
                         if record:
                             sm_start[k] = True
@@ -593,8 +593,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
                 # newcomers on a fixed baseline: DD to the fixed reference of their signal rounded (compiled)
                 # and constrained in place (DD pseudo-measurements as in _pseudo_update, as scalar Joseph updates)
                 nw, rf, vals = fix_newcomers(st.x, st.P, st.amb_key, st.amb_fixed, st.n_fixed_part, cols, mc_n, jp,
-                                             sp, fp, el_loc, n_sig, j, s.new_amb_round_sigma_cyc,
-                                             s.new_amb_round_frac_cyc, PSEUDO_VAR_CYC2)
+                                             sp, fp, el_loc, n_sig, j, s.ambiguity.new_amb_round_sigma_cyc,
+                                             s.ambiguity.new_amb_round_frac_cyc, PSEUDO_VAR_CYC2)
                 if nw.size:
                     ar_changed = True
                     fix_rows.extend(zip([k] * nw.size, st.amb_arc[nw - st.n_fixed_part].tolist(),
@@ -638,7 +638,7 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         # out_b[k], out_P[k], out_w[k]; out_ok[k] = pa & (n_used >= 3), out_fixed[k] = fixed_now & out_ok[k],
         # out_n[k] = n_used; fixed_now = ever_fixed & (n_fixed_used >= fixed_min_sats)
         fixed_now = store_outputs(st.x, st.P, all_b_idx, k, out_b, out_P, out_w, dynamic, pa, n_used, ever_fixed,
-                                  n_fixed_used, s.fixed_min_sats, out_ok, out_fixed, out_n)
+                                  n_fixed_used, s.ambiguity.fixed_min_sats, out_ok, out_fixed, out_n)
         if record:
             sm_xf[k], sm_Pf[k] = st.x[sub_w_b], st.P[ix_sub]
         if attitude_fn is not None and k % (1 if pcv_tables else 10) == 0 and fixed_now.all():
@@ -664,9 +664,9 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
     fix_log = {"epoch": fl[:, 0].astype(np.int64), "bl": arcs[a_arc, 0], "sig": arcs[a_arc, 2],
                "sat": arcs[a_arc, 1], "ref_sat": arcs[r_arc, 1], "dd_cyc": fl[:, 3],
                "last_epoch": np.minimum(arcs[a_arc, 4], arcs[r_arc, 4])}
-    noise = {"sigma_phase_white_m": {sg: float(np.sqrt(max(est_var_p[f], s.sigma_phase_m ** 2)))
+    noise = {"sigma_phase_white_m": {sg: float(np.sqrt(max(est_var_p[f], s.table1.sigma_phase_m ** 2)))
                                      for f, sg in enumerate(pobs.signals)},
-             "sigma_code_white_m": {sg: float(np.sqrt(max(est_var_c[f], s.sigma_code_m ** 2)))
+             "sigma_code_white_m": {sg: float(np.sqrt(max(est_var_c[f], s.table1.sigma_code_m ** 2)))
                                     for f, sg in enumerate(pobs.signals)},
              "cn0_gamma_code": {sg: float(gamma[0, f]) for f, sg in enumerate(pobs.signals)},
              "cn0_gamma_phase": {sg: float(gamma[1, f]) for f, sg in enumerate(pobs.signals)},

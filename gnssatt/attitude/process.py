@@ -19,6 +19,7 @@ from gnssatt.attitude.update_kernels import quest_dcm
 from gnssatt.gnss import rotations as rot
 from gnssatt.gnss.frames import (R_enu_from_ecef, R_gcrf_from_ecef, R_ned_from_ecef, R_orbital_from_ecef,
                                 ecef_to_geodetic)
+from gnssatt.gnss.leap_seconds import expiry_warning
 from gnssatt.gnss.time import GpsTime
 
 __all__ = ["AttitudeInputs", "AttitudeSolution", "InputProblem", "load_inputs", "process"]
@@ -161,12 +162,12 @@ def _platform_state(inputs: AttitudeInputs, pobs: PlatformObs, master: str):
         if np.isfinite(r).all(-1).mean() > 0.5:
             return r, v, f"platform SP3 {inputs.platform_sp3.name}"
     from gnssatt.gnss.ephemeris import BroadcastEphemeris, PreciseEphemeris
-    from gnssatt.gnss.positioning import spp
+    from gnssatt.gnss.positioning import SppOptions, spp
 
     eph = PreciseEphemeris(inputs.gnss_sp3, nav=inputs.nav) if inputs.gnss_sp3 is not None \
         else BroadcastEphemeris(inputs.nav)
     obs = inputs.obs[master]
-    sol = spp(obs, eph, systems=("G",), velocity=True)
+    sol = spp(obs, eph, SppOptions(systems=("G",), velocity=True))
     tags = sol.time_tag.s * 1000 + np.round(sol.time_tag.frac * 1000).astype(np.int64)
     want = pobs.time.s * 1000 + np.round(pobs.time.frac * 1000).astype(np.int64)
     r = np.full((len(want), 3), np.nan)
@@ -222,7 +223,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     bl_idx = [(ant_index[a], ant_index[b]) for a, b in baselines]
     body = []
     for a, b in baselines:
-        cal = settings.calibrated_baselines.get((a, b))
+        cal = settings.calibration.calibrated_baselines.get((a, b))
         body.append(np.asarray(cal, float) if cal is not None else plat.baseline_body_m(a, b))
     body = np.array(body)
     boresight = np.array([plat.antennas[a].boresight_body for a in antennas])
@@ -255,7 +256,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
                 q, _ = attitude_quaternion(b[None], body, settings.attitude_method)
                 return rot.quat_to_dcm(q[0])
     prog(0.15, "filtering")
-    two_pass = settings.mode == "dynamic" and settings.smoother_adaptive_noise
+    two_pass = settings.mode == "dynamic" and settings.smoothing.adaptive_noise
     span = 0.375 if two_pass else 0.75
     fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
                     progress=lambda f: prog(0.15 + span * f))
@@ -298,6 +299,9 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
         R_be = rot.quat_to_dcm(q_e)
         t_ep = pobs.time[ep]
         R_gcrf_ecef = R_gcrf_from_ecef(t_ep)
+        leap_warning = expiry_warning(t_ep)  # GCRF needs UT1 via UTC: stale after the leap table's expiry
+        if leap_warning:
+            sol.inputs.warnings.append(f"attitude in GCRF: {leap_warning}")
         R_bi = R_be @ np.swapaxes(R_gcrf_ecef, -1, -2)
         q_i = rot.dcm_to_quat(R_bi)
         R_b_ref = R_be @ np.swapaxes(R_ref_from_ecef[ep], -1, -2)

@@ -3,48 +3,15 @@ as defaults, every value with its unit in the name.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import warnings
 
-#: Signals the filter knows, per name: system letter, (code, phase, C/N0) RINEX 3 codes in order of preference,
-#: carrier frequency (Hz) and the default C/N0 mask (dB-Hz). Names are system-qualified ("E:E5b"); "L1" and "L2"
-#: are the GPS signals under their historical names (every GPS-only config, product and test keeps them).
-#: Frequencies: IS-GPS-200N 3.3.1.1, IS-GPS-705 3.3.1.1 (L5), Galileo OS SIS ICD 2.1 Table 2, BDS-SIS-ICD-B1I 3.0
-#: 4.2 (B1I 1561.098 MHz), BDS-SIS-ICD-B2I/B3I (1207.14 / 1268.52 MHz), IS-QZSS-PNT-005 (as GPS). RINEX 3.04
-#: Table 4-8 codes (BeiDou B1I is band "2": C2I; B2I band "7", B3I band "6").
-_GPS_L1 = {"system": "G", "code": ["C1C"], "phase": ["L1C"], "snr": ["S1C"], "freq_hz": 1575.42e6,
-           "cn0_mask_dbhz": 35.0}
-_GPS_L2 = {"system": "G", "code": ["C2W", "C2L", "C2X", "C2S"], "phase": ["L2W", "L2L", "L2X", "L2S"],
-           "snr": ["S2W", "S2L", "S2X", "S2S"], "freq_hz": 1227.60e6, "cn0_mask_dbhz": 30.0}
+from dataclasses import dataclass, field, fields, replace
+from typing import Literal
 
-
-def _spec(system: str, bands: str, attrs: str, freq_hz: float, cn0: float) -> dict:
-    """A SIGNALS entry: every (band, attribute) pair in preference order, e.g. bands '7', attrs 'QXI'."""
-    pairs = [b + a for b in bands for a in attrs]
-    return {"system": system, "code": ["C" + p for p in pairs], "phase": ["L" + p for p in pairs],
-            "snr": ["S" + p for p in pairs], "freq_hz": freq_hz, "cn0_mask_dbhz": cn0}
-
-
-SIGNALS: dict[str, dict] = {
-    "L1": _GPS_L1,
-    "L2": _GPS_L2,
-    "G:L1": _GPS_L1,
-    "G:L2": _GPS_L2,
-    "G:L5": _spec("G", "5", "QXI", 1176.45e6, 30.0),
-    "E:E1": _spec("E", "1", "CXB", 1575.42e6, 35.0),
-    "E:E5a": _spec("E", "5", "QXI", 1176.45e6, 30.0),
-    "E:E5b": _spec("E", "7", "QXI", 1207.14e6, 30.0),
-    "C:B1I": _spec("C", "2", "IXQ", 1561.098e6, 35.0),
-    "C:B2I": _spec("C", "7", "IXQ", 1207.14e6, 30.0),
-    "C:B3I": _spec("C", "6", "IXQ", 1268.52e6, 30.0),
-    "J:L1": _spec("J", "1", "CXZ", 1575.42e6, 35.0),
-    "J:L2": _spec("J", "2", "LXS", 1227.60e6, 30.0),
-    "J:L5": _spec("J", "5", "QXI", 1176.45e6, 30.0),
-}
-#: historical names -> system-qualified names
-SIGNAL_ALIASES = {"L1": "G:L1", "L2": "G:L2"}
-#: the `systems` preset: per system its first two frequency slots as RTKLIB 2.4.3 numbers them ("L1+L2":
-#: GPS/QZSS L1 + L2, Galileo E1 + E5b, BeiDou B1I + B2I). GLONASS (FDMA) is not supported.
-SYSTEM_SIGNALS = {"G": ("G:L1", "G:L2"), "E": ("E:E1", "E:E5b"), "C": ("C:B1I", "C:B2I"), "J": ("J:L1", "J:L2")}
+# The signals the filter knows (system, RINEX 3 codes in order of preference, frequency, wavelength, default C/N0
+# mask), the historical aliases "L1"/"L2" and the `systems` presets live in the one signal table,
+# gnssatt.gnss.signals; they stay importable from here under the names this module always had.
+from gnssatt.gnss.signals import SIGNAL_ALIASES, SIGNALS, SYSTEM_SIGNALS  # noqa: F401  (public re-export)
 
 
 def signal_system(name: str) -> str:
@@ -72,129 +39,302 @@ def effective_signals(settings: "AttitudeSettings") -> list[str]:
 
 
 def cn0_mask_of(settings: "AttitudeSettings", name: str) -> float:
-    """C/N0 mask (dB-Hz) of signal `name`: settings.cn0_mask_dbhz by that name or by its alias ("L1" also masks
-    "G:L1" and the reverse), else settings.cn0_mask_default_dbhz (0: none), or when that is None the signal's
+    """C/N0 mask (dB-Hz) of signal `name`: settings.table2.cn0_mask_dbhz by that name or by its alias ("L1" also masks
+    "G:L1" and the reverse), else settings.table2.cn0_mask_default_dbhz (0: none), or when that is None the signal's
     default in SIGNALS; -inf for a name SIGNALS does not know."""
-    masks = settings.cn0_mask_dbhz
+    masks = settings.table2.cn0_mask_dbhz
     if name in masks:
         return float(masks[name])
     canon = SIGNAL_ALIASES.get(name, name)
     for key, val in masks.items():
         if SIGNAL_ALIASES.get(key, key) == canon:
             return float(val)
-    if getattr(settings, "cn0_mask_default_dbhz", None) is not None:
-        return float(settings.cn0_mask_default_dbhz)
+    if settings.table2.cn0_mask_default_dbhz is not None:
+        return float(settings.table2.cn0_mask_default_dbhz)
     return float(SIGNALS[name]["cn0_mask_dbhz"]) if name in SIGNALS else -float("inf")
 
 
-#: Seed 000 Table 2's editing masks (antenna-frame elevation once fixed, C/N0 per signal): the defaults.
-TABLE2_MASKS: dict = {"elevation_mask_antenna_deg": 0.0, "cn0_mask_dbhz": {}, "cn0_mask_default_dbhz": None}
-#: "All phases": no antenna-frame or C/N0 mask; the noise model (C/N0 growth, off-boresight multipath term)
-#: weights weak and low signals instead. Measured better on simulated passes (docs/attitude.md "Data selection").
-ALL_PHASES: dict = {"elevation_mask_antenna_deg": -90.0, "cn0_mask_dbhz": {}, "cn0_mask_default_dbhz": 0.0}
+def _f(default, description: str, factory=None, **bounds):
+    """A settings field: default (or default factory), bounds (gt/ge/lt/le for the job's validation) and a
+    description, kept as dataclass metadata: the single source of truth of the job's config model."""
+    meta = {"description": description, **bounds}
+    if factory is not None:
+        return field(default_factory=factory, metadata=meta)
+    return field(default=default, metadata=meta)
+
+
+@dataclass
+class Table1Noise:
+    """Process and measurement noise of single differences. Implements: seed 000 Table 1 (sec. 2); the kinematic
+    baseline noise is seed 000 sec. 4.1; sigma0_code_bias_m (inter-signal bias state) is ours."""
+
+    sigma_code_m: float = _f(0.30, "Single-difference code noise (m), Table 1.", gt=0, le=100)
+    sigma_phase_m: float = _f(0.003, "Single-difference phase noise (m), Table 1.", gt=0, le=1)
+    sigma0_baseline_m: float = _f(2.0, "Initial sigma of each baseline component (m), Table 1.", gt=0, le=1000)
+    sigma_clock_s: float = _f(1.0e-6, "Differential clock: white noise, reset each epoch (s), Table 1.",
+                              gt=0, le=1e-2)
+    sigma0_omega_deg_s: float = _f(1.0, "Initial sigma of the angular velocity (deg/s), Table 1.", gt=0, le=100)
+    sigma_omega_deg_s: float = _f(0.03, "Angular-velocity random walk per tau (deg/s), Table 1.", ge=0, le=100)
+    tau_omega_s: float = _f(1.0, "Time interval tau of the angular-velocity random walk (s), Table 1.",
+                            gt=0, le=3600)
+    sigma0_ambiguity_cyc: float = _f(500.0, "Initial sigma of an ambiguity (cycles), Table 1.", gt=0, le=1e6)
+    sigma_baseline_kinematic_m: float = _f(1.0, "Kinematic mode: baseline random walk per component per tau (m), "
+                                                "seed 000 sec. 4.1.", gt=0, le=100)
+    tau_baseline_s: float = _f(1.0, "Kinematic mode: tau of the baseline random walk (s).", gt=0, le=3600)
+    sigma0_code_bias_m: float = _f(10.0, "Initial sigma of the inter-signal code bias of a baseline (each signal "
+                                         "after the first vs the first), constant (m).", gt=0, le=1000)
+
+
+@dataclass
+class Table2Editing:
+    """Editing limits of quality control: elevation masks, C/N0 masks, triple-difference limits. Implements: seed
+    000 Table 2 (sec. 2, data quality control); the innovation gate is ours (docs/attitude.md)."""
+
+    elevation_mask_local_deg: float = _f(-90.0, "Elevation mask on the local horizon (deg), Table 2.",
+                                         ge=-90, le=90)
+    elevation_mask_antenna_deg: float = _f(0.0, "Antenna-frame elevation mask once fixed (deg); Table 2: 0; -90 "
+                                                "keeps every satellite, the noise model weighting low ones.",
+                                           ge=-90, le=90)
+    cn0_mask_dbhz: dict[str, float] = _f(None, "C/N0 masks (dB-Hz) per signal name (aliases 'L1'/'G:L1' match).",
+                                         factory=dict)
+    cn0_mask_default_dbhz: float | None = _f(None, "C/N0 mask of signals not in cn0_mask_dbhz; null: their Table 2 "
+                                                   "mask (SIGNALS: 35 on a system's first frequency, 30 on the "
+                                                   "others); 0: none ('all phases', docs/attitude.md).",
+                                             ge=0, le=70)
+    td_code_m: float = _f(0.50, "Triple-difference limit of code (m), Table 2.", gt=0, le=1000)
+    td_phase_cyc: float = _f(0.25, "Triple-difference limit of phase (cycles), Table 2.", gt=0, le=100)
+    innovation_gate_sigma: float = _f(8.0, "Phase innovations beyond this (normalised) are re-checked / rejected.",
+                                      gt=0, le=1000)
+
+
+@dataclass
+class AmbiguityResolution:
+    """Integer ambiguity resolution and fix validation. Implements: seed 000 sec. 2 (MLAMBDA, validation by the
+    known length, Table 2 'ambiguity acceptance'); the ratio, constrained search, angle test and rounding of
+    newcomers are ours, with reasons in docs/attitude.md and docs/ttff.md."""
+
+    max_length_error_m: float = _f(0.03, "Ambiguity acceptance: |length - known| (m), Table 2.", gt=0, le=10)
+    min_ratio: float = _f(0.0, "Also require this ratio (0: ratio only reported; the paper validates by length).",
+                          ge=0, le=1000)
+    ambiguity_search: Literal["lambda", "constrained"] = _f(
+        "lambda", "Integer search of a baseline's first fix: lambda (MLAMBDA + length validation, seed 000) or "
+                  "constrained (C-LAMBDA with the known length inside the search, docs/ttff.md).")
+    min_ratio_constrained: float = _f(3.0, "constrained: ratio of the constrained objective to accept.",
+                                      ge=1, le=1000)
+    min_ratio_constrained_joint: float = _f(1.5, "constrained, >= 2 baselines, none fixed: ratio of the joint "
+                                                 "MC-LAMBDA objective (+ length and angle tests).", ge=1, le=1000)
+    min_ratio_first_fix: float = _f(0.0, "A first fix of a baseline also needs this ratio.", ge=0, le=1000)
+    max_angle_error_m: float = _f(0.03, "A first fix must agree with every baseline already fixed: angle within "
+                                        "atan(this / l_min); 0 switches the test off (m).", ge=0, le=10)
+    min_dd: int = _f(6, "DD ambiguities (all signals) before a first MLAMBDA attempt.", ge=1, le=1000)
+    min_sats: int = _f(4, "Satellites with phase on a baseline before an AR attempt.", ge=2, le=100)
+    fixed_min_sats: int = _f(4, "Fixed satellites in the update for an epoch to count as fixed.", ge=1, le=100)
+    new_amb_round_sigma_cyc: float = _f(0.08, "A fixed baseline fixes a newcomer by rounding below this sigma "
+                                              "(cycles).", gt=0, le=10)
+    new_amb_round_frac_cyc: float = _f(0.2, "... and when its float is within this of an integer (cycles).",
+                                       gt=0, le=0.5)
+    max_gap_s: float = _f(10.0, "An ambiguity unobserved longer than this restarts as float (s).", gt=0, le=86400)
+
+
+@dataclass
+class NoiseModel:
+    """The measurement noise model beyond Table 1's constant white noise: weighting, per-signal noise estimation,
+    the separate phase clock and time-correlated multipath. Ours (seed 000 sec. 2 uses no weighting); reasons and
+    measurements in docs/attitude.md 'Noise model'."""
+
+    weighting: Literal["none", "cn0", "elevation"] = _f("none", "Observation weighting (antenna-frame elevation "
+                                                                "or C/N0); none: Table 1.")
+    separate_phase_clock: bool = _f(True, "Phase gets its own white-noise clock per signal (enters as double "
+                                          "differences; code multipath cannot leak through the ambiguity).")
+    noise_estimation: bool = _f(True, "Estimate the white noise per signal from triple differences (keeps the "
+                                      "predicted sigmas honest).")
+    noise_cn0_growth: bool = _f(True, "White-noise variance x 10^((45 - C/N0)/10) (tracking jitter).")
+    sigma_multipath_phase_m: tuple[float, float] = _f(
+        (0.0015, 0.006), "Time-correlated phase error of one SD (boresight, antenna horizon) (m), growing with the "
+                         "square of the off-boresight angle; (0, 0): off.")
+    sigma_multipath_code_m: tuple[float, float] = _f((0.15, 0.9), "The same for code (m).")
+    multipath_correlation_factor: float = _f(3.0, "Dynamic mode: the correlated variance x this (epochs averaged "
+                                                  "within one correlation time).", gt=0, le=1000)
+    multipath_adaptive: bool = _f(True, "Scale the multipath variance by what the post-fit residuals of fixed "
+                                        "phases show (300-epoch memory).")
+
+
+@dataclass
+class SmootherSettings:
+    """Fixed-interval (Rauch-Tung-Striebel) smoothing after the forward pass, and its adaptive omega noise.
+    Ours (gnssatt/attitude/smoother.py; docs/attitude.md 'Where the slew errors come from', 'Adaptive process
+    noise of the smoother'); off = seed 000's forward filter."""
+
+    enabled: bool = _f(False, "Dynamic mode: RTS smoothing of the angular velocity and baselines after the "
+                              "forward pass (each epoch also uses the later data).")
+    adaptive_noise: bool = _f(False, "Dynamic mode, implies enabled: the omega random walk per epoch from the "
+                                     "smoothed angular acceleration of a first pass, then the filter run again "
+                                     "(about twice the CPU). Off: Table 1's random walk.")
+    noise_floor: float = _f(0.03, "Its quiet level, a fraction of Table 1's rate.", ge=0, le=100)
+    noise_gain: float = _f(0.5, "+ gain x alpha alpha^T dt (alpha the smoothed angular acceleration).",
+                           ge=0, le=1000)
+    noise_window_s: float = _f(20.0, "The largest alpha within +- this sets an epoch's noise (s).", gt=0, le=3600)
+    accel_window_s: float = _f(5.0, "alpha from the smoothed omega over +- this (s).", gt=0, le=3600)
+    accel_noise_k: float = _f(3.0, "|alpha| first shrunk by this x its median over the pass.", ge=0, le=100)
+
+
+@dataclass
+class AdaptiveSettings:
+    """Causal manoeuvre detection raising the angular-velocity random walk (gnssatt/attitude/adaptive.py,
+    docs/attitude.md 'Adaptive angular-velocity noise'). Ours; off = Table 1's random walk."""
+
+    enabled: bool = _f(False, "Dynamic mode: constant-acceleration hypotheses against the random walk; a "
+                              "detection raises the random walk along the acceleration axis.")
+    threshold: float = _f(5.0, "Log-likelihood ratio of a detected manoeuvre.", gt=0, le=100)
+    mix_at: float = _f(0.0, "Log-likelihood ratio at which the estimate is half-way to the manoeuvre.",
+                       ge=-20, le=100)
+    sigma_acc_deg_s2: float = _f(0.05, "Prior sigma of the hypotheses' angular acceleration (deg/s^2).",
+                                 gt=0, le=100)
+    sigma_omega_raised_deg_s: float = _f(0.3, "Random walk per tau along the axis after a detection (deg/s).",
+                                         ge=0, le=100)
+    hold_epochs: int = _f(30, "Updates it stays raised after the last detection.", ge=0, le=3600)
+
+
+@dataclass
+class AntennaCalibration:
+    """A calibration applied by the filter: differential PCV maps and calibrated body baselines (seed 000 sec. 3,
+    Table 3). Library-side records (tuple keys): the job declares its own JSON forms (pcv_map_ids,
+    calibrated_baselines)."""
+
+    pcv_maps: dict = _f(None, "(first, second, freq) -> map dict (CONVENTIONS layout).", factory=dict, job=False)
+    pcv_empty_bins: Literal["exclude", "keep"] = _f(
+        "exclude", "A fixed baseline's phase in an empty map bin: exclude it (seed 000 sec. 3.2) or keep it "
+                   "uncorrected.")
+    calibrated_baselines: dict = _f(None, "(first, second) -> body vector (3,) (m).", factory=dict, job=False)
+
+
+#: the groups of AttitudeSettings: attribute name -> record type
+GROUPS: dict[str, type] = {"table1": Table1Noise, "table2": Table2Editing, "ambiguity": AmbiguityResolution,
+                           "noise": NoiseModel, "smoothing": SmootherSettings, "adaptive": AdaptiveSettings,
+                           "calibration": AntennaCalibration}
+
+#: renamed fields (old flat name -> name in its group); every other field kept its flat name
+_RENAMED = {"smoother": "enabled", "smoother_adaptive_noise": "adaptive_noise", "smoother_noise_floor": "noise_floor",
+            "smoother_noise_gain": "noise_gain", "smoother_noise_window_s": "noise_window_s",
+            "smoother_accel_window_s": "accel_window_s", "smoother_accel_noise_k": "accel_noise_k",
+            "adaptive_omega_noise": "enabled", "adaptive_omega_threshold": "threshold",
+            "adaptive_omega_mix_at": "mix_at", "adaptive_omega_sigma_acc_deg_s2": "sigma_acc_deg_s2",
+            "adaptive_omega_sigma_deg_s": "sigma_omega_raised_deg_s", "adaptive_omega_hold_epochs": "hold_epochs",
+            "ar_min_ratio_first_fix": "min_ratio_first_fix", "ar_min_dd": "min_dd", "ar_min_sats": "min_sats"}
+
+
+def _flat_to_nested() -> dict[str, str]:
+    back = {}
+    for old, new in _RENAMED.items():
+        group = "smoothing" if old.startswith("smoother") else "adaptive" if old.startswith("adaptive") else "ambiguity"
+        back[f"{group}.{new}"] = old
+    out = {}
+    for gname, gtype in GROUPS.items():
+        for f in fields(gtype):
+            path = f"{gname}.{f.name}"
+            out[back.get(path, f.name)] = path
+    return out
 
 
 @dataclass
 class AttitudeSettings:
-    """Every tuning constant of the filter. Defaults: seed 000 Tables 1-2 unless noted."""
+    """Every tuning constant of the filter, by concern (GROUPS). Defaults: seed 000 Tables 1-2 unless noted.
+    Build with AttitudeSettings.preset(name, **overrides) (PRESETS) or AttitudeSettings(table1=Table1Noise(...))."""
 
-    mode: str = "dynamic"                       # dynamic (common angular velocity) | kinematic (baseline noise)
-    signals: list = field(default_factory=lambda: ["L1", "L2"])   # names of SIGNALS (GPS L1 + L2 by default)
-    systems: list | None = None                 # preset replacing `signals`: e.g. ["G", "E", "C", "J"] = the first
-                                                # two frequencies of each system (SYSTEM_SIGNALS, RTKLIB "L1+L2")
-    # --- Table 1: measurement noise of single differences ---
-    sigma_code_m: float = 0.30
-    sigma_phase_m: float = 0.003
-    weighting: str = "none"                     # none | cn0 | elevation (antenna frame)
-    separate_phase_clock: bool = True           # phase gets its own white-noise clock per signal, so the phase
-                                                # enters as double differences and code multipath cannot leak
-                                                # into the baseline through the common-mode ambiguity
-    noise_estimation: bool = True               # per-signal white-noise sigma from the triple differences (honest
-                                                # sigmas when the receiver is noisier than Table 1 says)
-    noise_cn0_growth: bool = True               # white-noise variance x 10^((45 - C/N0)/10) (tracking-loop
-                                                # jitter ~ 1/sqrt(C/N0)); same as weighting "cn0"
-    # time-correlated errors of one SD (multipath, uncalibrated PCV/PCO): sigma (boresight, antenna horizon) m,
-    # growing with the square of the off-boresight angle; (0, 0) switches the term off (Table 1: white only)
-    sigma_multipath_phase_m: tuple = (0.0015, 0.006)
-    sigma_multipath_code_m: tuple = (0.15, 0.9)
-    multipath_correlation_factor: float = 3.0   # dynamic mode: the correlated variance is multiplied by this,
-                                                # ~ the epochs the filter averages over within one correlation
-                                                # time, so its averaged contribution is not counted as white
-    multipath_adaptive: bool = True             # scale the multipath variance by what the post-fit residuals of
-                                                # fixed phases show (300-epoch memory; 1 = the sigmas above)
-    # --- Table 1: initial and process noise ---
-    sigma0_baseline_m: float = 2.0
-    sigma_clock_s: float = 1.0e-6              # white noise, reset each epoch
-    sigma0_omega_deg_s: float = 1.0
-    sigma_omega_deg_s: float = 0.03             # random walk, per tau
-    adaptive_omega_noise: bool = False          # dynamic mode: causal manoeuvre detection (gnssatt/attitude/adaptive.py):
-                                                # constant-acceleration hypotheses against the random walk; the
-                                                # estimate follows them by their weight, a detection raises the
-                                                # random walk along the acceleration axis; off = Table 1
-    adaptive_omega_threshold: float = 5.0       # log-likelihood ratio of a detected manoeuvre
-    adaptive_omega_mix_at: float = 0.0          # log-likelihood ratio at which the estimate is half-way to it
-    adaptive_omega_sigma_acc_deg_s2: float = 0.05   # prior sigma of the hypotheses' angular acceleration
-    adaptive_omega_sigma_deg_s: float = 0.3     # random walk (per tau) along the axis after a detection
-    adaptive_omega_hold_epochs: int = 30        # updates it stays raised after the last detection
-    tau_omega_s: float = 1.0
-    smoother: bool = False                      # dynamic mode: fixed-interval (Rauch-Tung-Striebel) smoothing of the
-                                                # angular velocity and baselines after the forward pass
-                                                # (gnssatt/attitude/smoother.py); off = the forward filter's output
-                                                # post-processing only: each epoch uses the later data
-    smoother_adaptive_noise: bool = False       # dynamic mode, implies smoother: the omega random walk per epoch
-                                                # from the smoothed angular acceleration of a first pass, then the
-                                                # whole filter run again with it and smoothed (smoother.py
-                                                # adaptive_noise_profile); off = Table 1's random walk
-    smoother_noise_floor: float = 0.03          # its quiet level, a fraction of Table 1's rate (sigma x 0.17)
-    smoother_noise_gain: float = 0.5            # + gain x alpha alpha^T dt (alpha the smoothed angular acceleration)
-    smoother_noise_window_s: float = 20.0       # the largest alpha within +- this sets an epoch's noise
-    smoother_accel_window_s: float = 5.0        # alpha from the smoothed omega over +- this
-    smoother_accel_noise_k: float = 3.0         # |alpha| first shrunk by this x its median over the pass (noise)
-    sigma0_ambiguity_cyc: float = 500.0
-    sigma_baseline_kinematic_m: float = 1.0     # kinematic mode: per baseline component per tau (seed 000 sec. 4.1)
-    tau_baseline_s: float = 1.0
-    sigma0_code_bias_m: float = 10.0            # inter-signal code bias of a baseline (each signal after the first
-                                                # vs the first: inter-frequency and inter-system), constant
-    rk4_step_s: float = 1.0
-    # --- Table 2: editing limits ---
-    elevation_mask_local_deg: float = -90.0
-    # Table 2 has an antenna-frame mask of 0 deg (applied only once the baseline is fixed) and C/N0 masks of L1 35 /
-    # L2 30 dB-Hz (SIGNALS "cn0_mask_dbhz" for every signal): the defaults, as issue 6 asks. ALL_PHASES keeps every
-    # tracked phase instead (the noise model weights weak and low signals): on the simulated passes the masks throw
-    # away the satellites that fix the baseline direction best (clean pass: kinematic angle error std 0.16 -> 0.135
-    # deg, the true-integer least-squares floor; the realistic and hard presets improve too).
-    elevation_mask_antenna_deg: float = 0.0
-    cn0_mask_dbhz: dict = field(default_factory=dict)   # per signal name (aliases "L1"/"G:L1" match)
-    cn0_mask_default_dbhz: float | None = None  # signals not in cn0_mask_dbhz; None = their SIGNALS (Table 2) mask
-    td_code_m: float = 0.50
-    td_phase_cyc: float = 0.25
-    max_length_error_m: float = 0.03            # ambiguity acceptance: |length - known| (Table 2)
-    # --- ambiguity resolution (not in the paper: our choices, with reasons in docs/attitude.md) ---
-    min_ratio: float = 0.0                      # 0 = ratio only reported (the paper validates by length)
-    ambiguity_search: str = "lambda"            # lambda (MLAMBDA + length, the paper) | constrained (C-LAMBDA with
-                                                # the known length, docs/ttff.md; first fixes of a baseline)
-    min_ratio_constrained: float = 3.0          # constrained: ratio of the constrained objective to accept
-    min_ratio_constrained_joint: float = 1.5    # constrained, >= 2 baselines, none fixed: ratio of the joint
-                                                # MC-LAMBDA objective (+ length and angle tests; docs/ttff.md)
-    ar_min_ratio_first_fix: float = 0.0         # a first fix of a baseline also needs this ratio
-    max_angle_error_m: float = 0.03             # a first fix must agree with every baseline already fixed: angle
-                                                # between them vs the body angle within atan(this / l_min) (1.6 deg
-                                                # at 1.05 m); 0 switches the test off
-    ar_min_dd: int = 6                          # DD ambiguities (all signals) before a first MLAMBDA attempt: with
-                                                # fewer, several integer vectors pass the 3 cm length test
-    ar_min_sats: int = 4                        # satellites with phase on a baseline before an AR attempt
-    fixed_min_sats: int = 4                     # fixed satellites in the update for an epoch to count as fixed
-    new_amb_round_sigma_cyc: float = 0.08       # a fixed baseline fixes a newcomer by rounding below this sigma
-    new_amb_round_frac_cyc: float = 0.2         # ... and when the float is within this of an integer
-    max_gap_s: float = 10.0                     # an ambiguity unobserved longer than this restarts as float
-    innovation_gate_sigma: float = 8.0          # phase innovations beyond this (normalised) -> re-check / reject
-    # --- initial attitude ---
-    initial_attitude: str = "earth-pointing"    # earth-pointing (spacecraft) / level (terrestrial) | given
-    initial_q_body_from_ecef: list | None = None
-    # --- attitude ---
-    attitude_method: str = "quest"              # quest (weights by baseline length) | triad | ml (full covariance)
-    pcv_maps: dict = field(default_factory=dict)   # (first, second, freq) -> map dict (CONVENTIONS layout)
-    pcv_empty_bins: str = "exclude"             # a fixed baseline's phase in an empty map bin: "exclude" (seed 000
-                                                # sec. 3.2: observations without PCV correction leave once fixed)
-                                                # | "keep" (used uncorrected, as without maps)
-    calibrated_baselines: dict = field(default_factory=dict)  # (first, second) -> body vector (3,)
+    mode: Literal["dynamic", "kinematic"] = _f("dynamic", "dynamic: common angular velocity, no baseline process "
+                                                          "noise; kinematic: baseline process noise, no angular "
+                                                          "velocity (seed 000 sec. 2, 4.1).")
+    signals: list[str] = _f(None, "Signal names of SIGNALS, each one system on one frequency (GPS L1 + L2 by "
+                                  "default).", factory=lambda: ["L1", "L2"], min_length=1, max_length=16)
+    systems: list[Literal["G", "E", "C", "J"]] | None = _f(
+        None, "Preset replacing `signals`: the first two frequencies of each system (SYSTEM_SIGNALS, RTKLIB "
+              "'L1+L2'), e.g. ['G', 'E', 'C', 'J']. GLONASS is not supported.", min_length=1, max_length=4)
+    rk4_step_s: float = _f(1.0, "Step of the Runge-Kutta propagation of the attitude between epochs (s).",
+                           gt=0, le=60)
+    initial_attitude: Literal["earth-pointing", "level", "given"] = _f(
+        "earth-pointing", "earth-pointing (spacecraft) / level (terrestrial) | given (initial_q_body_from_ecef).",
+        job=False)
+    initial_q_body_from_ecef: list[float] | None = _f(
+        None, "Initial attitude; default Earth pointing (spacecraft) or level heading north (terrestrial).",
+        min_length=4, max_length=4)
+    attitude_method: Literal["quest", "triad", "ml"] = _f(
+        "quest", "quest: QUEST with weights by baseline length (seed 000); triad: the first baseline exact; ml: "
+                 "maximum likelihood with the baselines' full covariance (docs/attitude.md).")
+    table1: Table1Noise = field(default_factory=Table1Noise, metadata={"description": Table1Noise.__doc__})
+    table2: Table2Editing = field(default_factory=Table2Editing, metadata={"description": Table2Editing.__doc__})
+    ambiguity: AmbiguityResolution = field(default_factory=AmbiguityResolution,
+                                           metadata={"description": AmbiguityResolution.__doc__})
+    noise: NoiseModel = field(default_factory=NoiseModel, metadata={"description": NoiseModel.__doc__})
+    smoothing: SmootherSettings = field(default_factory=SmootherSettings,
+                                        metadata={"description": SmootherSettings.__doc__})
+    adaptive: AdaptiveSettings = field(default_factory=AdaptiveSettings,
+                                       metadata={"description": AdaptiveSettings.__doc__})
+    calibration: AntennaCalibration = field(default_factory=AntennaCalibration,
+                                            metadata={"description": AntennaCalibration.__doc__})
+
+    @classmethod
+    def preset(cls, name: str = "seed000", **overrides) -> "AttitudeSettings":
+        """The named preset (PRESETS) with `overrides` applied (see `override`)."""
+        if name not in PRESETS:
+            raise ValueError(f"unknown preset {name!r} (known: {', '.join(PRESETS)})")
+        return cls().override(**PRESETS[name]).override(**overrides)
+
+    def override(self, **overrides) -> "AttitudeSettings":
+        """A copy with `overrides`: top-level fields by name, a group by its name (a record replaces it, a dict
+        updates some of its fields), or an old flat field name (FLAT_TO_NESTED). ValueError names an unknown key."""
+        top, groups = {}, {g: {} for g in GROUPS}
+        for key, val in overrides.items():
+            if key in GROUPS:
+                if isinstance(val, GROUPS[key]):
+                    top[key] = val
+                else:
+                    groups[key].update(val)
+            elif key in FLAT_TO_NESTED:
+                g, name = FLAT_TO_NESTED[key].split(".")
+                groups[g][name] = val
+            elif key in _TOP:
+                top[key] = val
+            else:
+                raise ValueError(f"unknown attitude setting {key!r}")
+        out = replace(self, **top)
+        for g, kw in groups.items():
+            if kw:
+                known = {f.name for f in fields(GROUPS[g])}
+                bad = sorted(set(kw) - known)
+                if bad:
+                    raise ValueError(f"unknown attitude setting {g}.{bad[0]}")
+                setattr(out, g, replace(getattr(out, g), **kw))
+        return out
+
+    def __getattr__(self, name: str):
+        """Transitional read access by an old flat name (FLAT_TO_NESTED), with a DeprecationWarning, for code
+        written against the flat settings while it is being rewritten; new code uses the nested path."""
+        path = FLAT_TO_NESTED.get(name)
+        if path is None or not name.isidentifier() or name.startswith("__"):
+            raise AttributeError(name)
+        warnings.warn(f"AttitudeSettings.{name} is now .{path}", DeprecationWarning, stacklevel=2)
+        g, f = path.split(".")
+        return getattr(self.__dict__[g], f)
+
+
+#: old flat field name -> "group.field" (every field that moved into a group)
+FLAT_TO_NESTED: dict[str, str] = _flat_to_nested()
+_TOP = {f.name for f in fields(AttitudeSettings) if f.name not in GROUPS}
+
+#: Seed 000 Table 2's editing masks (antenna-frame elevation once fixed, C/N0 per signal): the defaults.
+TABLE2_MASKS: dict = {"table2": {"elevation_mask_antenna_deg": 0.0, "cn0_mask_dbhz": {},
+                                 "cn0_mask_default_dbhz": None}}
+#: "All phases": no antenna-frame or C/N0 mask; the noise model (C/N0 growth, off-boresight multipath term)
+#: weights weak and low signals instead. Measured better on simulated passes (docs/attitude.md "Data selection").
+ALL_PHASES: dict = {"table2": {"elevation_mask_antenna_deg": -90.0, "cn0_mask_dbhz": {}, "cn0_mask_default_dbhz": 0.0}}
+
+#: Named configurations (overrides of the defaults, `AttitudeSettings.override` form): "seed000" = Tables 1-2 as
+#: the paper; "all-phases" = ALL_PHASES (the benches' selection); "all-phases-smoother" = + the fixed-interval
+#: smoother (the calibration job's held-out comparison); "all-phases-adaptive-smoother" = + its adaptive omega
+#: noise (docs/attitude.md, the slews' best).
+PRESETS: dict[str, dict] = {
+    "seed000": TABLE2_MASKS,
+    "all-phases": ALL_PHASES,
+    "all-phases-smoother": {**ALL_PHASES, "smoothing": {"enabled": True}},
+    "all-phases-adaptive-smoother": {**ALL_PHASES, "smoothing": {"enabled": True, "adaptive_noise": True}},
+}

@@ -57,7 +57,7 @@ def rts_smooth(x_post: np.ndarray, P_post: np.ndarray, x_prior: np.ndarray, P_pr
 
 def smooth_filter_result(fr, settings=None) -> int:
     """Replace the baselines, their covariance and omega of a dynamic-mode FilterResult (run with
-    settings.smoother) by the smoothed ones over the runs of epochs where every baseline is fixed (a run starts at
+    settings.smoothing.enabled) by the smoothed ones over the runs of epochs where every baseline is fixed (a run starts at
     a fix, a reset or an epoch after a float one: float ambiguities are correlated with the baselines and are not in
     the smoothed sub-state). Returns the number of epochs smoothed.
 
@@ -68,7 +68,7 @@ def smooth_filter_result(fr, settings=None) -> int:
     the reported covariance is P_k|N + f (P_k|k - P_k|N): white errors shrink as smoothed, correlated ones stay as
     filtered (f = 0 on white-noise data).
 
-    settings.smoother_adaptive_noise changes nothing here: fr is then the second forward pass (run with the
+    settings.smoothing.adaptive_noise changes nothing here: fr is then the second forward pass (run with the
     per-epoch noise of adaptive_noise_profile), smoothed as any other."""
     sd = fr.smoother_data
     if sd is None:
@@ -90,7 +90,7 @@ def smooth_filter_result(fr, settings=None) -> int:
 
 
 # ---------------------------------------------------------------------------------------------------------------
-# Adaptive process noise (settings.smoother_adaptive_noise): the omega random walk per epoch from the data
+# Adaptive process noise (settings.smoothing.adaptive_noise): the omega random walk per epoch from the data
 #
 # A random walk q on omega is white angular acceleration; its smoother is the cubic smoothing spline, whose penalty
 # on the acceleration shrinks a real one: with Table 1's q the smoothed attitude starts a minimum-jerk manoeuvre
@@ -125,7 +125,7 @@ def fixed_runs(fr) -> tuple[np.ndarray, np.ndarray]:
 
 
 def adaptive_noise_profile(fr, settings) -> tuple[np.ndarray, dict]:
-    """(q_omega (n_ep, 3, 3) rad^2/s^3, info) for the second forward pass of settings.smoother_adaptive_noise
+    """(q_omega (n_ep, 3, 3) rad^2/s^3, info) for the second forward pass of settings.smoothing.adaptive_noise
     (docs/attitude.md "Adaptive process noise of the smoother"): the omega random walk per epoch from the angular
     acceleration of fr's RTS-smoothed omega over its all-fixed runs (acceleration_noise_rate: floor x Table 1 +
     gain alpha alpha^T dt, the largest alpha within +-window); Table 1's rate outside the runs (float epochs, and
@@ -135,15 +135,15 @@ def adaptive_noise_profile(fr, settings) -> tuple[np.ndarray, dict]:
     fixed_all, start = fixed_runs(fr)
     xs, _ = rts_smooth(sd["x_post"], sd["P_post"], sd["x_prior"], sd["P_prior"], sd["Phi"], start)
     t_s = np.cumsum(np.nan_to_num(sd["dt_s"]))
-    Qw = acceleration_noise_rate(xs[:, 0:3], t_s, start, settings.smoother_noise_floor * q1,
-                                 settings.smoother_noise_gain, settings.smoother_accel_window_s,
-                                 settings.smoother_noise_window_s, settings.smoother_accel_noise_k)
+    Qw = acceleration_noise_rate(xs[:, 0:3], t_s, start, settings.smoothing.noise_floor * q1,
+                                 settings.smoothing.noise_gain, settings.smoothing.accel_window_s,
+                                 settings.smoothing.noise_window_s, settings.smoothing.accel_noise_k)
     run = fixed_all & np.isfinite(xs[:, 0:3]).all(1)
     Qw[~run] = q1 * np.eye(3)
     sig = np.degrees(np.sqrt(np.linalg.eigvalsh(Qw)[:, -1]))
     info = {"method": "omega random walk per epoch from the smoothed angular acceleration of a first pass (Table 1), "
                       "then the whole filter run again with it and smoothed",
-            "floor_sigma_omega_deg_s": float(np.degrees(np.sqrt(settings.smoother_noise_floor * q1))),
+            "floor_sigma_omega_deg_s": float(np.degrees(np.sqrt(settings.smoothing.noise_floor * q1))),
             "max_sigma_omega_deg_s": float(sig[run].max()) if run.any() else None,
             "epochs_above_table1": int(np.sum(run & (sig > np.degrees(np.sqrt(q1)) * (1 + 1e-9)))),
             "epochs_at_table1_outside_fixed_runs": int(np.sum(~run))}

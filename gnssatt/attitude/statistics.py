@@ -98,7 +98,7 @@ def summarize(sol, R_ref_from_ecef: np.ndarray, orbit_source: str) -> dict:
             vd = np.sqrt(Q[:, 2, 2])
             ok = np.isfinite(hd) & np.isfinite(vd)
             hdop, vdop = float(np.mean(hd[ok])), float(np.mean(vd[ok]))
-        sH, sV = hdop * s.sigma_phase_m, vdop * s.sigma_phase_m
+        sH, sV = hdop * s.table1.sigma_phase_m, vdop * s.table1.sigma_phase_m
         bb = sol.body_baselines_m[j]
         tilt = "pitch" if abs(bb[0]) >= abs(bb[1]) else "roll"
         ff = fr.first_fix_epoch[j]
@@ -123,7 +123,7 @@ def summarize(sol, R_ref_from_ecef: np.ndarray, orbit_source: str) -> dict:
     if fr.noise is not None:
         summary["noise_model"] = fr.noise
     if getattr(fr, "smoother_data", None) is not None:
-        # only with settings.smoother (dynamic mode): the products are smoothed, not filtered, values
+        # only with settings.smoothing.enabled (dynamic mode): the products are smoothed, not filtered, values
         summary["smoother"] = {"method": "Rauch-Tung-Striebel fixed interval (omega and baselines)",
                                "epochs_smoothed": int(fr.smoother_data.get("epochs_smoothed", 0))}
         if fr.smoother_data.get("adaptive_noise") is not None:

@@ -24,15 +24,13 @@ import numpy as np
 from gnssatt.calibration.kinematic import BaselineFix, solve_baseline
 from gnssatt.calibration.pcv import FixedPhases
 from gnssatt.calibration.reference import ReferenceAtEpochs, reference_at_epochs
-from gnssatt.gnss.constants import C_M_S, FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ
+from gnssatt.gnss.constants import C_M_S
+from gnssatt.gnss.signals import SIGNALS as _SIGNAL_TABLE
 from gnssatt.gnss.time import GpsTime
 
-#: signal name -> RINEX 3 (code, phase, C/N0) candidates in order of preference, carrier frequency
-SIGNALS = {
-    "L1": {"code": ["C1C"], "phase": ["L1C"], "snr": ["S1C"], "freq_hz": FREQ_GPS_L1_HZ},
-    "L2": {"code": ["C2W", "C2L", "C2X", "C2S"], "phase": ["L2W", "L2L", "L2X", "L2S"],
-           "snr": ["S2W", "S2L", "S2X", "S2S"], "freq_hz": FREQ_GPS_L2_HZ},
-}
+#: signal name -> RINEX 3 (code, phase, C/N0) candidates in order of preference, carrier frequency: the GPS L1
+#: and L2 entries of the signal table (gnssatt.gnss.signals.SIGNALS); calibration is GPS-only
+SIGNALS = {name: _SIGNAL_TABLE[name] for name in ("L1", "L2")}
 
 
 @dataclass

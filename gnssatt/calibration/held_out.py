@@ -22,7 +22,7 @@ __all__ = ["ANGLES", "map_documents", "filter_errors", "cut_percent", "filter_co
 
 def map_documents(grid: Grid2D, maps_m: dict) -> dict:
     """(first, second, signal) -> map dict (CONVENTIONS layout: bin centres, values in mm rounded to 0.1 um as
-    published, None where empty) of flat maps in metres (NaN empty), for AttitudeSettings.pcv_maps."""
+    published, None where empty) of flat maps in metres (NaN empty), for AttitudeSettings.calibration.pcv_maps."""
     out = {}
     for key, m in maps_m.items():
         v = np.round(np.asarray(m, float).reshape(grid.shape) * 1e3, 4)
@@ -75,11 +75,9 @@ def filter_comparison(inputs, settings, calibrated: dict, map_docs: dict) -> dic
 
     Note: the filter is sensitive to sub-micrometre input changes (a fix a few epochs earlier or later moves the
     statistics in the 4th decimal), hence the exact published rounding."""
-    from dataclasses import replace
-
-    base = replace(settings, calibrated_baselines={}, pcv_maps={})
+    base = settings.override(calibrated_baselines={}, pcv_maps={})
     # the published values (baselines.json rounds to 0.1 um), so the figures are those of an attitude job
-    cal = replace(settings, calibrated_baselines={k: [round(float(x), 7) for x in v] for k, v in calibrated.items()},
+    cal = settings.override(calibrated_baselines={k: [round(float(x), 7) for x in v] for k, v in calibrated.items()},
                   pcv_maps=dict(map_docs))
     without = filter_errors(inputs, base)
     with_cal = filter_errors(inputs, cal)

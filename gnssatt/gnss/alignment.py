@@ -47,8 +47,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gnssatt.gnss.constants import C_M_S, FREQ_BY_SYSTEM_BAND_HZ, glonass_frequency_hz
+from gnssatt.gnss.constants import C_M_S
 from gnssatt.gnss.geometry import emission_time_and_position
+from gnssatt.gnss.signals import FREQ_BY_SYSTEM_BAND_HZ, glonass_frequency_hz
 from gnssatt.gnss.time import GpsTime
 
 __all__ = ["ClockJumpEvent", "AlignedReceiver", "AlignedObs", "align_to_gps_epochs", "detect_clock_jumps",

@@ -4,15 +4,14 @@ Each system defines its own Earth model for its broadcast orbits; using another 
 rate in a broadcast orbit computation gives metre-level errors, so every value names its system.
 
 Sources:
-- IS-GPS-200N (2022) sec. 20.3.3.4.3 Table 20-IV and sec. 20.3.3.3.3.1 (GM, Omega_e, F, pi);
-  sec. 3.3.1.1 (L1/L2 carrier frequencies); IS-GPS-705 (L5).
-- NIMA TR8350.2 (WGS 84) Table 3.1: a, 1/f.
-- Galileo OS SIS ICD issue 2.1 (2023) sec. 5.1.1 Table 1 (carriers), sec. 5.1.9.3 Table 65 (GM, Omega_e),
-  sec. 5.1.4 (F).
-- BeiDou ICD B1I v3.0 (2019) sec. 5.2.4 Table 5-11 (CGCS2000 GM, Omega_e), sec. 5.2.4.10 (F),
-  BDS ICDs B1C/B2a/B3I (carriers); CGCS2000 ellipsoid (a, 1/f).
+- IS-GPS-200N (2022) sec. 20.3.3.4.3 Table 20-IV and sec. 20.3.3.3.3.1 (GM, Omega_e, F, pi).
+- NIMA TR8350.2 (WGS 84) Table 3.1: a, 1/f, GM (3.986004418e14, with the atmosphere; = EGM96).
+- Galileo OS SIS ICD issue 2.1 (2023) sec. 5.1.9.3 Table 65 (GM, Omega_e), sec. 5.1.4 (F).
+- BeiDou ICD B1I v3.0 (2019) sec. 5.2.4 Table 5-11 (CGCS2000 GM, Omega_e), sec. 5.2.4.10 (F);
+  CGCS2000 ellipsoid (a, 1/f).
 - IS-QZSS-PNT-005 (2022) sec. 3.1 and 4.1.2: QZSS uses the GPS values of GM, Omega_e, F and pi.
 - IERS Conventions (2010) ch. 1 Table 1.1 (c); IAU 2000 resolution B1.9 (TT - TAI).
+Carrier frequencies and wavelengths: gnssatt.gnss.signals. Leap seconds: gnssatt.gnss.leap_seconds.
 """
 from __future__ import annotations
 
@@ -43,6 +42,8 @@ WGS84_INV_F = 298.257223563
 WGS84_F = 1.0 / WGS84_INV_F
 WGS84_E2 = WGS84_F * (2.0 - WGS84_F)  # first eccentricity squared
 WGS84_B_M = WGS84_A_M * (1.0 - WGS84_F)
+GM_WGS84_M3_S2 = 3.986004418e14  # WGS 84 GM incl. the atmosphere (TR8350.2 Table 3.1) = EGM96: orbits, not
+                                 # broadcast ephemerides (those use GM_GPS_M3_S2)
 
 # --- Galileo (OS SIS ICD Table 65, sec. 5.1.4) ------------------------------------------------------
 GM_GALILEO_M3_S2 = 3.986004418e14
@@ -68,75 +69,7 @@ F_REL_QZSS_S_SQRT_M = F_REL_GPS_S_SQRT_M
 GST_MINUS_GPST_S = 0.0
 GST_WEEK_OFFSET = 1024
 
-# --- carrier frequencies (Hz) and wavelengths (m) ---------------------------------------------------
-FREQ_GPS_L1_HZ = 1575.42e6
-FREQ_GPS_L2_HZ = 1227.60e6
-FREQ_GPS_L5_HZ = 1176.45e6
-FREQ_GAL_E1_HZ = 1575.42e6
-FREQ_GAL_E5A_HZ = 1176.45e6
-FREQ_GAL_E5B_HZ = 1207.14e6
-FREQ_GAL_E5_HZ = 1191.795e6  # E5 AltBOC centre
-FREQ_GAL_E6_HZ = 1278.75e6
-FREQ_BDS_B1I_HZ = 1561.098e6
-FREQ_BDS_B1C_HZ = 1575.42e6
-FREQ_BDS_B2A_HZ = 1176.45e6
-FREQ_BDS_B2I_HZ = 1207.14e6  # also B2b
-FREQ_BDS_B3I_HZ = 1268.52e6
-FREQ_QZS_L1_HZ = 1575.42e6
-FREQ_QZS_L2_HZ = 1227.60e6
-FREQ_QZS_L5_HZ = 1176.45e6
-FREQ_QZS_L6_HZ = 1278.75e6
-# GLONASS FDMA: f = base + k * step, k = -7..+6 (GLONASS ICD 5.1 sec. 3.3.1.4)
-FREQ_GLO_G1_BASE_HZ = 1602.0e6
-FREQ_GLO_G1_STEP_HZ = 0.5625e6
-FREQ_GLO_G2_BASE_HZ = 1246.0e6
-FREQ_GLO_G2_STEP_HZ = 0.4375e6
-
-WAVELENGTH_GPS_L1_M = C_M_S / FREQ_GPS_L1_HZ  # 0.190293672798 m
-WAVELENGTH_GPS_L2_M = C_M_S / FREQ_GPS_L2_HZ  # 0.244210213425 m
-WAVELENGTH_GPS_L5_M = C_M_S / FREQ_GPS_L5_HZ  # 0.254828048791 m
-WAVELENGTH_GAL_E1_M = C_M_S / FREQ_GAL_E1_HZ
-WAVELENGTH_GAL_E5A_M = C_M_S / FREQ_GAL_E5A_HZ
-WAVELENGTH_GAL_E5B_M = C_M_S / FREQ_GAL_E5B_HZ
-WAVELENGTH_GAL_E5_M = C_M_S / FREQ_GAL_E5_HZ
-WAVELENGTH_GAL_E6_M = C_M_S / FREQ_GAL_E6_HZ
-WAVELENGTH_BDS_B1I_M = C_M_S / FREQ_BDS_B1I_HZ
-WAVELENGTH_BDS_B1C_M = C_M_S / FREQ_BDS_B1C_HZ
-WAVELENGTH_BDS_B2A_M = C_M_S / FREQ_BDS_B2A_HZ
-WAVELENGTH_BDS_B2I_M = C_M_S / FREQ_BDS_B2I_HZ
-WAVELENGTH_BDS_B3I_M = C_M_S / FREQ_BDS_B3I_HZ
-WAVELENGTH_QZS_L1_M = C_M_S / FREQ_QZS_L1_HZ
-WAVELENGTH_QZS_L2_M = C_M_S / FREQ_QZS_L2_HZ
-WAVELENGTH_QZS_L5_M = C_M_S / FREQ_QZS_L5_HZ
-WAVELENGTH_QZS_L6_M = C_M_S / FREQ_QZS_L6_HZ
-
-# Frequency of each RINEX 3 band number per system (RINEX 3.05 sec. 5.1 Table 4), for observation codes
-# like "L1C": FREQ_BY_SYSTEM_BAND_HZ[("G", "1")]. GLONASS FDMA bands need the channel number k.
-FREQ_BY_SYSTEM_BAND_HZ: dict[tuple[str, str], float] = {
-    ("G", "1"): FREQ_GPS_L1_HZ, ("G", "2"): FREQ_GPS_L2_HZ, ("G", "5"): FREQ_GPS_L5_HZ,
-    ("E", "1"): FREQ_GAL_E1_HZ, ("E", "5"): FREQ_GAL_E5A_HZ, ("E", "7"): FREQ_GAL_E5B_HZ,
-    ("E", "8"): FREQ_GAL_E5_HZ, ("E", "6"): FREQ_GAL_E6_HZ,
-    ("C", "2"): FREQ_BDS_B1I_HZ, ("C", "1"): FREQ_BDS_B1C_HZ, ("C", "5"): FREQ_BDS_B2A_HZ,
-    ("C", "7"): FREQ_BDS_B2I_HZ, ("C", "8"): 1191.795e6, ("C", "6"): FREQ_BDS_B3I_HZ,
-    ("J", "1"): FREQ_QZS_L1_HZ, ("J", "2"): FREQ_QZS_L2_HZ, ("J", "5"): FREQ_QZS_L5_HZ,
-    ("J", "6"): FREQ_QZS_L6_HZ,
-    ("R", "4"): 1600.995e6, ("R", "6"): 1248.06e6, ("R", "3"): 1202.025e6,  # GLONASS CDMA
-    ("I", "5"): FREQ_GPS_L5_HZ, ("I", "9"): 2492.028e6,  # NavIC L5, S
-    ("S", "1"): FREQ_GPS_L1_HZ, ("S", "5"): FREQ_GPS_L5_HZ,  # SBAS
-}
-
-
-def glonass_frequency_hz(band: int, k) -> float:
-    """Carrier frequency (Hz) of GLONASS FDMA band 1 (G1) or 2 (G2) for frequency channel number k (-7..6).
-
-    Implements: GLONASS ICD edition 5.1 (2008) sec. 3.3.1.4, eq. f_K1 = 1602 + K*0.5625 MHz,
-    f_K2 = 1246 + K*0.4375 MHz.
-    """
-    if band == 1:
-        return FREQ_GLO_G1_BASE_HZ + k * FREQ_GLO_G1_STEP_HZ
-    if band == 2:
-        return FREQ_GLO_G2_BASE_HZ + k * FREQ_GLO_G2_STEP_HZ
-    raise ValueError(f"GLONASS FDMA band must be 1 or 2, got {band!r}")
+# Carrier frequencies, wavelengths and RINEX codes: gnssatt.gnss.signals (the one signal table).
 
 
 def orbit_constants(system: str) -> tuple[float, float, float]:

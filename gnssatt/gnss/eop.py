@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gnssatt.gnss.constants import MJD_GPS_EPOCH, TAI_MINUS_GPS_S
 from gnssatt.gnss.time import GpsTime, civil_from_days
 
 ARCSEC_RAD = np.pi / 648000.0
@@ -32,7 +33,7 @@ MAS_RAD = ARCSEC_RAD * 1e-3
 # Rate of the Earth rotation angle per UT1 second, d(ERA)/d(UT1) (IERS Conventions 2010 eq. 5.15):
 # 2 pi * 1.00273781191135448 / 86400. Times (1 + d(UT1-TAI)/dTAI) it is the rate per SI second.
 OMEGA_ERA_RAD_S = 2.0 * np.pi * 1.00273781191135448 / 86400.0
-_GPS_EPOCH_MJD = 44244
+_GPS_EPOCH_MJD = int(MJD_GPS_EPOCH)
 _MJD_UNIX_EPOCH = 40587
 
 
@@ -174,13 +175,13 @@ class EopSource:
 
         shape = np.shape(t.s)
         gmu = gps_minus_utc_s(t)
-        tai_minus_utc = gmu + 19.0
+        tai_minus_utc = gmu + TAI_MINUS_GPS_S
         if self.is_zero:
             z = np.zeros(shape)
             return EopValues(z, z.copy(), z.copy(), -tai_minus_utc, z.copy(), z.copy(),
                              np.full(shape, OMEGA_ERA_RAD_S), np.ones(shape, bool), np.zeros(shape, bool))
         # Abscissa: MJD in TAI (continuous); the rows are at 0h UTC = MJD + (TAI-UTC)/86400 TAI.
-        mjd_tai = _GPS_EPOCH_MJD + (t.s.astype(np.float64) + 19.0) / 86400.0 + t.frac / 86400.0
+        mjd_tai = _GPS_EPOCH_MJD + (t.s.astype(np.float64) + TAI_MINUS_GPS_S) / 86400.0 + t.frac / 86400.0
         from gnssatt.gnss.leap_seconds import TABLE
 
         row_tai_utc = _tai_minus_utc_at_mjd(self.mjd_utc, TABLE)

@@ -7,6 +7,12 @@ The table is read once, at import, from the first of these that loads (all offli
 3. the fallback copied below from IERS Bulletin C 72 (Leap_Second.dat of July 2026, expires 2027-06-28).
 The chosen table names its `source`; `is_expired(t)` tells a product to warn: after `EXPIRES` a leap second
 may have been announced that this table does not know, so UTC (and UT1 via UTC) may be off by whole seconds.
+`expiry_warning(t)` is the sentence a product carries then (the attitude summary's warnings, the RINEX nav
+reader's LEAP_TABLE_EXPIRED for GLONASS epochs, the simulator's truth file).
+
+This is the project's one leap-second table: RINEX navigation/clock/SP3 readers (UTC epochs), the simulator
+and the UTC/UT1 Julian dates for ERFA all read `TABLE`. Layering: gnssatt.gnss.time (GPS time, no leap
+seconds) <- this module; time never imports it.
 
 Implements: IERS Bulletin C (TAI - UTC); GPS time = TAI - 19 s (IS-GPS-200 sec. 3.3.4); UTC calendar with
 the leap second written 23:59:60 (ITU-R TF.460-6).
@@ -21,10 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
+from gnssatt.gnss.constants import MJD_GPS_EPOCH, TAI_MINUS_GPS_S
 from gnssatt.gnss.time import GpsTime, days_from_civil, civil_from_days
 
-_GPS_EPOCH_MJD = 44244
-_TAI_MINUS_GPS_S = 19
+_GPS_EPOCH_MJD = int(MJD_GPS_EPOCH)
+_TAI_MINUS_GPS_S = int(TAI_MINUS_GPS_S)
 _MJD_UNIX_EPOCH = 40587  # MJD of 1970-01-01
 
 # Fallback: (MJD of the UTC day from which the value holds, TAI - UTC s). IERS Bulletin C 72, Leap_Second.dat.
@@ -177,17 +184,29 @@ def utc_to_gps(year, month, day, hour=0, minute=0, second=0.0,
 
     Implements: GPS = UTC + (TAI - UTC) - 19 s with the offset of the UTC second being labelled.
     """
-    table = table or TABLE
     second = np.asarray(second, dtype=np.float64)
     whole = np.floor(second)
     naive_day_s = (days_from_civil(year, month, day) - (_GPS_EPOCH_MJD - _MJD_UNIX_EPOCH)) * 86400 \
         + np.asarray(hour, dtype=np.int64) * 3600 + np.asarray(minute, dtype=np.int64) * 60
     # Look the offset up with 23:59:60 clipped to 23:59:59, so the leap second keeps the old offset.
-    lookup = naive_day_s + np.minimum(whole, 59).astype(np.int64)
-    steps_naive = (table.mjd_utc - _GPS_EPOCH_MJD) * 86400
-    idx = np.clip(np.searchsorted(steps_naive, lookup, side="right") - 1, 0, len(steps_naive) - 1)
-    offset = table.tai_minus_utc_s[idx] - _TAI_MINUS_GPS_S
+    offset = gps_minus_utc_at_utc_s(naive_day_s + np.minimum(whole, 59).astype(np.int64), table)
     return GpsTime(naive_day_s + whole.astype(np.int64) + offset, second - whole)
+
+
+def gps_minus_utc_at_utc_s(utc_calendar_s, table: LeapSecondTable | None = None) -> np.ndarray:
+    """GPS - UTC (int64 s) at UTC instants given as whole seconds of the UTC calendar since 1980-01-06 00:00.
+
+    Args:
+        utc_calendar_s: int64 array, `GpsTime.from_calendar(<UTC calendar date and time>).s` (RINEX writes
+            GLONASS and some clock/SP3 epochs in UTC).
+    Implements: IERS Bulletin C; the value of the UTC day the instant lies in (a 23:59:60 label must be given
+    as 23:59:59, see `utc_to_gps`).
+    """
+    table = table or TABLE
+    steps_naive = (table.mjd_utc - _GPS_EPOCH_MJD) * 86400
+    idx = np.searchsorted(steps_naive, np.asarray(utc_calendar_s, dtype=np.int64), side="right") - 1
+    idx = np.clip(idx, 0, len(steps_naive) - 1)
+    return table.tai_minus_utc_s[idx] - _TAI_MINUS_GPS_S
 
 
 def gps_to_utc(t: GpsTime, table: LeapSecondTable | None = None):
@@ -229,3 +248,24 @@ def expiry_warning(t: GpsTime, table: LeapSecondTable | None = None) -> str | No
         return None
     return (f"{n} epoch(s) lie after the leap-second table's expiry ({table.expires.isoformat()}, "
             f"{table.source}); UTC and UT1 there may be off by whole seconds if a leap second was announced")
+
+
+def jd_utc(t: GpsTime) -> tuple[np.ndarray, np.ndarray]:
+    """(jd1, jd2): ERFA quasi Julian date in UTC of GPS times `t` (a leap-second day has 86401 s), via erfa.dtf2d.
+
+    Implements: UTC = GPS - (GPS - UTC) with this table (IERS Bulletin C), then the SOFA/ERFA UTC quasi-JD
+    convention of iauDtf2d.
+    """
+    import erfa
+
+    y, mo, d, hh, mi, ss = gps_to_utc(t)
+    return erfa.dtf2d("UTC", y.astype(np.int32), mo.astype(np.int32), d.astype(np.int32),
+                      hh.astype(np.int32), mi.astype(np.int32), ss)
+
+
+def jd_ut1(t: GpsTime, ut1_minus_utc_s=0.0) -> tuple[np.ndarray, np.ndarray]:
+    """(jd1, jd2): two-part Julian date in UT1 = UTC + (UT1 - UTC) [s] of GPS times `t`, UTC from this table.
+
+    Computed as UT1 = GPS - (GPS - UTC) + (UT1 - UTC), a continuous scale (no quasi-JD).
+    """
+    return t.jd_with_offset(np.asarray(ut1_minus_utc_s, dtype=np.float64) - gps_minus_utc_s(t))

@@ -1,7 +1,7 @@
 """Single point positioning (SPP) of one receiver per epoch from code, with RAIM, and velocity from Doppler.
 
 Public API:
-    spp(obs, ephemeris, *, systems=("G",), iono_free=True, elevation_mask_deg=None, ...) -> SppSolution
+    spp(obs, ephemeris, options=SppOptions(...), *, epochs=None) -> SppSolution
     klobuchar_l1_delay_s(...), saastamoinen_delay_m(...)  (the two atmosphere models, also used by others)
 
 Model per epoch k and satellite s (ionosphere-free P1/P2 where both bands exist, else single frequency):
@@ -58,12 +58,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gnssatt.gnss.constants import C_M_S, FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ, OMEGA_EARTH_RAD_S, PI_GPS
+from gnssatt.gnss.constants import C_M_S, OMEGA_EARTH_RAD_S, PI_GPS
 from gnssatt.gnss.frames import R_enu_from_ecef, ecef_to_geodetic
 from gnssatt.gnss.geometry import sagnac_rotate
+from gnssatt.gnss.signals import FREQ_BY_SYSTEM_BAND_HZ, FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ
 from gnssatt.gnss.time import GpsTime
 
-__all__ = ["SppSolution", "spp", "klobuchar_l1_delay_s", "saastamoinen_delay_m", "select_code",
+__all__ = ["SppSolution", "SppOptions", "spp", "klobuchar_l1_delay_s", "saastamoinen_delay_m", "select_code",
            "FLAG_OK", "FLAG_TOO_FEW", "FLAG_NOT_CONVERGED", "FLAG_RAIM_FAILED", "FLAG_RAIM_UNTESTED",
            "FLAG_HIGH_PDOP", "FLAG_NO_VELOCITY", "CODE_PREFERENCE"]
 
@@ -99,8 +100,8 @@ GF_SLIP_M = 0.10
 #: The smoother restarts when the code departs from its phase-propagated prediction by more than this (m):
 #: ~10 sigma of the ionosphere-free code noise; catches gross slips and code-only 1 ms clock jumps (300 km).
 SMOOTH_RESET_M = 20.0
-BAND_FREQ_HZ = {("G", 1): FREQ_GPS_L1_HZ, ("G", 2): FREQ_GPS_L2_HZ, ("J", 1): FREQ_GPS_L1_HZ,
-                ("J", 2): FREQ_GPS_L2_HZ}
+#: carrier frequency of each (system, band number) of the code/phase preferences (gnssatt.gnss.signals)
+BAND_FREQ_HZ = {(s, b): FREQ_BY_SYSTEM_BAND_HZ[(s, str(b))] for s, b in CODE_PREFERENCE}
 
 #: Noise gain of the L1/L2 ionosphere-free combination: sqrt(g1^2 + g2^2), g1 = f1^2/(f1^2-f2^2) = 2.546.
 _G1 = FREQ_GPS_L1_HZ ** 2 / (FREQ_GPS_L1_HZ ** 2 - FREQ_GPS_L2_HZ ** 2)
@@ -130,11 +131,11 @@ CN0_REF_DBHZ = 51.0
 
 #: weighting="auto" takes C/N0 weighting when at least this fraction of the band-1 codes carry a signal-strength digit.
 AUTO_CN0_FRACTION = 0.9
-#: Arc screening (spp(arc_screening=True)): a satellite arc RAIM excluded at this fraction of its fixes, and at
+#: Arc screening (SppOptions(arc_screening=True)): a satellite arc RAIM excluded at this fraction of its fixes, and at
 #: least this many times, is excluded whole (see _arc_exclusions).
 ARC_EXCLUDED_FRACTION = 0.5
 ARC_MIN_EXCLUSIONS = 3
-#: Bounds of the batch a-posteriori variance factor (spp(calibrate_variance=True)): a code noise 10x smaller or
+#: Bounds of the batch a-posteriori variance factor (SppOptions(calibrate_variance=True)): a code noise 10x smaller or
 #: larger than assumed at most.
 VARIANCE_FACTOR_RANGE = (1e-2, 1e2)
 
@@ -370,120 +371,155 @@ def _batch_solve(N: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
     return x, N_inv, cond_ok
 
 
-class _Model:
-    """Per-epoch geometry of one receiver: satellite states, observations and row variances (arrays n x m)."""
+@dataclass(frozen=True)
+class SppOptions:
+    """Options of `spp` (one record instead of 18 keyword arguments); defaults are the service's.
 
-    def __init__(self, P, r_sat, clk_sv, var, sys_col, n_isb):
-        self.P = P              # corrected pseudorange (m): observed + c dt_sv - group delay handled
-        self.r_sat = r_sat      # (n, m, 3) satellite position at emission, ECEF of emission time
-        self.clk_sv = clk_sv    # (n, m) satellite clock (s)
-        self.var = var          # (n, m) base variance (m^2) before elevation weighting
-        self.sys_col = sys_col  # (m,) column of the inter-system bias (-1 for the reference system)
-        self.n_isb = n_isb
-
-
-def spp(obs, ephemeris, *, systems=("G",), iono_free: bool = True, elevation_mask_deg: float | None = None,
-        sigma_code_m: float = 0.3, sigma_ure_m: float | None = None, raim_false_alarm: float = 1e-3,
-        raim_max_exclusions: int = 3, max_pdop: float = 20.0, initial_position_ecef_m=None,
-        klobuchar: tuple | None = None, velocity: bool = True, sigma_range_rate_m_s: float = 0.1,
-        smoothing_window_s: float | None = None, epochs=None, weighting: str = "auto",
-        smooth_variance: bool = True, calibrate_variance: bool = True,
-        arc_screening: bool = True) -> SppSolution:
-    """SppSolution: per-epoch position, clock, velocity, drift, DOPs, residuals and flags of one receiver.
-
-    Args:
-        obs: RinexObs (gnssatt.gnss.io.rinex_obs) of one receiver.
-        ephemeris: a SatelliteEphemeris (gnssatt.gnss.ephemeris: BroadcastEphemeris or PreciseEphemeris).
-        systems: satellite systems to use ('G', 'J'); the first is the clock reference, each other system gets an
-            inter-system bias unknown (QZSS is on GPS time but its receiver biases differ).
-        iono_free: use the L1/L2 ionosphere-free code combination where both bands are present (else
-            single-frequency L1 everywhere); single-frequency rows are then dropped at epochs that have at least
-            unknowns + 1 ionosphere-free rows.
-        elevation_mask_deg: local-horizon mask; default 10 deg for ground receivers and none above 100 km.
-        sigma_code_m: a-priori code noise of one signal (m): at zenith (weighting "elevation") or at 51 dB-Hz
-            (weighting "cn0"); with calibrate_variance it only sets the start, the batch rescales it.
-            sigma_ure_m: orbit + clock error (m), default 1.0 for broadcast and 0.1 for precise ephemerides (the
-            class name decides), else 1.0.
-        raim_false_alarm: probability of the chi-square global test; raim_max_exclusions: satellites RAIM may
-            remove per epoch. max_pdop: epochs above are flagged FLAG_HIGH_PDOP.
-        initial_position_ecef_m: (3,) start of Gauss-Newton; default the header APPROX POSITION or the Earth's
-            centre (which converges for ground and LEO receivers).
-        klobuchar: (alpha, beta) for single-frequency ground rows; default taken from `ephemeris.nav` when it has
-            klobuchar_alpha/beta; none -> no ionosphere correction (flagged nowhere; the residuals show it).
-        velocity: solve velocity and clock drift (Doppler, else carrier-phase rate).
-        sigma_range_rate_m_s: range-rate noise for the velocity chi-square test.
-        smoothing_window_s: when given, the code (ionosphere-free and single-frequency series apart) is
-            carrier-smoothed by the Hatch filter over this window (`hatch_smooth`; arcs cut at LLI, gaps,
-            geometry-free phase jumps > GF_SLIP_M and code-prediction jumps > SMOOTH_RESET_M). Still one
-            independent fix per epoch; the phase only filters the code noise. sigma_code_m then applies to the
-            smoothed code. Keep the window short (~100 s) for single-frequency rows (the ionosphere makes
-            code and phase diverge at 2 dI/dt); the ionosphere-free rows have no divergence.
-        epochs: optional index/mask of the epochs to solve (others are omitted from the result).
-        weighting: "cn0" (signal-strength digits), "elevation", or "auto" (default): "cn0" when at least 90 % of
-            the band-1 codes carry a digit, else "elevation". Measured on GRACE-A (CODE, whole day, code only):
-            1.47 m RMS with "cn0" against 2.39 m with "elevation" (each with calibration and arc screening).
-        smooth_variance: with smoothing, divide the code variance by the samples in the Hatch filter (a fresh
-            arc keeps the raw noise, a converged one is trusted more); default True.
-        calibrate_variance: rescale the a-priori code variance by the batch a-posteriori variance factor (within
-            VARIANCE_FACTOR_RANGE) and solve again; default True. The factor is reported in `variance_factor`.
-        arc_screening: exclude whole arcs RAIM excluded most of the time and solve again (module docstring);
-            default True; the cells removed are reported in `arc_excluded`.
-    Implements: see module docstring.
+    systems: satellite systems to use ('G', 'J'); the first is the clock reference, each other system gets an
+        inter-system bias unknown (QZSS is on GPS time but its receiver biases differ).
+    iono_free: use the L1/L2 ionosphere-free code combination where both bands are present (else single-frequency
+        L1 everywhere); single-frequency rows are then dropped at epochs that have at least unknowns + 1
+        ionosphere-free rows.
+    elevation_mask_deg: local-horizon mask; default 10 deg for ground receivers and none above 100 km.
+    sigma_code_m: a-priori code noise of one signal (m): at zenith (weighting "elevation") or at 51 dB-Hz
+        (weighting "cn0"); with calibrate_variance it only sets the start, the batch rescales it.
+    sigma_ure_m: orbit + clock error (m), default 1.0 for broadcast and 0.1 for precise ephemerides (the class
+        name decides), else 1.0.
+    raim_false_alarm: probability of the chi-square global test; raim_max_exclusions: satellites RAIM may remove
+        per epoch. max_pdop: epochs above are flagged FLAG_HIGH_PDOP.
+    initial_position_ecef_m: (3,) start of Gauss-Newton; default the header APPROX POSITION or the Earth's centre
+        (which converges for ground and LEO receivers).
+    klobuchar: (alpha, beta) for single-frequency ground rows; default taken from `ephemeris.nav` when it has
+        klobuchar_alpha/beta; none -> no ionosphere correction (flagged nowhere; the residuals show it).
+    velocity: solve velocity and clock drift (Doppler, else carrier-phase rate).
+    sigma_range_rate_m_s: range-rate noise for the velocity chi-square test.
+    smoothing_window_s: when given, the code (ionosphere-free and single-frequency series apart) is carrier-
+        smoothed by the Hatch filter over this window (`hatch_smooth`; arcs cut at LLI, gaps, geometry-free phase
+        jumps > GF_SLIP_M and code-prediction jumps > SMOOTH_RESET_M). Still one independent fix per epoch; the
+        phase only filters the code noise. sigma_code_m then applies to the smoothed code. Keep the window short
+        (~100 s) for single-frequency rows (the ionosphere makes code and phase diverge at 2 dI/dt); the
+        ionosphere-free rows have no divergence.
+    weighting: "cn0" (signal-strength digits), "elevation", or "auto" (default): "cn0" when at least 90 % of the
+        band-1 codes carry a digit, else "elevation". Measured on GRACE-A (CODE, whole day, code only): 1.47 m
+        RMS with "cn0" against 2.39 m with "elevation" (each with calibration and arc screening).
+    smooth_variance: with smoothing, divide the code variance by the samples in the Hatch filter (a fresh arc
+        keeps the raw noise, a converged one is trusted more).
+    calibrate_variance: rescale the a-priori code variance by the batch a-posteriori variance factor (within
+        VARIANCE_FACTOR_RANGE) and solve again. The factor is reported in `variance_factor`.
+    arc_screening: exclude whole arcs RAIM excluded most of the time and solve again (module docstring); the
+        cells removed are reported in `arc_excluded`.
     """
-    from scipy.stats import chi2 as chi2_dist
 
+    systems: tuple[str, ...] = ("G",)
+    iono_free: bool = True
+    elevation_mask_deg: float | None = None
+    sigma_code_m: float = 0.3
+    sigma_ure_m: float | None = None
+    raim_false_alarm: float = 1e-3
+    raim_max_exclusions: int = 3
+    max_pdop: float = 20.0
+    initial_position_ecef_m: object = None
+    klobuchar: tuple | None = None
+    velocity: bool = True
+    sigma_range_rate_m_s: float = 0.1
+    smoothing_window_s: float | None = None
+    weighting: str = "auto"
+    smooth_variance: bool = True
+    calibrate_variance: bool = True
+    arc_screening: bool = True
+
+
+@dataclass
+class _Columns:
+    """The epochs and satellite columns of `obs` that spp solves for."""
+
+    sel: np.ndarray           # (n,) epoch indices into obs
+    t_tag: GpsTime            # (n,) receiver time tags
+    cols: np.ndarray          # (m,) satellite columns into obs.sats
+    sats: list[str]           # (m,)
+    sys_list: list[str]       # systems, clock reference first
+    sys_of: np.ndarray        # (m,) system letter per column
+    sys_col: np.ndarray       # (m,) inter-system bias column (-1 for the reference system)
+
+    @property
+    def n_isb(self) -> int:
+        return len(self.sys_list) - 1
+
+    def of_system(self, arr: np.ndarray, sysl: str) -> np.ndarray:
+        """(n, m_sys) cells of an (n_epochs_obs, n_sats_obs) array for the selected epochs and system columns."""
+        return arr[self.sel][:, self.cols[self.sys_of == sysl]]
+
+
+def _columns(obs, systems, epochs) -> _Columns:
     sel = np.arange(len(obs.time)) if epochs is None else np.arange(len(obs.time))[epochs]
-    t_tag = obs.time[sel]
-    n = len(sel)
     sys_list = list(systems)
     sats_all = list(obs.sats)
     cols = np.array([j for j, s in enumerate(sats_all) if s[:1] in sys_list], dtype=np.int64)
     sats = [sats_all[j] for j in cols]
-    m = len(sats)
     sys_of = np.array([s[:1] for s in sats])
-    n_isb = len(sys_list) - 1
     sys_col = np.array([sys_list.index(s) - 1 for s in sys_of], dtype=np.int64)
+    return _Columns(sel, obs.time[sel], cols, sats, sys_list, sys_of, sys_col)
 
-    # --- observations: band-1 code, band-2 code, ionosphere-free where possible ---
+
+def _band_codes(obs, c: _Columns) -> tuple[np.ndarray, np.ndarray]:
+    """(P1, P2) (n, m) m: the preferred band-1 and band-2 code of each cell (CODE_PREFERENCE), NaN where none."""
+    n, m = len(c.sel), len(c.cols)
     P1 = np.full((n, m), np.nan)
     P2 = np.full((n, m), np.nan)
-    for sysl in sys_list:
+    for sysl in c.sys_list:
         c1, _ = select_code(obs, sysl, CODE_PREFERENCE.get((sysl, 1), ()))
         c2, _ = select_code(obs, sysl, CODE_PREFERENCE.get((sysl, 2), ()))
-        mk = sys_of == sysl
-        P1[:, mk] = c1[sel][:, cols[mk]]
-        P2[:, mk] = c2[sel][:, cols[mk]]
+        mk = c.sys_of == sysl
+        P1[:, mk] = c.of_system(c1, sysl)
+        P2[:, mk] = c.of_system(c2, sysl)
+    return P1, P2
+
+
+def _weighting_and_cn0(obs, c: _Columns, P1: np.ndarray, weighting: str):
+    """(weighting, relative variances [q1, q2] (n, m) or None): "auto" resolved; q_i = 10^(-(C/N0_i - 51)/10).
+
+    Implements: the SIGMA-epsilon model (Hartinger & Brunner 1999) with C/N0 ~ 6 d + 3 dB-Hz from the RINEX
+    signal-strength digit d (RINEX 3.04 Table 8).
+    """
     if weighting not in ("auto", "cn0", "elevation"):
         raise ValueError(f"weighting must be 'auto', 'cn0' or 'elevation', not {weighting!r}")
-    ssi_rel = None
+    n, m = P1.shape
     if weighting == "auto":
         # C/N0 weighting when the file gives a signal-strength digit for (nearly) every band-1 code it has
         have, with_digit = 0, 0
-        for sysl in sys_list:
-            mk = sys_of == sysl
-            d1 = _code_ssi(obs, sysl, CODE_PREFERENCE.get((sysl, 1), ()))[sel][:, cols[mk]]
+        for sysl in c.sys_list:
+            mk = c.sys_of == sysl
+            d1 = c.of_system(_code_ssi(obs, sysl, CODE_PREFERENCE.get((sysl, 1), ())), sysl)
             have += int(np.isfinite(P1[:, mk]).sum())
             with_digit += int((np.isfinite(P1[:, mk]) & (d1 > 0)).sum())
         weighting = "cn0" if have and with_digit >= AUTO_CN0_FRACTION * have else "elevation"
-    if weighting == "cn0":
-        ssi_rel = [np.ones((n, m)), np.ones((n, m))]
-        for sysl in sys_list:
-            mk = sys_of == sysl
-            for b in (1, 2):
-                d = _code_ssi(obs, sysl, CODE_PREFERENCE.get((sysl, b), ()))[sel][:, cols[mk]]
-                sub = ssi_rel[b - 1][:, mk]
-                ok_ = d > 0
-                sub[ok_] = 10.0 ** (-(6.0 * d[ok_] + 3.0 - CN0_REF_DBHZ) / 10.0)
-                ssi_rel[b - 1][:, mk] = sub
-    # Gross-error screen before any fit: two band-1 codes (P1 and C1) that disagree, or a P2 - P1 outside what the
-    # ionosphere can do, mark a code not yet locked (seen on GRACE-A at acquisition: P1 100 m off C1).
-    for sysl in sys_list:
-        mk = sys_of == sysl
-        cands = CODE_PREFERENCE.get((sysl, 1), ())
+    if weighting != "cn0":
+        return weighting, None
+    ssi_rel = [np.ones((n, m)), np.ones((n, m))]
+    for sysl in c.sys_list:
+        mk = c.sys_of == sysl
+        for b in (1, 2):
+            d = c.of_system(_code_ssi(obs, sysl, CODE_PREFERENCE.get((sysl, b), ())), sysl)
+            sub = ssi_rel[b - 1][:, mk]
+            ok_ = d > 0
+            sub[ok_] = 10.0 ** (-(6.0 * d[ok_] + 3.0 - CN0_REF_DBHZ) / 10.0)
+            ssi_rel[b - 1][:, mk] = sub
+    return weighting, ssi_rel
+
+
+def _screen_codes(obs, c: _Columns, P1: np.ndarray, P2: np.ndarray) -> np.ndarray:
+    """Blank codes not yet locked (in place on P1, P2); returns P2 with implausible P2 - P1 removed.
+
+    Two band-1 codes (P1 and C1) that disagree by more than CODE_CONSISTENCY_M, or a P2 - P1 outside what the
+    ionosphere can do (GF_CODE_RANGE_M), mark a code not yet locked (seen on GRACE-A at acquisition: P1 100 m
+    off C1).
+    """
+    for sysl in c.sys_list:
+        mk = c.sys_of == sysl
         vals = []
-        for code in cands:
+        for code in CODE_PREFERENCE.get((sysl, 1), ()):
             try:
-                vals.append(obs.get(code, sysl)[sel][:, cols[mk]])
+                vals.append(c.of_system(obs.get(code, sysl), sysl))
             except KeyError:
                 continue
         if len(vals) >= 2:
@@ -495,30 +531,66 @@ def spp(obs, ephemeris, *, systems=("G",), iono_free: bool = True, elevation_mas
             sub1[bad], sub2[bad] = np.nan, np.nan
             P1[:, mk], P2[:, mk] = sub1, sub2
     gf_code = P2 - P1
-    P2 = np.where(np.isfinite(gf_code) & ((gf_code < GF_CODE_RANGE_M[0]) | (gf_code > GF_CODE_RANGE_M[1])),
-                  np.nan, P2)
-    use_if = np.isfinite(P1) & np.isfinite(P2) if iono_free else np.zeros((n, m), dtype=bool)
+    return np.where(np.isfinite(gf_code) & ((gf_code < GF_CODE_RANGE_M[0]) | (gf_code > GF_CODE_RANGE_M[1])),
+                    np.nan, P2)
+
+
+@dataclass
+class _Codes:
+    """The code observable of each cell and what it is made of."""
+
+    P_obs: np.ndarray     # (n, m) m: ionosphere-free (smoothed) code where use_if, else band-1 (smoothed)
+    P_raw: np.ndarray     # (n, m) m: a raw code, for the emission time only (10 m -> 0.1 mm of orbit)
+    use_if: np.ndarray    # (n, m) bool: ionosphere-free row
+    has: np.ndarray       # (n, m) bool: a row is formed
+    n_smooth: np.ndarray  # (n, m) samples in the Hatch filter (1 without smoothing)
+
+
+def _code_observables(obs, c: _Columns, P1: np.ndarray, P2: np.ndarray, opts: SppOptions) -> _Codes:
+    """_Codes: P_IF = g1 P1 - g2 P2 (g1 = 2.546, g2 = 1.546) where both bands exist, optionally Hatch-smoothed.
+
+    Ionosphere-free rows only, where an epoch has enough of them for a tested fix (unknowns + 1): a single-
+    frequency row keeps the ionospheric delay (metres; for a spacecraft nothing models it), which biases the fix
+    more than the lost geometry costs. Epochs short of IF rows keep their single-frequency rows.
+    """
+    n, m = P1.shape
+    use_if = np.isfinite(P1) & np.isfinite(P2) if opts.iono_free else np.zeros((n, m), dtype=bool)
     P_if = _G1 * P1 - _G2 * P2
     n_smooth = np.ones((n, m))
-    if smoothing_window_s is not None:
-        P1s, P_ifs, n_smooth = _smoothed_codes(obs, sel, cols, sys_list, sys_of, t_tag, P1, P_if, use_if,
-                                               float(smoothing_window_s))
+    if opts.smoothing_window_s is not None:
+        P1s, P_ifs, n_smooth = _smoothed_codes(obs, c, P1, P_if, use_if, float(opts.smoothing_window_s))
     else:
         P1s, P_ifs = P1, P_if
-    P_raw = np.where(np.isfinite(P1), P1, P2)  # for the emission time only (10 m -> 0.1 mm of orbit)
+    P_raw = np.where(np.isfinite(P1), P1, P2)
     has = np.isfinite(P1) | use_if
-    if iono_free:
-        # Ionosphere-free rows only, where an epoch has enough of them for a tested fix (unknowns + 1): a single-
-        # frequency row keeps the ionospheric delay (metres; for a spacecraft nothing models it), which biases
-        # the fix more than the lost geometry costs. Epochs short of IF rows keep their single-frequency rows.
+    if opts.iono_free:
         n_if = use_if.sum(axis=1)
-        has = np.where((n_if >= 4 + n_isb + 1)[:, None], use_if, has)
-    P_obs = np.where(use_if, P_ifs, P1s)
+        has = np.where((n_if >= 4 + c.n_isb + 1)[:, None], use_if, has)
+    return _Codes(np.where(use_if, P_ifs, P1s), P_raw, use_if, has, n_smooth)
 
-    # --- satellite states at emission (t_tx = T_tag - P/c - dt_sv, two passes for dt_sv) ---
+
+@dataclass
+class _SatStates:
+    """Satellite states at emission and the clock-corrected code of each cell."""
+
+    r_sat: np.ndarray     # (n, m, 3) m, ECEF of emission time
+    v_sat: np.ndarray     # (n, m, 3) m/s
+    clk_rate: np.ndarray  # (n, m) s/s
+    single: np.ndarray    # (n, m) bool: single-frequency row
+    P_corr: np.ndarray    # (n, m) m: P + c (dt_sv - T_GD on single-frequency rows)
+    avail: np.ndarray     # (n, m) bool: usable row
+
+
+def _satellite_states(ephemeris, c: _Columns, codes: _Codes) -> _SatStates:
+    """_SatStates at t_tx = T_tag - P/c - dt_sv (two passes for dt_sv; RTKLIB `satposs`).
+
+    Implements: IS-GPS-200 20.3.3.3.3.2 (single-frequency users subtract T_GD from the satellite clock).
+    """
+    t_tag, has, use_if = c.t_tag, codes.has, codes.use_if
+    n, m = has.shape
     ii, jj = np.nonzero(has)
-    sat_ids = np.array(sats, dtype=object)[jj].astype(str) if ii.size else np.array([], dtype=str)
-    t_tx = GpsTime(t_tag.s[ii], t_tag.frac[ii]) - P_raw[ii, jj] / C_M_S
+    sat_ids = np.array(c.sats, dtype=object)[jj].astype(str) if ii.size else np.array([], dtype=str)
+    t_tx = GpsTime(t_tag.s[ii], t_tag.frac[ii]) - codes.P_raw[ii, jj] / C_M_S
     st = ephemeris.state(sat_ids, t_tx)
     t_tx = t_tx - np.nan_to_num(st.clock_s)
     st = ephemeris.state(sat_ids, t_tx)
@@ -532,51 +604,67 @@ def spp(obs, ephemeris, *, systems=("G",), iono_free: bool = True, elevation_mas
     single = has & ~use_if
     if np.any(single):
         si, sj = np.nonzero(single)
-        g = ephemeris.group_delay_s(np.array(sats, dtype=object)[sj].astype(str),
+        g = ephemeris.group_delay_s(np.array(c.sats, dtype=object)[sj].astype(str),
                                     GpsTime(t_tag.s[si], t_tag.frac[si]))
         tgd[si, sj] = np.nan_to_num(g)
     # P + c dt_sv(L1 user) ; the L1 user's clock is dt_sv - T_GD
-    P_corr = P_obs + C_M_S * (clk_sv - np.where(single, tgd, 0.0))
+    P_corr = codes.P_obs + C_M_S * (clk_sv - np.where(single, tgd, 0.0))
     avail = has & np.isfinite(P_corr) & np.all(np.isfinite(r_sat), axis=-1)
+    return _SatStates(r_sat, v_sat, clk_rate, single, P_corr, avail)
 
-    if sigma_ure_m is None:
-        name = type(ephemeris).__name__
-        sigma_ure_m = 0.1 if "Precise" in name else 1.0
+
+def _a_priori_variance(codes: _Codes, ssi_rel, weighting: str, opts: SppOptions) -> np.ndarray:
+    """(n, m) m^2: sigma_code^2 q / N before elevation weighting, q = g1^2 q1 + g2^2 q2 (IF) or q1 (module doc)."""
+    use_if = codes.use_if
     if weighting == "cn0":
         rel1, rel2 = ssi_rel[0], ssi_rel[1]
-        var0 = sigma_code_m ** 2 * np.where(use_if, _G1 ** 2 * rel1 + _G2 ** 2 * rel2, rel1)
+        var0 = opts.sigma_code_m ** 2 * np.where(use_if, _G1 ** 2 * rel1 + _G2 ** 2 * rel2, rel1)
     else:
-        var0 = sigma_code_m ** 2 * np.where(use_if, IF_NOISE_GAIN ** 2, 1.0)
-    if smooth_variance:
-        var0 = var0 / n_smooth
+        var0 = opts.sigma_code_m ** 2 * np.where(use_if, IF_NOISE_GAIN ** 2, 1.0)
+    if opts.smooth_variance:
+        var0 = var0 / codes.n_smooth
+    return var0
 
-    if klobuchar is None:
-        nav = getattr(ephemeris, "nav", None)
-        a_ = getattr(nav, "klobuchar_alpha", None)
-        b_ = getattr(nav, "klobuchar_beta", None)
-        klobuchar = (a_, b_) if a_ is not None and b_ is not None else None
-    _, sow = t_tag.week_sow()
 
-    # --- initial position ---
-    x0 = np.zeros(3)
-    if initial_position_ecef_m is not None:
-        x0 = np.asarray(initial_position_ecef_m, dtype=np.float64)
-    elif getattr(obs.header, "approx_position_ecef_m", None) is not None:
-        x0 = np.asarray(obs.header.approx_position_ecef_m, dtype=np.float64)
-    p = 4 + n_isb
-    x = np.zeros((n, p))
-    x[:, :3] = x0
+def _klobuchar_of(ephemeris, klobuchar):
+    """(alpha, beta) given, else those of `ephemeris.nav`, else None."""
+    if klobuchar is not None:
+        return klobuchar
+    nav = getattr(ephemeris, "nav", None)
+    a_ = getattr(nav, "klobuchar_alpha", None)
+    b_ = getattr(nav, "klobuchar_beta", None)
+    return (a_, b_) if a_ is not None and b_ is not None else None
 
-    # A weak prior (sigma 1 km) on each inter-system bias keeps an epoch without satellites of that system solvable.
-    isb_prior = np.zeros((p, p))
-    for k in range(n_isb):
-        isb_prior[4 + k, 4 + k] = 1e-6
-    use = avail.copy()
-    excluded = np.zeros((n, m), dtype=bool)
-    flags = np.zeros(n, dtype=np.int64)
 
-    def model(xk, rows_mask):
-        """(residual v, design H, variance var, elevation, azimuth, sagnac-rotated r_sat) for epochs xk."""
+class _SppProblem:
+    """The batched WLS problem of one receiver: the measurement model, Gauss-Newton and RAIM over all epochs.
+
+    Implements: the module docstring's model (Sagnac, Saastamoinen below TROPO_MAX_HEIGHT_M, Klobuchar for
+    single-frequency ground rows), RAIM by the chi-square global test and the largest standardised residual.
+    """
+
+    def __init__(self, c: _Columns, sat: _SatStates, var0: np.ndarray, weighting: str, klobuchar, sigma_ure_m: float,
+                 opts: SppOptions):
+        self.c, self.sat, self.var0, self.weighting = c, sat, var0, weighting
+        self.klobuchar, self.sigma_ure_m, self.opts = klobuchar, sigma_ure_m, opts
+        self.n_isb = c.n_isb
+        self.p = 4 + self.n_isb
+        _, self.sow = c.t_tag.week_sow()
+        # A weak prior (sigma 1 km) on each inter-system bias keeps an epoch without satellites of that system
+        # solvable.
+        self.isb_prior = np.zeros((self.p, self.p))
+        for k in range(self.n_isb):
+            self.isb_prior[4 + k, 4 + k] = 1e-6
+
+    def mask_deg(self, ground):
+        if self.opts.elevation_mask_deg is not None:
+            return np.where(ground, self.opts.elevation_mask_deg, -90.0)
+        return np.where(ground, 10.0, -90.0)
+
+    def model(self, xk, rows_mask):
+        """(residual v, design H, variance var, elevation, azimuth, ground) for the epochs `rows_mask` at xk."""
+        sys_col, n_isb, p, klobuchar = self.c.sys_col, self.n_isb, self.p, self.klobuchar
+        r_sat = self.sat.r_sat
         r_rx = xk[:, :3]
         d0 = r_sat[rows_mask] - r_rx[:, None, :]
         tau = np.linalg.norm(d0, axis=-1) / C_M_S
@@ -593,16 +681,16 @@ def spp(obs, ephemeris, *, systems=("G",), iono_free: bool = True, elevation_mas
         trop = np.where(ground, saastamoinen_delay_m(lat[:, None], h[:, None], el), 0.0)
         iono = np.zeros_like(rho)
         if klobuchar is not None:
-            sgl = single[rows_mask]
+            sgl = self.sat.single[rows_mask]
             kl = klobuchar_l1_delay_s(klobuchar[0], klobuchar[1], lat[:, None], lon[:, None], az, el,
-                                      sow[rows_mask][:, None]) * C_M_S
+                                      self.sow[rows_mask][:, None]) * C_M_S
             iono = np.where(ground & sgl & (el > 0), kl, 0.0)
         cdt = xk[:, 3:4]
         isb = np.zeros_like(rho)
         if n_isb:
             for k in range(n_isb):
                 isb = isb + np.where(sys_col[None, :] == k, xk[:, 4 + k][:, None], 0.0)
-        v = P_corr[rows_mask] - (rho + cdt + isb + trop + iono)
+        v = self.sat.P_corr[rows_mask] - (rho + cdt + isb + trop + iono)
         H = np.zeros(rho.shape + (p,))
         H[..., :3] = -e
         H[..., 3] = 1.0
@@ -615,31 +703,36 @@ def spp(obs, ephemeris, *, systems=("G",), iono_free: bool = True, elevation_mas
         dip = np.arccos(np.clip(6371e3 / (6371e3 + np.maximum(h, 0.0)), -1.0, 1.0))
         el_w = np.where(ground, el, el + dip[:, None])
         sin_el = np.maximum(np.sin(el_w), np.sin(np.radians(5.0)))
-        el_factor = (1.0 + 1.0 / sin_el ** 2) if weighting != "cn0" else 1.0
-        var = var0[rows_mask] * el_factor + sigma_ure_m ** 2
+        el_factor = (1.0 + 1.0 / sin_el ** 2) if self.weighting != "cn0" else 1.0
+        var = self.var0[rows_mask] * el_factor + self.sigma_ure_m ** 2
         return v, H, var, el, az, ground
 
-    def gauss_newton(rows, xk, usek):
+    def n_unknowns(self, u: np.ndarray) -> np.ndarray:
+        """(k,) position + clock + one bias per extra system that has a row in `u` (k, m)."""
+        sys_col = self.c.sys_col
+        return 4 + np.sum([np.any(u & (sys_col[None, :] == k), axis=1) for k in range(self.n_isb)], axis=0)
+
+    def gauss_newton(self, rows, xk, usek):
         """Iterate the batched WLS on epochs `rows` (index array) from xk; returns x, N_inv, ok, converged.
 
         Epochs leave the iteration once converged (or singular): later iterations solve only the others.
         """
+        p = self.p
         xk = np.array(xk, dtype=np.float64, copy=True)
         conv = np.zeros(len(rows), dtype=bool)
         N_inv = np.zeros((len(rows), p, p))
         ok = np.ones(len(rows), dtype=bool)
         act = np.arange(len(rows))
         for it in range(GN_MAX_ITER):
-            v, H, var, el, az, ground = model(xk[act], rows[act])
+            v, H, var, el, az, ground = self.model(xk[act], rows[act])
             u = usek[act].copy()
             if it >= 1:  # the elevation mask needs a position first
-                u &= ~(ground & (el < np.radians(mask_deg(ground))))
+                u &= ~(ground & (el < np.radians(self.mask_deg(ground))))
             w = np.where(u, 1.0 / var, 0.0)
             v0 = np.where(u, v, 0.0)
-            N = np.einsum("ksi,ks,ksj->kij", H, w, H) + isb_prior
+            N = np.einsum("ksi,ks,ksj->kij", H, w, H) + self.isb_prior
             b = np.einsum("ksi,ks,ks->ki", H, w, v0)
-            enough = u.sum(1) >= 4 + np.sum([np.any(u & (sys_col[None, :] == k), axis=1) for k in range(n_isb)],
-                                            axis=0)
+            enough = u.sum(1) >= self.n_unknowns(u)
             dx, N_inv_a, ok_a = _batch_solve(N, b)
             ok_a &= enough
             dx = np.where(ok_a[:, None], dx, 0.0)
@@ -651,30 +744,31 @@ def spp(obs, ephemeris, *, systems=("G",), iono_free: bool = True, elevation_mas
                 break
         return xk, N_inv, ok, conv
 
-    def mask_deg(ground):
-        if elevation_mask_deg is not None:
-            return np.where(ground, elevation_mask_deg, -90.0)
-        return np.where(ground, 10.0, -90.0)
+    def solve_with_raim(self, x, use, excluded):
+        """Batched Gauss-Newton + RAIM exclusion loop over all epochs; updates use/excluded in place.
 
-    rows = np.arange(n)
+        Returns (x, N_inv, ok, conv, T, dof): T = v'Wv, dof = rows - unknowns.
+        """
+        from scipy.stats import chi2 as chi2_dist
 
-    def solve_with_raim(x, use, excluded):
-        """Batched Gauss-Newton + RAIM exclusion loop over all epochs; updates use/excluded in place."""
-        x, N_inv_all, ok, conv = gauss_newton(rows, x, use)
+        opts, p = self.opts, self.p
+        n = len(x)
+        rows = np.arange(n)
+        x, N_inv_all, ok, conv = self.gauss_newton(rows, x, use)
         T = np.zeros(n)
         dof = np.zeros(n, dtype=np.int64)
         idx = rows  # epochs whose test statistic is (re)computed this round: all, then the re-solved ones
         # --- RAIM loop: re-solve failing epochs without their worst satellite ---
-        for _round in range(raim_max_exclusions + 1):
-            v, H, var, el, az, ground = model(x[idx], idx)
-            u = use[idx] & ~(ground & (el < np.radians(mask_deg(ground))))
+        for _round in range(opts.raim_max_exclusions + 1):
+            v, H, var, el, az, ground = self.model(x[idx], idx)
+            u = use[idx] & ~(ground & (el < np.radians(self.mask_deg(ground))))
             w = np.where(u, 1.0 / var, 0.0)
             T[idx] = np.einsum("ks,ks->k", w, np.where(u, v, 0.0) ** 2)
             dof[idx] = u.sum(1) - p
             d_i = dof[idx]
-            thr = np.where(d_i > 0, chi2_dist.ppf(1.0 - raim_false_alarm, np.maximum(d_i, 1)), np.inf)
+            thr = np.where(d_i > 0, chi2_dist.ppf(1.0 - opts.raim_false_alarm, np.maximum(d_i, 1)), np.inf)
             fail = ok[idx] & conv[idx] & (d_i >= 2) & (T[idx] > thr)  # keep one redundant row to test again
-            if _round == raim_max_exclusions or not np.any(fail):
+            if _round == opts.raim_max_exclusions or not np.any(fail):
                 break
             loc = np.flatnonzero(fail)
             cand = idx[loc]
@@ -687,88 +781,153 @@ def spp(obs, ephemeris, *, systems=("G",), iono_free: bool = True, elevation_mas
             worst = np.argmax(std, axis=1)
             use[cand, worst] = False
             excluded[cand, worst] = True
-            xs, N_inv_c, ok_c, conv_c = gauss_newton(cand, x[cand], use[cand])
+            xs, N_inv_c, ok_c, conv_c = self.gauss_newton(cand, x[cand], use[cand])
             x[cand], N_inv_all[cand], ok[cand], conv[cand] = xs, N_inv_c, ok_c, conv_c
             idx = cand
         return x, N_inv_all, ok, conv, T, dof
 
-    x_start = x.copy()
-    x, N_inv_all, ok, conv, T, dof = solve_with_raim(x, use, excluded)
+
+@dataclass
+class _Fix:
+    """The state of the batch after a RAIM solve."""
+
+    x: np.ndarray
+    ok: np.ndarray
+    conv: np.ndarray
+    use: np.ndarray
+    excluded: np.ndarray
+    variance_factor: float = 1.0
+    arc_excluded: np.ndarray | None = None
+
+
+def _solve_batch(prob: _SppProblem, x_start: np.ndarray) -> _Fix:
+    """_Fix after RAIM, the a-posteriori variance calibration and the arc screening (each re-solves the batch).
+
+    The variance factor is the median of T over its chi-square median across the epochs that passed RAIM with
+    redundancy: the a-priori code noise becomes that of this receiver, so that the RAIM test is neither blind
+    (sigma too large) nor trigger-happy (too small).
+    """
+    from scipy.stats import chi2 as chi2_dist
+
+    opts, sat, t_tag = prob.opts, prob.sat, prob.c.t_tag
+    n, m = sat.avail.shape
+    use = sat.avail.copy()
+    excluded = np.zeros((n, m), dtype=bool)
+    x, N_inv_all, ok, conv, T, dof = prob.solve_with_raim(x_start.copy(), use, excluded)
     variance_factor = 1.0
-    if calibrate_variance:
-        # One robust a-posteriori variance factor for the whole batch (the median of T / its chi-square median
-        # over the epochs that passed RAIM with redundancy): the a-priori code noise becomes that of this
-        # receiver, so that the RAIM test is neither blind (sigma too large) nor trigger-happy (too small).
+    if opts.calibrate_variance:
         good0 = ok & conv & (dof > 0)
         if good0.sum() >= 10:
             f = float(np.median(T[good0] / chi2_dist.ppf(0.5, dof[good0])))
             if np.isfinite(f) and f > 0:
                 variance_factor = float(np.clip(f, VARIANCE_FACTOR_RANGE[0], VARIANCE_FACTOR_RANGE[1]))
-                var0 = var0 * variance_factor
-                use = avail.copy()
+                prob.var0 = prob.var0 * variance_factor
+                use = sat.avail.copy()
                 excluded[:] = False
                 x = np.where((ok & conv)[:, None], x, x_start)
-                x, N_inv_all, ok, conv, T, dof = solve_with_raim(x, use, excluded)
+                x, N_inv_all, ok, conv, T, dof = prob.solve_with_raim(x, use, excluded)
     arc_excluded = np.zeros((n, m), dtype=bool)
-    if arc_screening and raim_max_exclusions > 0:
-        arc_excluded = _arc_exclusions(avail, excluded, ok & conv, t_tag)
+    if opts.arc_screening and opts.raim_max_exclusions > 0:
+        arc_excluded = _arc_exclusions(sat.avail, excluded, ok & conv, t_tag)
         if arc_excluded.any():
-            use = avail & ~arc_excluded
+            use = sat.avail & ~arc_excluded
             excluded = arc_excluded.copy()
             x = np.where((ok & conv)[:, None], x, x_start)
-            x, N_inv_all, ok, conv, T, dof = solve_with_raim(x, use, excluded)
+            x, N_inv_all, ok, conv, T, dof = prob.solve_with_raim(x, use, excluded)
+    return _Fix(x, ok, conv, use, excluded, variance_factor, arc_excluded)
 
-    v, H, var, el, az, ground = model(x, rows)
-    used = use & ~(ground & (el < np.radians(mask_deg(ground))))
+
+def _initial_state(obs, opts: SppOptions, n: int, p: int) -> np.ndarray:
+    """(n, p) Gauss-Newton start: the given position, else the header's APPROX POSITION, else the geocentre."""
+    x0 = np.zeros(3)
+    if opts.initial_position_ecef_m is not None:
+        x0 = np.asarray(opts.initial_position_ecef_m, dtype=np.float64)
+    elif getattr(obs.header, "approx_position_ecef_m", None) is not None:
+        x0 = np.asarray(obs.header.approx_position_ecef_m, dtype=np.float64)
+    x = np.zeros((n, p))
+    x[:, :3] = x0
+    return x
+
+
+def _final_solution(obs, prob: _SppProblem, fix: _Fix, codes: _Codes) -> SppSolution:
+    """SppSolution from the solved batch: final test, flags, DOPs (unit weights), velocity and drift."""
+    from scipy.stats import chi2 as chi2_dist
+
+    opts, c, sat = prob.opts, prob.c, prob.sat
+    x, use, n_isb, p = fix.x, fix.use, prob.n_isb, prob.p
+    n = len(x)
+    flags = np.zeros(n, dtype=np.int64)
+    v, H, var, el, az, ground = prob.model(x, np.arange(n))
+    used = use & ~(ground & (el < np.radians(prob.mask_deg(ground))))
     w = np.where(used, 1.0 / var, 0.0)
     T = np.einsum("ks,ks->k", w, np.where(used, v, 0.0) ** 2)
-    dof = used.sum(1) - (4 + np.sum([np.any(used & (sys_col[None, :] == k), axis=1) for k in range(n_isb)],
-                                     axis=0))
-    thr = np.where(dof > 0, chi2_dist.ppf(1.0 - raim_false_alarm, np.maximum(dof, 1)), np.inf)
-    N = np.einsum("ksi,ks,ksj->kij", H, w, H) + isb_prior
+    n_par = prob.n_unknowns(used)
+    dof = used.sum(1) - n_par
+    thr = np.where(dof > 0, chi2_dist.ppf(1.0 - opts.raim_false_alarm, np.maximum(dof, 1)), np.inf)
+    N = np.einsum("ksi,ks,ksj->kij", H, w, H) + prob.isb_prior
     _, N_inv_all, ok2, = _batch_solve(N, np.zeros((n, p)))
-    n_par = 4 + np.sum([np.any(used & (sys_col[None, :] == k), axis=1) for k in range(n_isb)], axis=0)
     few = used.sum(1) < n_par
-    ok &= ok2 & ~few
+    ok = fix.ok & ok2 & ~few
     flags |= np.where(few, FLAG_TOO_FEW, 0)
-    flags |= np.where(~few & ~(ok & conv), FLAG_NOT_CONVERGED, 0)
-    good = ok & conv
+    flags |= np.where(~few & ~(ok & fix.conv), FLAG_NOT_CONVERGED, 0)
+    good = ok & fix.conv
     flags |= np.where(good & (dof > 0) & (T > thr), FLAG_RAIM_FAILED, 0)
     flags |= np.where(good & (dof == 0), FLAG_RAIM_UNTESTED, 0)
-    pdop, gdop = _dops(N_inv_all[:, :4, :4] / np.maximum(1e-300, 1.0))
     # DOPs from unit weights (geometry only)
     N_unit = np.einsum("ksi,ks,ksj->kij", H[..., :4], used.astype(float), H[..., :4])
     _, N_unit_inv, ok_u = _batch_solve(N_unit, np.zeros((n, 4)))
     pdop, gdop = _dops(N_unit_inv)
     pdop = np.where(ok_u, pdop, np.nan)
     gdop = np.where(ok_u, gdop, np.nan)
-    flags |= np.where(good & (pdop > max_pdop), FLAG_HIGH_PDOP, 0)
+    flags |= np.where(good & (pdop > opts.max_pdop), FLAG_HIGH_PDOP, 0)
 
     pos = np.where(good[:, None], x[:, :3], np.nan)
     clock = np.where(good, x[:, 3] / C_M_S, np.nan)
-    resid = np.where(used & good[:, None], v, np.nan)
-    cov = np.where(good[:, None, None], N_inv_all[:, :4, :4], np.nan)
-    time = t_tag - np.nan_to_num(clock)
-
-    # --- velocity and clock drift ---
     vel = np.full((n, 3), np.nan)
     drift = np.full(n, np.nan)
     vsource = "none"
-    if velocity:
-        rr, vsource = _range_rates(obs, sel, cols, sys_list, sys_of, t_tag)
+    if opts.velocity:
+        rr, vsource = _range_rates(obs, c)
         if rr is not None:
-            vel, drift = _solve_velocity(rr, pos, r_sat, v_sat, clk_rate, used & good[:, None],
-                                         sigma_range_rate_m_s, raim_false_alarm, raim_max_exclusions)
+            vel, drift = _solve_velocity(rr, pos, sat.r_sat, sat.v_sat, sat.clk_rate, used & good[:, None],
+                                         opts.sigma_range_rate_m_s, opts.raim_false_alarm, opts.raim_max_exclusions)
     flags |= np.where(np.isnan(drift), FLAG_NO_VELOCITY, 0)
 
     return SppSolution(
-        sats=sats, time_tag=t_tag, time=time, position_ecef_m=pos, clock_s=clock, velocity_ecef_m_s=vel,
-        clock_drift_s_s=drift, n_sats=np.where(good, used.sum(1), 0), pdop=pdop, gdop=gdop,
-        chi2=np.where(good, T, np.nan), residuals_m=resid, used=used & good[:, None], excluded=excluded,
-        iono_free=use_if, elevation_deg=np.degrees(el), azimuth_deg=np.degrees(az), covariance=cov, flags=flags,
-        velocity_source=vsource, isb_systems=sys_list[1:],
-        isb_m=np.where(good[:, None], x[:, 4:], np.nan) if n_isb else None, weighting=weighting,
-        variance_factor=variance_factor, arc_excluded=arc_excluded)
+        sats=c.sats, time_tag=c.t_tag, time=c.t_tag - np.nan_to_num(clock), position_ecef_m=pos, clock_s=clock,
+        velocity_ecef_m_s=vel, clock_drift_s_s=drift, n_sats=np.where(good, used.sum(1), 0), pdop=pdop, gdop=gdop,
+        chi2=np.where(good, T, np.nan), residuals_m=np.where(used & good[:, None], v, np.nan),
+        used=used & good[:, None], excluded=fix.excluded, iono_free=codes.use_if, elevation_deg=np.degrees(el),
+        azimuth_deg=np.degrees(az), covariance=np.where(good[:, None, None], N_inv_all[:, :4, :4], np.nan),
+        flags=flags, velocity_source=vsource, isb_systems=c.sys_list[1:],
+        isb_m=np.where(good[:, None], x[:, 4:], np.nan) if n_isb else None, weighting=prob.weighting,
+        variance_factor=fix.variance_factor, arc_excluded=fix.arc_excluded)
+
+
+def spp(obs, ephemeris, options: SppOptions | None = None, *, epochs=None) -> SppSolution:
+    """SppSolution: per-epoch position, clock, velocity, drift, DOPs, residuals and flags of one receiver.
+
+    Args:
+        obs: RinexObs (gnssatt.gnss.io.rinex_obs) of one receiver.
+        ephemeris: a SatelliteEphemeris (gnssatt.gnss.ephemeris: BroadcastEphemeris or PreciseEphemeris).
+        options: SppOptions (systems, ionosphere-free, weighting, RAIM, smoothing, ...); default SppOptions().
+        epochs: optional index/mask of the epochs to solve (others are omitted from the result).
+    Implements: see module docstring.
+    """
+    opts = options if options is not None else SppOptions()
+    c = _columns(obs, opts.systems, epochs)
+    P1, P2 = _band_codes(obs, c)
+    weighting, ssi_rel = _weighting_and_cn0(obs, c, P1, opts.weighting)
+    P2 = _screen_codes(obs, c, P1, P2)
+    codes = _code_observables(obs, c, P1, P2, opts)
+    sat = _satellite_states(ephemeris, c, codes)
+    sigma_ure_m = opts.sigma_ure_m
+    if sigma_ure_m is None:
+        sigma_ure_m = 0.1 if "Precise" in type(ephemeris).__name__ else 1.0
+    var0 = _a_priori_variance(codes, ssi_rel, weighting, opts)
+    prob = _SppProblem(c, sat, var0, weighting, _klobuchar_of(ephemeris, opts.klobuchar), sigma_ure_m, opts)
+    fix = _solve_batch(prob, _initial_state(obs, opts, len(c.sel), prob.p))
+    return _final_solution(obs, prob, fix, codes)
 
 
 def hatch_smooth(code_m, phase_m, slip, t: GpsTime, window_s: float, *, max_gap_s: float,
@@ -809,8 +968,10 @@ def hatch_smooth(code_m, phase_m, slip, t: GpsTime, window_s: float, *, max_gap_
     return out, count
 
 
-def _smoothed_codes(obs, sel, cols, sys_list, sys_of, t_tag, P1, P_if, use_if, window_s):
-    """(smoothed band-1 code, smoothed ionosphere-free code), (n, m) each, for `spp(smoothing_window_s=...)`."""
+def _smoothed_codes(obs, c: _Columns, P1, P_if, use_if, window_s):
+    """(smoothed band-1 code, smoothed ionosphere-free code, samples), (n, m) each, for
+    `SppOptions(smoothing_window_s=...)`."""
+    sel, cols, sys_list, sys_of, t_tag = c.sel, c.cols, c.sys_list, c.sys_of, c.t_tag
     n, m = P1.shape
     L1 = np.full((n, m), np.nan)
     L2 = np.full((n, m), np.nan)
@@ -847,8 +1008,9 @@ def _smoothed_codes(obs, sel, cols, sys_list, sys_of, t_tag, P1, P_if, use_if, w
     return np.where(use_if, P1, p1), np.where(use_if, p_if, P_if), np.maximum(count, 1)
 
 
-def _range_rates(obs, sel, cols, sys_list, sys_of, t_tag) -> tuple[np.ndarray | None, str]:
+def _range_rates(obs, c: _Columns) -> tuple[np.ndarray | None, str]:
     """(range rates (n, m) m/s from Doppler -lambda D, or from L1 phase rate, and the source name)."""
+    sel, cols, sys_list, sys_of = c.sel, c.cols, c.sys_list, c.sys_of
     lam = C_M_S / FREQ_GPS_L1_HZ
     n, m = len(sel), len(cols)
     rr = np.full((n, m), np.nan)

@@ -179,11 +179,8 @@ class SatelliteAntennaOffsets:
         BeiDou ('C02', 'C07'), GLONASS ('R01', 'R02'). PCO_IF = (f1^2 PCO_1 - f2^2 PCO_2) / (f1^2 - f2^2); a
         single listed frequency is used as it is.
         """
-        from gnssatt.gnss.constants import FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ
+        from gnssatt.gnss.signals import antex_frequency_hz
 
-        freq_hz = {"G01": FREQ_GPS_L1_HZ, "G02": FREQ_GPS_L2_HZ, "G05": 1176.45e6, "E01": 1575.42e6,
-                   "E05": 1176.45e6, "E07": 1207.14e6, "J01": 1575.42e6, "J02": FREQ_GPS_L2_HZ,
-                   "C02": 1561.098e6, "C07": 1207.14e6, "C06": 1268.52e6, "R01": 1602.0e6, "R02": 1246.0e6}
         pairs = {"G": ("G01", "G02"), "E": ("E01", "E05"), "J": ("J01", "J02"), "C": ("C02", "C07"),
                  "R": ("R01", "R02")}
         if frequencies:
@@ -196,7 +193,7 @@ class SatelliteAntennaOffsets:
             f = {fp.code: np.asarray(fp.neu_mm, dtype=np.float64) * 1e-3 for fp in p.frequencies}
             a, b = pairs[sat[0]]
             if a in f and b in f:
-                fa, fb = freq_hz.get(a), freq_hz.get(b)
+                fa, fb = antex_frequency_hz(a), antex_frequency_hz(b)
                 pco = (fa ** 2 * f[a] - fb ** 2 * f[b]) / (fa ** 2 - fb ** 2)
             elif a in f:
                 pco = f[a]

@@ -5,25 +5,26 @@ Float64 seconds since 1980 resolve only about 0.24 us, which a LEO range rate of
 
 Implements: GPS time scale and week numbering of IS-GPS-200 sec. 20.3.3.5.2.4 (continuous week count,
 no 1024 roll-over here); proleptic Gregorian calendar via the days-from-civil algorithm (H. Hinnant).
-Neglects: leap seconds (GPS time has none); UTC conversion lives with the leap-second table
-(gnssatt.gnss.leap_seconds), used by `to_jd_utc` / `to_jd_ut1`. TT / TAI / BDT / GST are fixed offsets.
+Neglects: leap seconds (GPS time has none). UTC and UT1 live with the leap-second table, which builds on this
+module and never the reverse (gnssatt.gnss.leap_seconds: `utc_to_gps`, `gps_to_utc`, `jd_utc`, `jd_ut1`).
+TT / TAI / BDT / GST are fixed offsets.
 """
 from __future__ import annotations
 
 import numpy as np
 
-SECONDS_PER_DAY = 86400
+# The fixed offsets of TAI / TT / BDT / GST from GPS time and the JD of the GPS epoch are definitions of
+# gnssatt.gnss.constants (IS-GPS-200 sec. 3.3.4, IAU 2000 B1.9, BDS ICD B1I 4.1.2, Galileo OS SIS ICD 5.1.2),
+# re-exported here under the names this module always had.
+from gnssatt.gnss.constants import (  # noqa: F401
+    BDT_MINUS_GPST_S, BDT_WEEK_OFFSET, GST_MINUS_GPST_S, GST_WEEK_OFFSET, JD_GPS_EPOCH, TAI_MINUS_GPS_S,
+    TT_MINUS_GPS_S,
+)
+
+SECONDS_PER_DAY = 86400  # int: whole-second arithmetic (gnssatt.gnss.constants.SECONDS_PER_DAY is the float)
 SECONDS_PER_WEEK = 604800
 # Days from 1970-01-01 to the GPS epoch 1980-01-06.
 _GPS_EPOCH_UNIX_DAYS = 3657
-# Julian date of the GPS epoch, and the fixed offsets of TAI / TT / BDT / GST from GPS time.
-JD_GPS_EPOCH = 2444244.5
-TAI_MINUS_GPS_S = 19.0  # IS-GPS-200 sec. 3.3.4
-TT_MINUS_GPS_S = 51.184  # TT = TAI + 32.184 s (IAU 2000 B1.9)
-BDT_MINUS_GPST_S = -14.0  # BDS ICD B1I v3.0 sec. 4.1.2
-BDT_WEEK_OFFSET = 1356  # GPS week of the BDT epoch
-GST_MINUS_GPST_S = 0.0  # Galileo OS SIS ICD 5.1.2 (GGTO neglected)
-GST_WEEK_OFFSET = 1024  # GPS week of the GST epoch (1999-08-22)
 
 
 def days_from_civil(year, month, day) -> np.ndarray:
@@ -174,7 +175,12 @@ class GpsTime:
         return f"GpsTime({self.iso(6)!r})"
 
     # --- other time scales (two-part Julian dates for ERFA) ---------------------------------------
-    def _jd_with_offset(self, offset_s) -> tuple[np.ndarray, np.ndarray]:
+    def jd_with_offset(self, offset_s) -> tuple[np.ndarray, np.ndarray]:
+        """(jd1, jd2): two-part Julian date of these times shifted by `offset_s` seconds (scalar or shape of t).
+
+        jd1 is the JD of 0h of the GPS day, jd2 the day fraction of (seconds of day + frac + offset), so a scale
+        that is GPS time plus an offset (TAI, TT, or UT1 = GPS - (GPS - UTC) + (UT1 - UTC)) keeps ~1 us.
+        """
         days = np.floor_divide(self.s, SECONDS_PER_DAY)
         sod = (self.s - days * SECONDS_PER_DAY).astype(np.float64)
         jd1 = JD_GPS_EPOCH + days.astype(np.float64)
@@ -183,11 +189,11 @@ class GpsTime:
 
     def to_jd_gps(self) -> tuple[np.ndarray, np.ndarray]:
         """(jd1, jd2): two-part Julian date in the GPS time scale; jd1 = JD of 0h of the GPS day."""
-        return self._jd_with_offset(0.0)
+        return self.jd_with_offset(0.0)
 
     def to_jd_tai(self) -> tuple[np.ndarray, np.ndarray]:
         """(jd1, jd2): two-part Julian date in TAI (TAI = GPS + 19 s, IS-GPS-200 sec. 3.3.4)."""
-        return self._jd_with_offset(TAI_MINUS_GPS_S)
+        return self.jd_with_offset(TAI_MINUS_GPS_S)
 
     def to_jd_tt(self) -> tuple[np.ndarray, np.ndarray]:
         """(jd1, jd2): two-part Julian date in TT for ERFA (TT = TAI + 32.184 s = GPS + 51.184 s).
@@ -195,30 +201,7 @@ class GpsTime:
         jd1 is the JD of 0h of the GPS day (an integer + 0.5), jd2 the TT fraction (may exceed 1 a little),
         so the sum keeps ~1e-11 day (1 us) and each part is exact to the ERFA two-part convention.
         """
-        return self._jd_with_offset(TT_MINUS_GPS_S)
-
-    def to_jd_utc(self) -> tuple[np.ndarray, np.ndarray]:
-        """(jd1, jd2): ERFA quasi Julian date in UTC (a leap-second day has 86401 s), via erfa.dtf2d.
-
-        Implements: UTC = GPS - (GPS - UTC) with gnssatt.gnss.leap_seconds (IERS Bulletin C), then the
-        SOFA/ERFA UTC quasi-JD convention of iauDtf2d.
-        """
-        import erfa
-
-        from gnssatt.gnss.leap_seconds import gps_to_utc
-
-        y, mo, d, hh, mi, ss = gps_to_utc(self)
-        return erfa.dtf2d("UTC", y.astype(np.int32), mo.astype(np.int32), d.astype(np.int32),
-                          hh.astype(np.int32), mi.astype(np.int32), ss)
-
-    def to_jd_ut1(self, ut1_minus_utc_s=0.0) -> tuple[np.ndarray, np.ndarray]:
-        """(jd1, jd2): two-part Julian date in UT1 = UTC + (UT1 - UTC) [s], UTC from the leap-second table.
-
-        Computed as UT1 = GPS - (GPS - UTC) + (UT1 - UTC), a continuous scale (no quasi-JD).
-        """
-        from gnssatt.gnss.leap_seconds import gps_minus_utc_s
-
-        return self._jd_with_offset(np.asarray(ut1_minus_utc_s, dtype=np.float64) - gps_minus_utc_s(self))
+        return self.jd_with_offset(TT_MINUS_GPS_S)
 
     # --- BeiDou and Galileo system times ----------------------------------------------------------
     @classmethod

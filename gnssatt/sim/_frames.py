@@ -2,7 +2,8 @@
 
 Implements: IAU 2006/2000A CIO-based GCRS->ITRS as ERFA computes it (erfa.c2i06a, erfa.era00,
 erfa.c2tcio) with polar motion and UT1-UTC taken as zero (CONVENTIONS.md "Frames"); TT = GPS + 51.184 s;
-UTC from the leap-second table in `_constants`. WGS 84 geodetic <-> ECEF; NED at a geodetic point.
+UTC from the leap-second table (gnssatt.gnss.leap_seconds via `_constants`). WGS 84 geodetic <-> ECEF; NED at
+a geodetic point.
 Neglects: EOP (xp = yp = 0, UT1 = UTC); the CIO-based precession-nutation matrix is interpolated
 linearly over 60 s nodes (its rate is < 1e-9 rad/s, so the error is < 1e-13 rad); the rotation angle is exact.
 """
@@ -11,10 +12,9 @@ from __future__ import annotations
 import erfa
 import numpy as np
 
+from gnssatt.gnss.constants import JD_GPS_EPOCH as _JD_GPS_EPOCH, TT_MINUS_GPS_S as _TT_MINUS_GPS_S
 from gnssatt.sim._constants import R_EARTH_M, WGS84_F, gps_minus_utc_s
 
-_TT_MINUS_GPS_S = 51.184
-_JD_GPS_EPOCH = 2444244.5  # JD of 1980-01-06T00:00:00
 _NODE_S = 60.0
 
 

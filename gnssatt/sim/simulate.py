@@ -21,7 +21,8 @@ from gnssatt.gnss.io.sp3_write import write_sp3
 from gnssatt.gnss.time import GpsTime
 from gnssatt.sim import _rot
 from gnssatt.sim import observables as ob
-from gnssatt.sim._constants import C_M_S, F_L1_HZ, F_L2_HZ, GAMMA_L2, LEAP_TABLE_EXPIRES
+from gnssatt.sim._constants import (C_M_S, F_L1_HZ, F_L2_HZ, GAMMA_L2, LEAP_TABLE_EXPIRES,
+                                   leap_expiry_warning)
 from gnssatt.sim._frames import EarthRotation
 from gnssatt.sim._rinex_obs_out import write_obs
 from gnssatt.sim.constellation import gps_from_nav, synthetic_gps
@@ -563,10 +564,12 @@ def _model_json(p, scenario, seed, pidx, t0, antennas, const, sat_phase_bias, si
                      "receiver_code_bias_m": {f: A["code_bias"][f] for f in sigs},
                      "receiver_phase_bias_cyc": {f: A["phase_bias"][f] for f in sigs},
                      "clock": dataclasses.asdict(c)}
+    leap_warning = leap_expiry_warning(float(t0.s))  # UTC/UT1 of the files may be stale after the expiry
     return {
         "scenario": scenario, "seed": seed, "pass": pidx, "t0_gps": t0.iso(3), "interval_s": p.interval_s,
         "signals": sigs, "frames": "ECEF from GCRF by IAU 2006/2000A (ERFA), EOP zero (xp=yp=0, UT1=UTC)",
         "leap_seconds": earth.leap_s, "leap_table_expires": LEAP_TABLE_EXPIRES,
+        **({"leap_table_warning": leap_warning} if leap_warning else {}),
         "pcv_grid": {"azimuth_deg": ob.PCV_AZ_DEG.tolist(), "elevation_deg": ob.PCV_EL_DEG.tolist(),
                      "interpolation": "bilinear on grid nodes; antenna frame of each antenna; mm"},
         "pcv_differential_maps": pcv_files,

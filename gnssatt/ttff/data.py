@@ -76,11 +76,11 @@ def _platform_state(inputs, pobs: PlatformObs, master: str):
         if np.isfinite(r).all(-1).mean() > 0.5:
             return r, v, f"platform SP3 {inputs.platform_sp3.name}"
     from gnssatt.gnss.ephemeris import BroadcastEphemeris, PreciseEphemeris
-    from gnssatt.gnss.positioning import spp
+    from gnssatt.gnss.positioning import SppOptions, spp
 
     eph = PreciseEphemeris(inputs.gnss_sp3, nav=inputs.nav) if inputs.gnss_sp3 is not None \
         else BroadcastEphemeris(inputs.nav)
-    sol = spp(inputs.obs[master], eph, systems=("G",), velocity=True)
+    sol = spp(inputs.obs[master], eph, SppOptions(systems=("G",), velocity=True))
     tags = sol.time_tag.s * 1000 + np.round(sol.time_tag.frac * 1000).astype(np.int64)
     want = pobs.time.s * 1000 + np.round(pobs.time.frac * 1000).astype(np.int64)
     r = np.full((len(want), 3), np.nan)

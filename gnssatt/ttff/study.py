@@ -17,6 +17,7 @@ non-zero TTFF), issue 7 (right/wrong against truth, single-epoch success).
 """
 from __future__ import annotations
 
+import copy
 import math
 import time
 from dataclasses import asdict, dataclass, field
@@ -43,7 +44,7 @@ RUN_COLUMNS = ("set", "yaw_deg", "pitch_deg", "roll_deg", "configuration", "base
 #: L2 alone (semi-codeless, 6 dB weaker, PCV x1.3) gives the 3 cm length test few, noisy DDs at the first epochs of
 #: an off-pointed start, and a wrong candidate of the right length was accepted on 2 of 400 baselines; a first fix
 #: of an L2-only baseline also needs the MLAMBDA ratio >= 2. L1+L2 and L1 keep seed 000's length test alone.
-FILTER_SETTINGS_BY_CONFIGURATION: dict = {"L2": {"ar_min_ratio_first_fix": 2.0}}
+FILTER_SETTINGS_BY_CONFIGURATION: dict = {"L2": {"ambiguity": {"min_ratio_first_fix": 2.0}}}
 
 
 @dataclass(frozen=True)
@@ -54,10 +55,10 @@ class StudyOptions:
     methods: tuple = ("filter", "epoch-lambda", "epoch-constrained")
     max_duration_s: float | None = 120.0          # seconds of each set used (TTFFs beyond are "never")
     single_epoch_step_s: float = 10.0             # sampling of the single-epoch success rate
-    filter_settings: dict = field(default_factory=dict)   # AttitudeSettings overrides (e.g. mode)
+    filter_settings: dict = field(default_factory=dict)   # AttitudeSettings.override keywords (e.g. mode, {"ambiguity": {...}})
     # further AttitudeSettings overrides per configuration, applied after filter_settings
     filter_settings_by_configuration: dict = field(
-        default_factory=lambda: {k: dict(v) for k, v in FILTER_SETTINGS_BY_CONFIGURATION.items()})
+        default_factory=lambda: copy.deepcopy(FILTER_SETTINGS_BY_CONFIGURATION))
     single_epoch: SingleEpochOptions = field(default_factory=SingleEpochOptions)
     wrong_fix_deg: float = WRONG_FIX_DEG
 
@@ -81,7 +82,7 @@ def filter_integer_errors(ss: StudySet, fix_log: dict, signals: list[str]) -> np
 
     Every constraint of the filter's fix_log (DD SD(sat) - SD(ref) of a baseline and signal, from its epoch to its
     last_epoch) against the truth DD (N_b,sat - N_a,sat) - (N_b,ref - N_a,ref) of the arcs covering each epoch
-    (the simulator's receiver and satellite phase biases cancel in it; tests/attitude/truth.py does the same).
+    (the simulator's receiver and satellite phase biases cancel in it; gnssatt/attitude/truth.py does the same).
     """
     if ss.truth is None or ss.truth.n_cyc is None or fix_log is None:
         return None
@@ -102,16 +103,15 @@ def filter_integer_errors(ss: StudySet, fix_log: dict, signals: list[str]) -> np
 
 def _filter_runs(ss: StudySet, cfg: str, method: str, opts: StudyOptions) -> list[dict]:
     from gnssatt.attitude.filter import run_filter
-    from gnssatt.attitude.settings import TABLE2_MASKS, AttitudeSettings
+    from gnssatt.attitude.settings import AttitudeSettings
 
     t0 = time.process_time()
     sigs = list(CONFIGURATIONS[cfg])
-    kw = dict(TABLE2_MASKS)          # the paper's method: seed 000 Table 2 editing masks, explicitly
-    kw.update(opts.filter_settings)
-    kw.update(opts.filter_settings_by_configuration.get(cfg, {}))
+    # the paper's method: preset seed000 = seed 000 Tables 1-2 (Table 2 editing masks explicitly)
+    settings = (AttitudeSettings.preset("seed000", signals=sigs).override(**opts.filter_settings)
+                .override(**opts.filter_settings_by_configuration.get(cfg, {})))
     if method == "filter-constrained":
-        kw["ambiguity_search"] = "constrained"
-    settings = AttitudeSettings(signals=sigs, **kw)
+        settings = settings.override(ambiguity={"ambiguity_search": "constrained"})
     pobs = subset_signals(ss.pobs, sigs)
     attitude_fn = None
     if len(ss.bl_idx) >= 2:
@@ -234,11 +234,9 @@ def _epoch_runs(ss: StudySet, cfg: str, methods: list[str], opts: StudyOptions) 
 
 def constrained_filter_available() -> bool:
     """True when the attitude filter offers ambiguity_search="constrained"."""
-    from dataclasses import fields
+    from gnssatt.attitude.settings import FLAT_TO_NESTED
 
-    from gnssatt.attitude.settings import AttitudeSettings
-
-    return any(f.name == "ambiguity_search" for f in fields(AttitudeSettings))
+    return "ambiguity_search" in FLAT_TO_NESTED
 
 
 def run_set(ss: StudySet, opts: StudyOptions) -> dict:

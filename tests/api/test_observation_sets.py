@@ -10,7 +10,7 @@ import zipfile
 import pytest
 
 from tests.api.conftest import stored_state
-from tests.builders.rinex import obs_v3_text, platform_doc
+from gnssatt.sim.sample_set import obs_v3_text, platform_doc
 
 
 def _files(*items):

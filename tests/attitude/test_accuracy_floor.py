@@ -1,5 +1,5 @@
 """gnssatt's kinematic (epoch-wise) baselines against the independent true-integer least-squares floor
-(tests/attitude/floor.py) on the short clean pass (issue 6: the kinematic fixed solution must match an epoch-wise
+(gnssatt/attitude/floor.py) on the short clean pass (issue 6: the kinematic fixed solution must match an epoch-wise
 double-difference solution such as RTKLIB's; dynamic mode must do better).
 
 On white-noise data with the right integers an epoch-wise estimator cannot beat weighted least squares on the
@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from tests.attitude.conftest import set_files
-from tests.attitude.floor import true_integer_floor, used_phase_mask
+from gnssatt.attitude.floor import true_integer_floor, used_phase_mask
 from gnssatt.attitude.process import load_inputs, process
-from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
+from gnssatt.attitude.settings import AttitudeSettings
 
 #: the clean pass's white phase noise per receiver (simulator preset, truth/observations_*.csv n_phase_*):
 #: L1 3 mm, L2 4.5 mm; one single difference sqrt(2) times that
@@ -29,7 +29,7 @@ def _angles_deg(b, t):
 
 
 def _true_baselines(d, sol):
-    from tests.attitude.test_attitude_sim import truth_at
+    from gnssatt.attitude.truth import truth_at
     from gnssatt.gnss import rotations as rot
 
     q, _ = truth_at(d, sol)      # at sol.att_epochs
@@ -40,8 +40,8 @@ def _true_baselines(d, sol):
 @pytest.fixture(scope="module")
 def kinematic(clean_pass):
     inputs = load_inputs(set_files(clean_pass))
-    return {"all_phases": process(inputs, AttitudeSettings(mode="kinematic", **ALL_PHASES)),
-            "table2": process(inputs, AttitudeSettings(mode="kinematic"))}   # the defaults: seed 000 Table 2 masks
+    return {"all_phases": process(inputs, AttitudeSettings.preset("all-phases", mode="kinematic")),
+            "table2": process(inputs, AttitudeSettings.preset("seed000", mode="kinematic"))}   # the defaults: seed 000 Table 2 masks
 
 
 def _stats(d, sol, b_est):

@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from tests.attitude.conftest import set_files
-from tests.attitude.test_attitude_sim import errors
 from gnssatt.attitude.adaptive import ManoeuvreDetector, equivalent_measurement, info_update
 from gnssatt.attitude.process import load_inputs, process
 from gnssatt.attitude.settings import AttitudeSettings
+from gnssatt.attitude.truth import attitude_errors_deg, lag_deg
 
 DEG = np.pi / 180.0
 
@@ -89,18 +89,6 @@ def test_detector_quiet_on_a_constant_rate_and_detects_an_angular_acceleration()
     assert lag_t1 > 0.1 and lag_ad < 0.4 * lag_t1, (lag_ad, lag_t1)
 
 
-def _lag_deg(d, sol, t_from_s):
-    """Max over epochs after t_from_s of the 15-s running mean of the Euler errors (the lag; noise averages out)."""
-    _, de = errors(d, sol)
-    f = sol.att_fixed
-    t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]
-    k = np.ones(15)
-    n = np.convolve(f * 1.0, k, "same")
-    sm = np.array([np.convolve(np.where(f, de[:, i], 0.0), k, "same") for i in range(3)]).T / np.maximum(n, 1)[:, None]
-    late = f & (t >= t_from_s) & (n >= 10)
-    return np.abs(sm[late]).max()
-
-
 #: seed 000 Fig. 6 (bottom) as in bench/bench_attitude.py SLEWS, the first 200 s: Earth pointing, pitch 0 -> 50 deg
 #: (minimum jerk) between 60 and 120 s, then slowly back towards -40 deg
 PITCH_UP = {"start_gps": "2018-06-06T16:31:00", "duration_s": 200.0,
@@ -123,7 +111,7 @@ def slews(pitch_up_pass, slew_pass):
     out = {}
     for name, d in (("pitch", pitch_up_pass), ("yawroll", slew_pass)):
         inputs = load_inputs(set_files(d))
-        out[name] = (d, {on: process(inputs, AttitudeSettings(mode="dynamic", adaptive_omega_noise=on))
+        out[name] = (d, {on: process(inputs, AttitudeSettings.preset("seed000", mode="dynamic", adaptive={"enabled": on}))
                          for on in (False, True)})
     return out
 
@@ -133,7 +121,7 @@ def test_adaptive_noise_follows_the_pitch_manoeuvre(slews):
     for sol in sols.values():
         f = sol.att_fixed
         assert f[int(np.argmax(f)):].mean() > 0.99 and "fix_lost" not in sol.summary["events"]
-    lag_t1, lag_ad = _lag_deg(d, sols[False], 45.0), _lag_deg(d, sols[True], 45.0)
+    lag_t1, lag_ad = lag_deg(d, sols[False], 45.0), lag_deg(d, sols[True], 45.0)
     # Table 1's random walk lags the 50 deg / 1 min pitch-up (the paper saw up to 1 deg; measured 1.00 deg);
     # adaptive: < 0.3 deg (measured 0.23)
     assert lag_t1 > 0.6, lag_t1
@@ -141,7 +129,7 @@ def test_adaptive_noise_follows_the_pitch_manoeuvre(slews):
     # the largest error after the first 30 s of fix (Table 1: at the pitch-up, measured 1.22 / 0.60 deg)
     m = []
     for on in (False, True):
-        ang, _ = errors(d, sols[on])
+        ang, _ = attitude_errors_deg(d, sols[on])
         f = sols[on].att_fixed
         t = np.asarray(sols[on].pobs.time - sols[on].pobs.time[0], float)[sols[on].att_epochs]
         m.append(ang[f & (t > t[int(np.argmax(f))] + 30.0)].max())
@@ -150,8 +138,8 @@ def test_adaptive_noise_follows_the_pitch_manoeuvre(slews):
 
 def test_adaptive_noise_leaves_a_slow_manoeuvre_alone(slews):
     d, sols = slews["yawroll"]
-    a0, _ = errors(d, sols[False])
-    a1, _ = errors(d, sols[True])
+    a0, _ = attitude_errors_deg(d, sols[False])
+    a1, _ = attitude_errors_deg(d, sols[True])
     f0, f1 = sols[False].att_fixed, sols[True].att_fixed
     assert f1[int(np.argmax(f1)):].mean() > 0.99 and "fix_lost" not in sols[True].summary["events"]
     assert np.percentile(a1[f1], 95) < 1.05 * np.percentile(a0[f0], 95)
@@ -160,7 +148,7 @@ def test_adaptive_noise_leaves_a_slow_manoeuvre_alone(slews):
 def test_job_config_passes_the_option_and_defaults_to_table_1():
     from worker.jobs.attitude import AttitudeConfig
 
-    assert AttitudeConfig().to_settings().adaptive_omega_noise is False
+    assert AttitudeConfig().to_settings().adaptive.enabled is False
     s = AttitudeConfig(adaptive_omega_noise=True, adaptive_omega_threshold=6.0, adaptive_omega_hold_epochs=20)
     s = s.to_settings()
-    assert s.adaptive_omega_noise and s.adaptive_omega_threshold == 6.0 and s.adaptive_omega_hold_epochs == 20
+    assert s.adaptive.enabled and s.adaptive.threshold == 6.0 and s.adaptive.hold_epochs == 20

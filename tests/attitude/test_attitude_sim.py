@@ -11,39 +11,22 @@ import numpy as np
 import pytest
 
 from tests.attitude.conftest import set_files
-from tests.attitude.truth import score_fixes
 from gnssatt.attitude.process import load_inputs, process
 from gnssatt.attitude.products import all_products
 from gnssatt.attitude.settings import AttitudeSettings
-from gnssatt.gnss import rotations as rot
-from gnssatt.gnss.time import GpsTime
-
-
-def truth_at(d, sol):
-    """(q_body_from_ecef (n, 4), yaw/pitch/roll (n, 3)) of truth/attitude.csv at the solution's attitude epochs."""
-    rows = {r["time_gps"]: r for r in csv.DictReader(open(d / "truth" / "attitude.csv"))}
-    iso = np.asarray(sol.pobs.time.iso(3))[sol.att_epochs]
-    q = np.array([[float(rows[t][k]) for k in ("qe_w", "qe_x", "qe_y", "qe_z")] for t in iso])
-    e = np.array([[float(rows[t][k]) for k in ("yaw_deg", "pitch_deg", "roll_deg")] for t in iso])
-    return q, e
-
-
-def errors(d, sol):
-    q, e = truth_at(d, sol)
-    ang = rot.attitude_error_deg(sol.q_body_from_ecef, q)
-    de = (sol.euler_deg - e + 180.0) % 360.0 - 180.0
-    return ang, de
+from gnssatt.attitude.truth import (attitude_errors_deg, clock_jump_match, score_fixes,
+                                    slips_seen_by_single_differences)
 
 
 @pytest.fixture(scope="module")
 def clean_solutions(clean_pass):
     inputs = load_inputs(set_files(clean_pass))
-    return {m: process(inputs, AttitudeSettings(mode=m)) for m in ("kinematic", "dynamic")}
+    return {m: process(inputs, AttitudeSettings.preset("seed000", mode=m)) for m in ("kinematic", "dynamic")}
 
 
 def test_clean_pass_fixes_quickly_and_never_wrongly(clean_pass, clean_solutions):
     for mode, sol in clean_solutions.items():
-        ang, _ = errors(clean_pass, sol)
+        ang, _ = attitude_errors_deg(clean_pass, sol)
         fixed = sol.att_fixed
         assert fixed.mean() >= 0.95, (mode, fixed.mean())
         assert np.argmax(fixed) <= 30, "first fix within 30 s of switch-on"
@@ -59,7 +42,7 @@ def test_clean_pass_fixes_quickly_and_never_wrongly(clean_pass, clean_solutions)
 
 def test_clean_pass_errors_are_unbiased_and_match_the_predicted_sigma(clean_pass, clean_solutions):
     sol = clean_solutions["kinematic"]
-    _, de = errors(clean_pass, sol)
+    _, de = attitude_errors_deg(clean_pass, sol)
     f = sol.att_fixed
     for i, name in enumerate(("yaw", "pitch", "roll")):
         bias, std = de[f, i].mean(), de[f, i].std()
@@ -81,7 +64,7 @@ def test_noise_model_learns_white_receivers(clean_solutions):
 def test_dynamic_mode_beats_kinematic_mode_on_every_angle(clean_pass, clean_solutions):
     stds = {}
     for mode, sol in clean_solutions.items():
-        _, de = errors(clean_pass, sol)
+        _, de = attitude_errors_deg(clean_pass, sol)
         stds[mode] = de[sol.att_fixed].std(axis=0)
     assert np.all(stds["dynamic"] < stds["kinematic"]), stds
 
@@ -126,8 +109,8 @@ def test_products_follow_conventions_and_aem_parses(clean_solutions):
 
 
 def test_slew_keeps_the_fix(slew_pass):
-    sol = process(load_inputs(set_files(slew_pass)), AttitudeSettings(mode="dynamic"))
-    ang, _ = errors(slew_pass, sol)
+    sol = process(load_inputs(set_files(slew_pass)), AttitudeSettings.preset("seed000", mode="dynamic"))
+    ang, _ = attitude_errors_deg(slew_pass, sol)
     f = sol.att_fixed
     first = int(np.argmax(f))
     assert f[first:].mean() > 0.99, "no fix lost during the slew"
@@ -135,45 +118,8 @@ def test_slew_keeps_the_fix(slew_pass):
     assert "fix_lost" not in sol.summary["events"]
 
 
-def _slips_formed_by_sd(sol, truth_dir):
-    """Truth slips (antenna, sat, signal, time s) on a phase that forms a single difference of some baseline at the
-    slip epoch and the one before (the only slips a differential filter can see)."""
-    po = sol.pobs
-    t = np.asarray(po.time - po.time[0], float)
-    ants = list(po.antennas)
-    out = []
-    for r in csv.DictReader(open(truth_dir / "arcs.csv")):
-        if r["cause"] != "slip":
-            continue
-        ts = float(GpsTime.from_iso(r["start_time_gps"]) - po.time[0])
-        k = int(np.argmin(np.abs(t - ts)))
-        if k == 0 or abs(t[k] - ts) > 0.5 or t[k] - t[k - 1] > 1.5:
-            continue
-        si, fi, a = po.sats.index(r["sat"]), po.signals.index(r["signal"]), ants.index(r["antenna"])
-        ok = np.isfinite(po.phase_m[:, k - 1:k + 1, si, fi]).all(axis=1)
-        if any(ok[ants.index(x)] and ok[ants.index(y)] and a in (ants.index(x), ants.index(y))
-               for x, y in sol.baselines):
-            out.append((r["sat"], r["signal"], ts))
-    return out
-
-
-def clock_jump_match(sol, truth_dir):
-    """(truth jumps (antenna, t), missed truth jumps, spurious clock_jump events): a truth jump is found by an
-    event within 2 s on a baseline that includes its receiver."""
-    t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)
-    rows: dict = {}
-    for r in csv.DictReader(open(truth_dir / "receivers.csv")):
-        rows.setdefault(r["antenna"], []).append((float(GpsTime.from_iso(r["time_gps"]) - sol.pobs.time[0]),
-                                                  int(r["clock_jumps_ms"])))
-    jumps = [(a, v[i][0]) for a, v in rows.items() for i in range(1, len(v)) if v[i][1] != v[i - 1][1]]
-    evs = [(sol.baselines[e["baseline"]], t[e["epoch"]]) for e in sol.fr.events if e["event"] == "clock_jump"]
-    missed = [x for x in jumps if not any(x[0] in bl and abs(te - x[1]) <= 2.0 for bl, te in evs)]
-    spurious = [e for e in evs if not any(a in e[0] and abs(e[1] - tj) <= 2.0 for a, tj in jumps)]
-    return jumps, missed, spurious
-
-
 def test_hard_pass_completes_and_reports_every_event(hard_pass):
-    sol = process(load_inputs(set_files(hard_pass)), AttitudeSettings(mode="kinematic"))
+    sol = process(load_inputs(set_files(hard_pass)), AttitudeSettings.preset("seed000", mode="kinematic"))
     ev = sol.summary["events"]
     # every integer the filter fixed is the truth's, over the whole time it was held (slips after a fix included)
     sc = score_fixes(sol, hard_pass / "truth")
@@ -181,7 +127,7 @@ def test_hard_pass_completes_and_reports_every_event(hard_pass):
     # every slip the single differences can see is in events.csv (with or without LLI, phase in use or not)
     t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)
     seen = {(e["sat"], e["signal"], t[e["epoch"]]) for e in sol.fr.events if e["event"] == "cycle_slip"}
-    slips = _slips_formed_by_sd(sol, hard_pass / "truth")
+    slips = slips_seen_by_single_differences(sol, hard_pass / "truth")
     assert len(slips) >= 5
     missed = [x for x in slips if not any(s == x[0] and f == x[1] and abs(tt - x[2]) < 1.5 for s, f, tt in seen)]
     assert not missed, missed
@@ -203,13 +149,13 @@ def test_realistic_pass_right_integers_and_honest_sigma(realistic_pass, mode):
     """Multipath, PCV and C/N0-dependent noise: every fixed integer is the truth's and the errors' scatter matches
     the predicted sigma (noise model: C/N0 growth of the white noise + off-boresight multipath variance, inflated
     for its time correlation in dynamic mode; docs/attitude.md)."""
-    sol = process(load_inputs(set_files(realistic_pass)), AttitudeSettings(mode=mode))
+    sol = process(load_inputs(set_files(realistic_pass)), AttitudeSettings.preset("seed000", mode=mode))
     sc = score_fixes(sol, realistic_pass / "truth")
     assert sc["constraints"] > 10 and sc["wrong_constraints"] == 0, sc["details"]
     # the simulator's noise grows as 10^((45 - C/N0)/20) in sigma: the estimated variance exponent is ~1
     nm = sol.summary["noise_model"]
     assert all(0.7 < g < 1.3 for g in nm["cn0_gamma_phase"].values()), nm
-    _, de = errors(realistic_pass, sol)
+    _, de = attitude_errors_deg(realistic_pass, sol)
     f = sol.att_fixed
     assert f.mean() > 0.95
     for i, name in enumerate(("yaw", "pitch", "roll")):
@@ -220,11 +166,11 @@ def test_realistic_pass_right_integers_and_honest_sigma(realistic_pass, mode):
 def test_ml_attitude_is_more_accurate_than_quest_in_kinematic_mode(clean_pass, clean_solutions):
     """attitude_method "ml" on the same filter run: lower error rms than QUEST, and its predicted sigmas honest."""
     sol_q = clean_solutions["kinematic"]
-    sol_m = process(load_inputs(set_files(clean_pass)), AttitudeSettings(mode="kinematic", attitude_method="ml"))
+    sol_m = process(load_inputs(set_files(clean_pass)), AttitudeSettings.preset("seed000", mode="kinematic", attitude_method="ml"))
     assert np.array_equal(sol_q.att_fixed, sol_m.att_fixed)
     f = sol_q.att_fixed
-    ang_q, _ = errors(clean_pass, sol_q)
-    ang_m, de_m = errors(clean_pass, sol_m)
+    ang_q, _ = attitude_errors_deg(clean_pass, sol_q)
+    ang_m, de_m = attitude_errors_deg(clean_pass, sol_m)
     rms = lambda a: float(np.sqrt(np.mean(a[f] ** 2)))  # noqa: E731
     assert rms(ang_m) < 0.97 * rms(ang_q), (rms(ang_m), rms(ang_q))
     ratio = de_m[f].std(0) / np.sqrt(np.mean(sol_m.sigma_euler_deg[f] ** 2, 0))

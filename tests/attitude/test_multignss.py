@@ -118,20 +118,20 @@ def test_single_system_single_frequency(mixed):
 def test_effective_signals_and_masks():
     s = AttitudeSettings()
     assert effective_signals(s) == ["L1", "L2"]
-    s = AttitudeSettings(systems=["G", "E", "C", "J"])
+    s = AttitudeSettings.preset("seed000", systems=["G", "E", "C", "J"])
     assert effective_signals(s) == [x for sysl in "GECJ" for x in SYSTEM_SIGNALS[sysl]]
-    assert effective_signals(AttitudeSettings(systems=["C"])) == ["C:B1I", "C:B2I"]
-    for bad in (AttitudeSettings(systems=["R"]), AttitudeSettings(signals=["L1", "G:L1"]),
-                AttitudeSettings(signals=["E:E6"])):
+    assert effective_signals(AttitudeSettings.preset("seed000", systems=["C"])) == ["C:B1I", "C:B2I"]
+    for bad in (AttitudeSettings.preset("seed000", systems=["R"]), AttitudeSettings.preset("seed000", signals=["L1", "G:L1"]),
+                AttitudeSettings.preset("seed000", signals=["E:E6"])):
         with pytest.raises(ValueError):
             effective_signals(bad)
-    s = AttitudeSettings(cn0_mask_dbhz={"L1": 38.0, "L2": 31.0, "C:B2I": 20.0})
+    s = AttitudeSettings.preset("seed000", table2={"cn0_mask_dbhz": {"L1": 38.0, "L2": 31.0, "C:B2I": 20.0}})
     assert cn0_mask_of(s, "L1") == 38.0 and cn0_mask_of(s, "G:L1") == 38.0      # the alias masks GPS L1 too
     assert cn0_mask_of(s, "G:L2") == 31.0 and cn0_mask_of(s, "C:B2I") == 20.0
     assert cn0_mask_of(s, "E:E1") == 35.0 and cn0_mask_of(s, "E:E5b") == 30.0  # default: Table 2 style per system
-    t2 = AttitudeSettings(cn0_mask_dbhz={"L1": 38.0}, cn0_mask_default_dbhz=0.0)
+    t2 = AttitudeSettings.preset("seed000", table2={"cn0_mask_dbhz": {"L1": 38.0}, "cn0_mask_default_dbhz": 0.0})
     assert cn0_mask_of(t2, "E:E1") == 0.0 and cn0_mask_of(t2, "E:E5b") == 0.0    # 0: no mask (noise model)
-    assert cn0_mask_of(AttitudeSettings(cn0_mask_dbhz={"G:L1": 40.0}), "L1") == 40.0
+    assert cn0_mask_of(AttitudeSettings.preset("seed000", table2={"cn0_mask_dbhz": {"G:L1": 40.0}}), "L1") == 40.0
 
 
 def test_filter_state_has_one_code_bias_per_extra_signal():
@@ -217,7 +217,7 @@ def test_job_with_systems_preset_runs_end_to_end(tmp_path):
     import hashlib
     import json
 
-    from tests.attitude.test_real_nagoya import PLATFORM
+    from bench.real_sets import NAGOYA_PLATFORM as PLATFORM
     from tests.conftest import real_set
     from worker.context import InputFile, InputSet, JobContext
     from worker.jobs.attitude import AttitudeConfig

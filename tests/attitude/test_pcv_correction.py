@@ -108,7 +108,7 @@ def true_maps(d: Path) -> dict:
 
 
 def test_true_maps_remove_the_attitude_bias(pcv_pass):
-    from tests.attitude.test_attitude_sim import errors
+    from gnssatt.attitude.truth import attitude_errors_deg
     from gnssatt.attitude.process import load_inputs, process
     from gnssatt.attitude.settings import AttitudeSettings
 
@@ -116,9 +116,9 @@ def test_true_maps_remove_the_attitude_bias(pcv_pass):
     maps = true_maps(pcv_pass)
     assert len(maps) == 4
     out = {}
-    for name, st in (("raw", AttitudeSettings()), ("maps", AttitudeSettings(pcv_maps=maps))):
+    for name, st in (("raw", AttitudeSettings()), ("maps", AttitudeSettings.preset("seed000", calibration={"pcv_maps": maps}))):
         sol = process(inputs, st)
-        ang, de = errors(pcv_pass, sol)
+        ang, de = attitude_errors_deg(pcv_pass, sol)
         f = sol.att_fixed
         assert f.mean() > 0.9 and ang[f].max() < 3.0, name
         out[name] = (de[f].mean(axis=0), np.median(ang[f]))
@@ -186,7 +186,7 @@ def test_empty_bins_exclude_or_keep(pcv_pass):
     code = {v: k for k, v in REASONS.items()}["pcv_empty"]
     n_empty = {}
     for mode in ("exclude", "keep"):
-        sol = process(inputs, AttitudeSettings(pcv_maps=holed, pcv_empty_bins=mode))
+        sol = process(inputs, AttitudeSettings.preset("seed000", calibration={"pcv_maps": holed, "pcv_empty_bins": mode}))
         n_empty[mode] = int(np.sum(sol.fr.residuals["reason"] == code))
         assert sol.att_fixed.mean() > 0.9
     assert n_empty["exclude"] > 100 and n_empty["keep"] == 0, n_empty

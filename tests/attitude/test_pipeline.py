@@ -34,14 +34,14 @@ def test_registry_and_config():
     assert jt.pipeline == "worker.pipelines.attitude:run" and jt.min_sets == 1 and jt.max_sets == 1
     cfg = AttitudeConfig()
     st = cfg.to_settings()
-    assert st.mode == "dynamic" and st.cn0_mask_dbhz == {"L1": 35.0, "L2": 30.0} and st.elevation_mask_antenna_deg == 0.0 and st.sigma_phase_m == 0.003
+    assert st.mode == "dynamic" and st.table2.cn0_mask_dbhz == {"L1": 35.0, "L2": 30.0} and st.table2.elevation_mask_antenna_deg == 0.0 and st.table1.sigma_phase_m == 0.003
     with pytest.raises(ValidationError):
         AttitudeConfig(signals=["L5"])
     with pytest.raises(ValidationError):
         AttitudeConfig(mode="static")
     cal = AttitudeConfig(calibrated_baselines={"platform": "x", "frames": "body", "baselines": [
         {"from": "GPS-2", "to": "GPS-0", "a_priori_m": [1, 0, 0], "calibrated_m": [1.001, 0, 0]}]}).to_settings()
-    assert cal.calibrated_baselines[("GPS-2", "GPS-0")] == [1.001, 0, 0]
+    assert cal.calibration.calibrated_baselines[("GPS-2", "GPS-0")] == [1.001, 0, 0]
 
 
 def test_pipeline_writes_products(tmp_path, clean_pass):

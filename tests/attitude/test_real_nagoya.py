@@ -13,31 +13,20 @@ import json
 import numpy as np
 import pytest
 
+from bench.real_sets import NAGOYA, NAGOYA_PLATFORM, nagoya_files
 from tests.conftest import real_set
 from gnssatt.attitude.process import load_inputs, process
 from gnssatt.attitude.products import all_products
 from gnssatt.attitude.settings import AttitudeSettings
 
-PLATFORM = {
-    "name": "nagoya-dual", "kind": "terrestrial",
-    # a tape-measured 0.99 m along the vehicle x axis: only the length matters for one baseline
-    "antennas": {"base": {"position_m": [0.0, 0.0, 0.0], "boresight": [0, 0, -1]},
-                 "rover": {"position_m": [0.99, 0.0, 0.0], "boresight": [0, 0, -1]}},
-    "master": "base", "baselines": [["base", "rover"]],
-    # both files carry MARKER NAME "SEPT", so the mapping must be explicit
-    "observation_files": {"base": "base.obs", "rover": "rover.obs"},
-}
-
-
 @pytest.fixture(scope="module")
 def nagoya(tmp_path_factory):
-    d = real_set("static_1m_mosaicx5_nagoya_2024")
+    d = real_set(NAGOYA)
     plat = tmp_path_factory.mktemp("nagoya") / "platform.json"
-    plat.write_text(json.dumps(PLATFORM))
-    files = [("base.obs", "rinex_obs", d / "base.obs"), ("rover.obs", "rinex_obs", d / "rover.obs"),
-             ("base.nav", "rinex_nav", d / "base.nav"), ("platform.json", "platform", plat)]
-    return process(load_inputs(files), AttitudeSettings(mode="kinematic", weighting="elevation",
-                                                        systems=["G", "E", "C", "J"]))
+    plat.write_text(json.dumps(NAGOYA_PLATFORM))
+    files = nagoya_files(d, plat)
+    return process(load_inputs(files), AttitudeSettings.preset("seed000", mode="kinematic", systems=["G", "E", "C", "J"],
+                                                               noise={"weighting": "elevation"}))
 
 
 def test_nagoya_every_epoch_fixed_from_the_first(nagoya):

@@ -20,28 +20,17 @@ import shutil
 import numpy as np
 import pytest
 
+from bench.real_sets import UPC, UPC_ENU_M, UPC_PLATFORM, upc_files
 from tests.conftest import real_set, require_module
 from gnssatt.attitude.process import load_inputs, process
 from gnssatt.attitude.settings import AttitudeSettings
 
-UPC = "upc1_upc2_38m_barcelona_2010"
 N_EPOCHS = 600                                   # 10 minutes at 1 Hz from 2010-03-18 05:00:00 GPST
-ENU_M = np.array([-27.4171, -26.2340, -0.0306])  # README, UPC1 -> UPC2 at UPC1
+ENU_M = UPC_ENU_M                                # README, UPC1 -> UPC2 at UPC1
 LENGTH_M = float(np.linalg.norm(ENU_M))          # 37.946 m
 AZIMUTH_DEG = 226.263                            # atan2(E, N) of the README vector
 ELEVATION_DEG = float(np.degrees(np.arctan2(ENU_M[2], np.hypot(ENU_M[0], ENU_M[1]))))   # -0.046 deg
 UPC1_ECEF_M = ("4789013.0077", "176610.1555", "4195034.8091")
-
-PLATFORM = {
-    "name": "upc-roof", "kind": "terrestrial",
-    # body = NED of a level vehicle heading north: (N, E, D) of the README vector; only its length is used
-    "antennas": {"UPC1": {"position_m": [0.0, 0.0, 0.0], "boresight": [0, 0, -1]},
-                 "UPC2": {"position_m": [float(ENU_M[1]), float(ENU_M[0]), float(-ENU_M[2])],
-                          "boresight": [0, 0, -1]}},
-    "master": "UPC1", "baselines": [["UPC1", "UPC2"]],
-    "observation_files": {"UPC1": "UPC10770.11o.gz", "UPC2": "UPC20770.11o.gz"},
-}
-
 
 def _first_epochs(obs, n: int):
     """The RinexObs restricted to its first n epochs (every per-epoch array)."""
@@ -50,20 +39,14 @@ def _first_epochs(obs, n: int):
                                ssi=obs.ssi[:n], events=[])
 
 
-def _files(d, plat):
-    return [("UPC10770.11o.gz", "rinex_obs", d / "UPC10770.11o.gz"),
-            ("UPC20770.11o.gz", "rinex_obs", d / "UPC20770.11o.gz"),
-            ("brdc0770.11n", "rinex_nav", d / "brdc0770.11n"), ("platform.json", "platform", plat)]
-
-
 @pytest.fixture(scope="module")
 def upc(tmp_path_factory):
     d = real_set(UPC)
     plat = tmp_path_factory.mktemp("upc") / "platform.json"
-    plat.write_text(json.dumps(PLATFORM))
-    inputs = load_inputs(_files(d, plat))
+    plat.write_text(json.dumps(UPC_PLATFORM))
+    inputs = load_inputs(upc_files(d, plat))
     inputs.obs = {a: _first_epochs(o, N_EPOCHS) for a, o in inputs.obs.items()}
-    return process(inputs, AttitudeSettings(mode="kinematic"))
+    return process(inputs, AttitudeSettings.preset("seed000", mode="kinematic"))
 
 
 @pytest.fixture(scope="module")

@@ -56,7 +56,7 @@ def test_gps_only_rtklib_agrees_with_gnssatt_not_with_the_multi_gnss_readme(tmp_
     test_real_nagoya.py::test_nagoya_matches_rtklib_level runs gnssatt with Galileo, BeiDou and QZSS."""
     import json
 
-    from tests.attitude.test_real_nagoya import PLATFORM
+    from bench.real_sets import NAGOYA_PLATFORM as PLATFORM
     from gnssatt.attitude.process import load_inputs, process
     from gnssatt.attitude.settings import AttitudeSettings
 
@@ -69,7 +69,7 @@ def test_gps_only_rtklib_agrees_with_gnssatt_not_with_the_multi_gnss_readme(tmp_
     plat.write_text(json.dumps(PLATFORM))
     files = [("base.obs", "rinex_obs", d / "base.obs"), ("rover.obs", "rinex_obs", d / "rover.obs"),
              ("base.nav", "rinex_nav", d / "base.nav"), ("platform.json", "platform", plat)]
-    g = process(load_inputs(files), AttitudeSettings(mode="kinematic", elevation_mask_local_deg=10.0))
+    g = process(load_inputs(files), AttitudeSettings.preset("seed000", mode="kinematic", table2={"elevation_mask_local_deg": 10.0}))
     b = g.summary["baselines"][0]
     # measured: azimuth 193.118 vs 193.100 deg, length 0.9868 vs 0.9870 m, elevation 0.30 vs 0.18 deg
     assert abs(b["median_azimuth_deg"] - r_az) < 0.05
@@ -84,7 +84,7 @@ def test_multi_gnss_gnssatt_agrees_with_rtklib_epoch_by_epoch(tmp_path):
     scatter 0.031 / 0.065 deg against RTKLIB's 0.037 / 0.086 deg."""
     import json
 
-    from tests.attitude.test_real_nagoya import PLATFORM
+    from bench.real_sets import NAGOYA_PLATFORM as PLATFORM
     from gnssatt.attitude.process import load_inputs, process
     from gnssatt.attitude.settings import TABLE2_MASKS, AttitudeSettings
 
@@ -97,8 +97,7 @@ def test_multi_gnss_gnssatt_agrees_with_rtklib_epoch_by_epoch(tmp_path):
              ("base.nav", "rinex_nav", d / "base.nav"), ("platform.json", "platform", plat)]
     # seed 000 Table 2's C/N0 masks: close to the data RTKLIB's 15 deg mask leaves (with gnssatt's default of no
     # masks the elevation differs by -0.056 deg: 0.508 instead of 0.537 deg, the README says 0.56)
-    g = process(load_inputs(files), AttitudeSettings(mode="kinematic", weighting="elevation",
-                                                     systems=["G", "E", "C", "J"], **TABLE2_MASKS))
+    g = process(load_inputs(files), AttitudeSettings.preset("seed000", mode="kinematic", systems=["G", "E", "C", "J"], **TABLE2_MASKS, noise={"weighting": "elevation"}))
     bt = g.baseline_table
     assert bt["fixed"].all()
     _, sow = g.pobs.time.week_sow()

@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 
 from tests.attitude.conftest import CLEAN, _simulate, set_files
-from tests.attitude.test_adaptive import _lag_deg
-from tests.attitude.test_attitude_sim import errors
+from gnssatt.attitude.truth import attitude_errors_deg, lag_deg
 from gnssatt.attitude.process import load_inputs, process
-from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
+from gnssatt.attitude.settings import AttitudeSettings
 from gnssatt.attitude.smoother import acceleration_noise_rate, rts_smooth
 
 
@@ -99,8 +98,8 @@ PITCH_UP = {"start_gps": "2018-06-06T16:31:00", "duration_s": 200.0,
 def pitch_up(tmp_path_factory):
     d = _simulate(tmp_path_factory, "pitch_up", "slew", 0, {**PITCH_UP, **CLEAN})
     inputs = load_inputs(set_files(d))
-    sols = {sm: process(inputs, AttitudeSettings(mode="dynamic", smoother=sm, **ALL_PHASES)) for sm in (False, True)}
-    sols["adaptive"] = process(inputs, AttitudeSettings(mode="dynamic", smoother_adaptive_noise=True, **ALL_PHASES))
+    sols = {sm: process(inputs, AttitudeSettings.preset("all-phases", mode="dynamic", smoothing={"enabled": sm})) for sm in (False, True)}
+    sols["adaptive"] = process(inputs, AttitudeSettings.preset("all-phases", mode="dynamic", smoothing={"adaptive_noise": True}))
     return d, sols
 
 
@@ -110,13 +109,13 @@ def test_smoother_removes_the_lag_of_the_pitch_up(pitch_up):
     for sm, sol in sols.items():
         if sm == "adaptive":
             continue
-        ang, _ = errors(d, sol)
+        ang, _ = attitude_errors_deg(d, sol)
         f = sol.att_fixed
         t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]
         t0 = t[int(np.argmax(f))]
         assert f[int(np.argmax(f)):].mean() > 0.99 and "fix_lost" not in sol.summary["events"]
         late = f & (t > t0 + 30.0)
-        out[sm] = ang[late].max(), _lag_deg(d, sol, t0 + 30.0), sol
+        out[sm] = ang[late].max(), lag_deg(d, sol, t0 + 30.0), sol
     (max_f, lag_f, _), (max_s, lag_s, sol_s) = out[False], out[True]
     # the forward filter with Table 1's random walk lags the pitch-up (the paper: up to 1 deg)
     assert lag_f > 0.4 and max_f > 0.6, (lag_f, max_f)
@@ -126,7 +125,7 @@ def test_smoother_removes_the_lag_of_the_pitch_up(pitch_up):
     # its sigmas are not optimistic after convergence: std(error / sigma) per angle not above 1.2 (measured
     # 0.50 / 0.64 / 0.46: conservative, as the forward filter's on white-noise data, because the multipath model's
     # share is kept at its filtered value; the forward filter's pitch 1.70 with its lag)
-    _, de = errors(d, sol_s)
+    _, de = attitude_errors_deg(d, sol_s)
     t = np.asarray(sol_s.pobs.time - sol_s.pobs.time[0], float)[sol_s.att_epochs]
     late = sol_s.att_fixed & (t > t[int(np.argmax(sol_s.att_fixed))] + 30.0)
     z = (de / sol_s.sigma_euler_deg)[late]
@@ -136,7 +135,7 @@ def test_smoother_removes_the_lag_of_the_pitch_up(pitch_up):
 def test_smoother_changes_nothing_but_the_baselines_omega_and_their_covariance(pitch_up):
     _, sols = pitch_up
     a, b = sols[False].fr, sols[True].fr
-    assert AttitudeSettings().smoother is False and a.smoother_data is None
+    assert AttitudeSettings().smoothing.enabled is False and a.smoother_data is None
     assert "smoother" not in sols[False].summary
     assert sols[True].summary["smoother"]["epochs_smoothed"] == int((np.linalg.norm(
         a.b_ecef_m - b.b_ecef_m, axis=-1).max(axis=1) > 0).sum())
@@ -151,10 +150,10 @@ def test_smoother_changes_nothing_but_the_baselines_omega_and_their_covariance(p
 def test_job_config_passes_the_smoother_setting():
     from worker.jobs.attitude import AttitudeConfig
 
-    assert AttitudeConfig.model_validate({"smoother": True}).to_settings().smoother is True
-    assert AttitudeConfig.model_validate({}).to_settings().smoother is False
-    assert AttitudeConfig.model_validate({"smoother_adaptive_noise": True}).to_settings().smoother_adaptive_noise
-    assert AttitudeConfig.model_validate({}).to_settings().smoother_adaptive_noise is False
+    assert AttitudeConfig.model_validate({"smoother": True}).to_settings().smoothing.enabled is True
+    assert AttitudeConfig.model_validate({}).to_settings().smoothing.enabled is False
+    assert AttitudeConfig.model_validate({"smoother_adaptive_noise": True}).to_settings().smoothing.adaptive_noise
+    assert AttitudeConfig.model_validate({}).to_settings().smoothing.adaptive_noise is False
 
 
 def test_second_pass_with_table1_noise_reproduces_the_first(pitch_up, monkeypatch):
@@ -171,7 +170,7 @@ def test_second_pass_with_table1_noise_reproduces_the_first(pitch_up, monkeypatc
         return orig(*a, **k)
 
     monkeypatch.setattr(P, "run_filter", spy)
-    P.process(load_inputs(set_files(d)), AttitudeSettings(mode="dynamic", smoother=True, **ALL_PHASES))
+    P.process(load_inputs(set_files(d)), AttitudeSettings.preset("all-phases", mode="dynamic", smoothing={"enabled": True}))
     (args, kw), = calls
     a = orig(*args, **kw)
     n = a.fixed.shape[0]
@@ -221,7 +220,7 @@ def test_adaptive_noise_keeps_the_pitch_up_below_0_3_deg(pitch_up):
     out = {}
     for key in (True, "adaptive"):
         sol = sols[key]
-        ang, de = errors(d, sol)
+        ang, de = attitude_errors_deg(d, sol)
         f = sol.att_fixed
         t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]
         t0 = t[int(np.argmax(f))]

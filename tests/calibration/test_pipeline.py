@@ -2,7 +2,6 @@
 recovery of injected offsets and maps, identical maps on a re-run, refusals naming the set."""
 from __future__ import annotations
 
-import hashlib
 import json
 import shutil
 from pathlib import Path
@@ -10,33 +9,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.calibration._campaign import (compare_maps_mm, input_set, simulate_campaign, truth_map_mm, truth_of,
-                                         truth_split)
-from worker.context import JobContext
+from bench.local_jobs import input_set, job_context, product_bytes
+from gnssatt.calibration.simulated import compare_maps_mm, simulate_campaign, truth_map_mm, truth_of, truth_split
 from worker.errors import JobInputError
 from worker.jobs.calibration import HELD_OUT_ATTITUDE_DEFAULT, CalibrationConfig
 from worker.pipelines.calibration import run
 
 BENIGN = {"noise": False, "multipath": False, "cn0_jitter_db": 0.0}
 FAST_CFG = {"azimuth_step_deg": 10.0, "elevation_step_deg": 5.0, "min_count": 10}
-
-
-def _ctx(tmp: Path, sets) -> JobContext:
-    tmp.mkdir(parents=True, exist_ok=True)
-
-    def store(path: Path):
-        data = Path(path).read_bytes()
-        return hashlib.sha256(data).hexdigest(), len(data)
-
-    return JobContext(job_id="test", attempt=1, sets=sets, workdir=tmp, _store_blob=store)
-
-
-def _products(ctx) -> dict:
-    out = {}
-    for name in ctx.products:
-        p = ctx.workdir / "products" / name
-        out[name] = p.read_bytes()
-    return out
 
 
 @pytest.fixture(scope="module")
@@ -48,9 +28,9 @@ def pcv_campaign(tmp_path_factory):
 
 def test_campaign_recovers_offsets_without_pcv(tmp_path):
     dirs = simulate_campaign(tmp_path / "sets", 3, 600.0, seed=5, overrides={**BENIGN, "pcv": False})
-    ctx = _ctx(tmp_path / "job", [input_set(d) for d in dirs])
+    ctx = job_context(tmp_path / "job", [input_set(d) for d in dirs])
     run(ctx, CalibrationConfig(**FAST_CFG))
-    doc = json.loads(_products(ctx)["baselines.json"])
+    doc = json.loads(product_bytes(ctx)["baselines.json"])
     truth = truth_of(dirs[0])
     assert doc["frames"] == "body" and len(doc["baselines"]) == 2
     for b in doc["baselines"]:
@@ -66,9 +46,9 @@ def test_campaign_recovers_offsets_without_pcv(tmp_path):
 def test_campaign_recovers_maps_and_is_deterministic(tmp_path, pcv_campaign):
     sets = [input_set(d) for d in pcv_campaign]
     cfg = CalibrationConfig(**FAST_CFG, held_out_set=sets[-1].id)
-    ctx = _ctx(tmp_path / "a", sets)
+    ctx = job_context(tmp_path / "a", sets)
     run(ctx, cfg)
-    prod = _products(ctx)
+    prod = product_bytes(ctx)
     for name in ("baselines.json", "baselines.csv", "residual_statistics.json", "held_out_attitude.json",
                  "calibration_summary.json", "pcv_maps.png", "pcv_counts.png", "report.html"):
         assert name in prod, name
@@ -109,9 +89,9 @@ def test_campaign_recovers_maps_and_is_deterministic(tmp_path, pcv_campaign):
     summary = json.loads(prod["calibration_summary.json"])
     assert all(m["converged"] for m in summary["maps"])
     # re-run: the same maps bit for bit
-    ctx2 = _ctx(tmp_path / "b", sets)
+    ctx2 = job_context(tmp_path / "b", sets)
     run(ctx2, cfg)
-    prod2 = _products(ctx2)
+    prod2 = product_bytes(ctx2)
     for name in prod:
         if name.startswith("pcv_") and name.endswith(".json") or name == "baselines.json":
             assert prod[name] == prod2[name], name
@@ -125,14 +105,14 @@ def _copy(src: Path, dst: Path) -> Path:
 def test_refuses_a_set_without_reference_attitude(tmp_path, pcv_campaign):
     sets = [input_set(pcv_campaign[0]), input_set(pcv_campaign[1], skip=("reference_attitude.csv",))]
     with pytest.raises(JobInputError) as exc:
-        run(_ctx(tmp_path, sets), CalibrationConfig(**FAST_CFG))
+        run(job_context(tmp_path, sets), CalibrationConfig(**FAST_CFG))
     assert "set_001" in exc.value.detail and "reference attitude" in exc.value.detail
 
 
 def test_refuses_overlapping_sets(tmp_path, pcv_campaign):
     sets = [input_set(pcv_campaign[0]), input_set(pcv_campaign[1]), input_set(pcv_campaign[0], set_id="copy_of_0")]
     with pytest.raises(JobInputError) as exc:
-        run(_ctx(tmp_path, sets), CalibrationConfig(**FAST_CFG))
+        run(job_context(tmp_path, sets), CalibrationConfig(**FAST_CFG))
     assert "overlap" in exc.value.detail and "copy_of_0" in exc.value.detail and "set_000" in exc.value.detail
 
 
@@ -143,7 +123,7 @@ def test_refuses_a_set_of_another_platform(tmp_path, pcv_campaign):
     (other / "platform.json").write_text(json.dumps(doc))
     sets = [input_set(pcv_campaign[0]), input_set(other)]
     with pytest.raises(JobInputError) as exc:
-        run(_ctx(tmp_path / "job", sets), CalibrationConfig(**FAST_CFG))
+        run(job_context(tmp_path / "job", sets), CalibrationConfig(**FAST_CFG))
     assert exc.value.title == "Set of another platform"
     assert "'other'" in exc.value.detail and "GPS-1" in exc.value.detail
 
@@ -154,10 +134,10 @@ def test_refuses_a_reference_that_does_not_cover_the_observations(tmp_path, pcv_
     (cut / "reference_attitude.csv").write_text("\n".join(lines[:200] + lines[260:]) + "\n")  # a 60 s hole
     sets = [input_set(pcv_campaign[0]), input_set(cut)]
     with pytest.raises(JobInputError) as exc:
-        run(_ctx(tmp_path / "job", sets), CalibrationConfig(**FAST_CFG))
+        run(job_context(tmp_path / "job", sets), CalibrationConfig(**FAST_CFG))
     assert "'cut'" in exc.value.detail and "uncovered" in exc.value.detail and exc.value.file == "reference_attitude.csv"
     # with a gap limit above the hole it is bridged and accepted
-    run(_ctx(tmp_path / "job2", sets), CalibrationConfig(**FAST_CFG, max_reference_gap_s=120.0))
+    run(job_context(tmp_path / "job2", sets), CalibrationConfig(**FAST_CFG, max_reference_gap_s=120.0))
 
 
 def test_config_refuses_a_grid_that_does_not_divide():
@@ -178,9 +158,9 @@ def test_held_out_comparison_is_the_attitude_filter_with_the_published_calibrati
     from worker.jobs.attitude import AttitudeConfig, maps_for_settings
 
     sets = [input_set(d) for d in pcv_campaign]
-    ctx = _ctx(tmp_path / "job", sets)
+    ctx = job_context(tmp_path / "job", sets)
     run(ctx, CalibrationConfig(**FAST_CFG, held_out_set=sets[-1].id))
-    prod = _products(ctx)
+    prod = product_bytes(ctx)
     doc = json.loads(prod["held_out_attitude.json"])
     assert doc["method"].startswith("attitude filter (dynamic mode")
     w0, w1 = doc["without_calibration"], doc["with_calibration"]
@@ -201,7 +181,7 @@ def test_held_out_comparison_is_the_attitude_filter_with_the_published_calibrati
     assert doc["attitude_config"] == HELD_OUT_ATTITUDE_DEFAULT
     settings = AttitudeConfig(**HELD_OUT_ATTITUDE_DEFAULT,
                               calibrated_baselines=json.loads(prod["baselines.json"])).to_settings()
-    settings.pcv_maps = maps_for_settings(maps, list(inputs.platform.baselines))
+    settings.calibration.pcv_maps = maps_for_settings(maps, list(inputs.platform.baselines))
     job = filter_errors(inputs, settings)
     for a in ("yaw", "pitch", "roll"):
         assert job[a]["bias_deg"] == w1[a]["bias_deg"] and job[a]["std_deg"] == w1[a]["std_deg"], (a, job, w1)

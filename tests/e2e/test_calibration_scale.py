@@ -12,7 +12,8 @@ from pathlib import Path
 import httpx
 import pytest
 
-from tests.calibration._campaign import input_set, simulate_campaign
+from bench.local_jobs import input_set, job_context, product_bytes
+from gnssatt.calibration.simulated import simulate_campaign
 from tests.e2e.conftest import wait_for
 
 pytestmark = pytest.mark.e2e
@@ -32,13 +33,12 @@ def campaign(tmp_path_factory) -> list[Path]:
 @pytest.fixture(scope="module")
 def in_process(campaign, tmp_path_factory) -> dict[str, str]:
     """sha256 of the compared products of the same campaign run in-process (fan-out run locally)."""
-    from tests.calibration.test_pipeline import _ctx, _products
     from worker.jobs.calibration import CalibrationConfig
     from worker.pipelines.calibration import run
 
-    ctx = _ctx(tmp_path_factory.mktemp("cal_scale_job"), [input_set(d) for d in campaign])
+    ctx = job_context(tmp_path_factory.mktemp("cal_scale_job"), [input_set(d) for d in campaign])
     run(ctx, CalibrationConfig(**CFG))
-    return _hashes(_products(ctx))
+    return _hashes(product_bytes(ctx))
 
 
 def _hashes(products: dict[str, bytes]) -> dict[str, str]:

@@ -11,14 +11,14 @@ import sys
 
 import pytest
 
-from tests.builders.rinex import write_sample_set
-from tests.e2e.conftest import Service
+from gnssatt.sim.sample_set import write_sample_set
+from client.local_service import LocalService
 
 pytestmark = pytest.mark.e2e
 
 
 def test_api_conforms_to_its_spec(tmp_path):
-    svc = Service(tmp_path, "sqlite", None, None)
+    svc = LocalService(tmp_path, "sqlite", None, None)
     try:
         svc.start_api()
         svc.start_worker()

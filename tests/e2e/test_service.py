@@ -9,7 +9,7 @@ import threading
 import httpx
 import pytest
 
-from tests.builders.rinex import write_sample_set
+from gnssatt.sim.sample_set import write_sample_set
 from tests.e2e.conftest import wait_for
 
 pytestmark = pytest.mark.e2e

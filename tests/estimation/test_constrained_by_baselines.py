@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.estimation.problems import CASSIOPE_BODY_M, CUBESAT_BODY_M, simulate_epoch
+from gnssatt.estimation.synthetic import CASSIOPE_BODY_M, CUBESAT_BODY_M, simulate_epoch
 from tests.estimation.test_constrained_search import _brute_constrained, _joint_problem
 from gnssatt.estimation.constrained_search import constrained_search, constrained_search_by_baselines
 

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from tests.estimation.problems import CUBESAT_BODY_M, L1_WAVELENGTH_M, random_los, random_rotation
+from gnssatt.estimation.synthetic import CUBESAT_BODY_M, L1_WAVELENGTH_M, random_los, random_rotation
 from gnssatt.estimation.constrained_search import (
     DDBlock, constrained_search_by_baselines, dd_geometry, rotation_fit, rotation_starts, single_epoch_float,
 )

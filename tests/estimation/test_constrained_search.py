@@ -14,14 +14,14 @@ import numpy as np
 import pytest
 from scipy.optimize import minimize
 
-from tests.estimation.problems import (
+from gnssatt.estimation.synthetic import (
     CASSIOPE_BODY_M, CUBESAT_BODY_M, L1_WAVELENGTH_M, random_rotation, simulate_epoch,
 )
 from gnssatt.estimation.constrained_search import (
     DDBlock, constrained_search, constrained_search_float, dd_operator, float_from_single_differences,
     rotation_fit, single_epoch_float, sphere_fit,
 )
-from gnssatt.estimation.lambda_search import decorrelate, mlambda
+from gnssatt.estimation.lambda_search import integer_bootstrap, mlambda
 
 
 def _rotvec_to_R(v):
@@ -180,7 +180,7 @@ def _success_rates(seed, body, n_trials, n_sats_range=(8, 11)):
         ep = simulate_epoch(rng, body, n_sats=int(rng.integers(*n_sats_range)))
         s = ep.sol
         hits["rounding"] += np.array_equal(np.rint(s.a_float_cyc), ep.a_true)
-        hits["bootstrap"] += np.array_equal(_bootstrap(s.a_float_cyc, s.Q_a), ep.a_true)
+        hits["bootstrap"] += np.array_equal(integer_bootstrap(s.a_float_cyc, s.Q_a), ep.a_true)
         hits["ils"] += np.array_equal(mlambda(s.a_float_cyc, s.Q_a).fixed[0], ep.a_true)
         both = True
         for i, sl in enumerate(s.ambiguity_slices()):
@@ -193,19 +193,6 @@ def _success_rates(seed, body, n_trials, n_sats_range=(8, 11)):
     rates = {k: v / n_trials for k, v in hits.items()}
     rates["c_lambda"] = hits["c_lambda"] / per_baseline_trials
     return rates
-
-
-def _bootstrap(a, Q):
-    """Integer bootstrapping after decorrelation (sequential conditional rounding, Teunissen 1998)."""
-    dec = decorrelate(Q)
-    zs = dec.Z.T.astype(float) @ a
-    n = a.size
-    z = np.zeros(n)
-    zb = np.zeros(n)
-    for k in range(n - 1, -1, -1):
-        zb[k] = zs[k] - dec.L[k + 1:, k] @ (zb[k + 1:] - z[k + 1:])
-        z[k] = np.floor(zb[k] + 0.5)
-    return z.astype(np.int64) @ dec.Z_inv
 
 
 N_TRIALS = 300

@@ -17,9 +17,10 @@ import numpy as np
 import pytest
 
 from gnssatt.gnss.alignment import align_to_gps_epochs, detect_clock_jumps
-from gnssatt.gnss.constants import C_M_S, FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ
+from gnssatt.gnss.constants import C_M_S
 from gnssatt.gnss.ephemeris import BroadcastEphemeris
 from gnssatt.gnss.positioning import spp
+from gnssatt.gnss.signals import FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ
 
 ANTS = ["GPS-2", "GPS-0", "GPS-1"]
 BASE = dict(duration_s=300.0, noise=False, multipath=False, slip_rate_per_hour=0.0, gap_rate_per_hour=0.0,

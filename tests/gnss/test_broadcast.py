@@ -204,7 +204,8 @@ def test_bad_index_and_scalar_time(geonet_gps):
 def test_constants_consistent():
     assert K.F_REL_GPS_S_SQRT_M == pytest.approx(-2 * math.sqrt(K.GM_GPS_M3_S2) / K.C_M_S ** 2, rel=1e-9)
     assert K.F_REL_GALILEO_S_SQRT_M == pytest.approx(-2 * math.sqrt(K.GM_GALILEO_M3_S2) / K.C_M_S ** 2, rel=1e-9)
-    assert K.WAVELENGTH_GPS_L1_M == pytest.approx(0.190293672798, abs=1e-12)
+    from gnssatt.gnss.signals import WAVELENGTH_GPS_L1_M
+    assert WAVELENGTH_GPS_L1_M == pytest.approx(0.190293672798, abs=1e-12)
     assert K.TT_MINUS_GPS_S == pytest.approx(51.184)
 
 

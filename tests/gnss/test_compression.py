@@ -10,7 +10,7 @@ import hatanaka
 import ncompress
 import pytest
 
-from tests.builders.rinex import obs_v3_text
+from gnssatt.sim.sample_set import obs_v3_text
 from gnssatt.gnss.io.compression import detect_layer, read_text_bytes
 from gnssatt.gnss.io.errors import ParseError
 

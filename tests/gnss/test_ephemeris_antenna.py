@@ -124,7 +124,8 @@ def grace():
 
 def _mean_residual_per_satellite(grace, eph, n_epochs=2160):
     """Per-satellite mean of the ionosphere-free code minus the range from the JPL orbit (6 h, clock removed)."""
-    from gnssatt.gnss.constants import C_M_S, FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ
+    from gnssatt.gnss.constants import C_M_S
+    from gnssatt.gnss.signals import FREQ_GPS_L1_HZ, FREQ_GPS_L2_HZ
     from gnssatt.gnss.geometry import sagnac_rotate
     from gnssatt.gnss.orbits.sp3_interp import interpolate_sp3
 

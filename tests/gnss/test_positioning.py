@@ -20,8 +20,8 @@ import pytest
 from tests.conftest import real_set
 from gnssatt.gnss.ephemeris import BroadcastEphemeris, PreciseEphemeris
 from gnssatt.gnss.frames import enu, geodetic_to_ecef
-from gnssatt.gnss.positioning import (FLAG_NO_VELOCITY, FLAG_NOT_CONVERGED, FLAG_TOO_FEW, hatch_smooth,
-                                     klobuchar_l1_delay_s, saastamoinen_delay_m, spp)
+from gnssatt.gnss.positioning import (FLAG_NO_VELOCITY, FLAG_NOT_CONVERGED, FLAG_TOO_FEW, SppOptions,
+                                     hatch_smooth, klobuchar_l1_delay_s, saastamoinen_delay_m, spp)
 from gnssatt.gnss.time import GpsTime
 
 GRACE = "leo_grace_a_2007080"
@@ -87,7 +87,7 @@ def test_grace_precise_spp_within_2_m(grace):
     eph = PreciseEphemeris(grace["sp3"], grace["clk"])
     assert eph.antenna_offsets is not None  # IGS05 product -> the built-in igs05.atx satellite offsets
     raw = spp(grace["obs"], eph, epochs=GRACE_PRECISE_EPOCHS)
-    sm = spp(grace["obs"], eph, epochs=GRACE_PRECISE_EPOCHS, smoothing_window_s=600.0)
+    sm = spp(grace["obs"], eph, SppOptions(smoothing_window_s=600.0), epochs=GRACE_PRECISE_EPOCHS)
     assert sm.valid.mean() > 0.99  # one epoch has 4 satellites with CODE clocks: no fix
     ok = sm.valid & raw.valid
     e_raw, e_sm = (_grace_errors(s, grace["ref"])[0][ok] for s in (raw, sm))
@@ -114,14 +114,14 @@ def test_grace_precise_needs_the_satellite_antenna_offsets(grace):
 def test_grace_weighting_and_calibration_beat_the_flat_model(grace):
     eph = PreciseEphemeris(grace["sp3"], grace["clk"])
     new = spp(grace["obs"], eph, epochs=GRACE_PRECISE_EPOCHS)
-    old = spp(grace["obs"], eph, epochs=GRACE_PRECISE_EPOCHS, weighting="elevation", calibrate_variance=False,
-              arc_screening=False, smooth_variance=False)
+    old = spp(grace["obs"], eph, SppOptions(weighting="elevation", calibrate_variance=False, arc_screening=False,
+                                            smooth_variance=False), epochs=GRACE_PRECISE_EPOCHS)
     assert old.weighting == "elevation" and old.variance_factor == 1.0 and not old.arc_excluded.any()
     ok = new.valid & old.valid
     e_new, e_old = (_grace_errors(s, grace["ref"])[0][ok] for s in (new, old))
     assert _rms(e_old) > _rms(e_new) + OLD_MODEL_GAIN_M, (_rms(e_old), _rms(e_new))
     # calibrated: the a-priori noise scale hardly matters (the factor absorbs it)
-    other = spp(grace["obs"], eph, epochs=GRACE_PRECISE_EPOCHS, sigma_code_m=0.1)
+    other = spp(grace["obs"], eph, SppOptions(sigma_code_m=0.1), epochs=GRACE_PRECISE_EPOCHS)
     assert other.variance_factor == pytest.approx(new.variance_factor * 9.0, rel=0.2)
     d = np.linalg.norm(other.position_ecef_m - new.position_ecef_m, axis=1)
     assert np.nanmedian(d) < 0.01 and np.sqrt(np.nanmean(d ** 2)) < 0.3
@@ -132,7 +132,7 @@ def test_grace_arc_screening_removes_a_biased_pass(grace):
     at most epochs, not at the few with 5 satellites, where the fix took it (38 m errors)."""
     eph = PreciseEphemeris(grace["sp3"], grace["clk"])
     on = spp(grace["obs"], eph, epochs=GRACE_BIASED_PASS)
-    off = spp(grace["obs"], eph, epochs=GRACE_BIASED_PASS, arc_screening=False)
+    off = spp(grace["obs"], eph, SppOptions(arc_screening=False), epochs=GRACE_BIASED_PASS)
     j = on.sats.index("G25")
     main = slice(4154 - GRACE_BIASED_PASS.start, 4388 - GRACE_BIASED_PASS.start)  # the pass, 11:32:20-12:11:20
     assert on.arc_excluded[main, j].all() and not on.used[main, j].any()
@@ -170,7 +170,7 @@ def test_nagoya_static_within_a_few_metres(nagoya, name):
     assert 1e-4 < np.abs(sol.clock_s).min() and np.abs(sol.clock_s).max() < 1e-3
     assert np.abs(sol.clock_drift_s_s).max() < 1e-6
     # single frequency with Klobuchar still within ~5 m (measured 4.0 m)
-    sf = spp(obs, nagoya["eph"], iono_free=False)
+    sf = spp(obs, nagoya["eph"], SppOptions(iono_free=False))
     assert not sf.iono_free.any()
     assert np.linalg.norm(enu(truth, sf.position_ecef_m).mean(axis=0)) < 2 * STATIC_MEAN_3D_M
 
@@ -186,7 +186,7 @@ def test_raim_excludes_an_injected_fault(nagoya):
     col = sol.sats.index("G13")
     assert sol.excluded[:, col].mean() > 0.95
     assert np.linalg.norm(enu(truth, sol.position_ecef_m).mean(axis=0)) < STATIC_MEAN_3D_M
-    no_raim = spp(bad, nagoya["eph"], raim_max_exclusions=0)
+    no_raim = spp(bad, nagoya["eph"], SppOptions(raim_max_exclusions=0))
     assert np.linalg.norm(enu(truth, no_raim.position_ecef_m).mean(axis=0)) > 2 * STATIC_MEAN_3D_M
 
 
@@ -266,8 +266,9 @@ def test_arc_exclusions_rule():
 def test_weighting_auto_falls_back_to_elevation_without_signal_strength(grace):
     obs = copy.copy(grace["obs"])
     obs.ssi = np.full_like(grace["obs"].ssi, -1)
-    sol = spp(obs, BroadcastEphemeris(grace["nav"]), epochs=slice(0, 30), velocity=False)
+    sol = spp(obs, BroadcastEphemeris(grace["nav"]), SppOptions(velocity=False), epochs=slice(0, 30))
     assert sol.weighting == "elevation"
-    assert spp(grace["obs"], BroadcastEphemeris(grace["nav"]), epochs=slice(0, 30), velocity=False).weighting == "cn0"
+    assert spp(grace["obs"], BroadcastEphemeris(grace["nav"]), SppOptions(velocity=False),
+               epochs=slice(0, 30)).weighting == "cn0"
     with pytest.raises(ValueError):
-        spp(grace["obs"], BroadcastEphemeris(grace["nav"]), epochs=slice(0, 3), weighting="snr")
+        spp(grace["obs"], BroadcastEphemeris(grace["nav"]), SppOptions(weighting="snr"), epochs=slice(0, 3))

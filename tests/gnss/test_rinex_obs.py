@@ -15,14 +15,14 @@ from tests.conftest import real_set
 from tests.gnss.test_rinex_obs_helpers import replace_header_line, small_obs
 from gnssatt.gnss.io.errors import ParseError
 from gnssatt.gnss.io.rinex_obs import read_rinex_obs, rinex3_code, summarize_rinex_obs
-from gnssatt.gnss.io.rinex_obs_write import rinex_obs_bytes
+from gnssatt.gnss.io.rinex_obs_write import ObsWriteHeader, rinex_obs_bytes
 
 
 V2_SATS = ("G01", "G05", "R07")
 
 
 def _text(obs=None, version=3.04, **kw) -> str:
-    return rinex_obs_bytes(obs if obs is not None else small_obs(), version, **kw).decode()
+    return rinex_obs_bytes(obs if obs is not None else small_obs(), version, ObsWriteHeader(**kw)).decode()
 
 
 def _read(text: str, name="t.rnx"):

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from tests.conftest import real_set
-from tests.gnss.test_rinex_obs_helpers import compare_with_georinex, cut_rinex, load_georinex, small_obs
+from bench.georinex_check import compare_with_georinex, load_georinex
+from tests.gnss.test_rinex_obs_helpers import cut_rinex, small_obs
 from gnssatt.gnss.io.rinex_obs import read_rinex_obs
 from gnssatt.gnss.io.rinex_obs_write import rinex_obs_bytes
 

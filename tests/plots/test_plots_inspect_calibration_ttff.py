@@ -11,7 +11,7 @@ import sys
 import numpy as np
 import pytest
 
-from tests.builders.rinex import obs_v3_text
+from gnssatt.sim.sample_set import obs_v3_text
 from tests.conftest import REPO_ROOT
 from tests.plots.builders import TABLE5_FIRST_ROWS, pcv_map, ttff_runs
 from gnssatt.gnss.io.rinex_obs import read_rinex_obs

@@ -34,8 +34,8 @@ def study_sets(tmp_path_factory):
 
 def test_job_config_passes_the_search_to_the_filter():
     s = AttitudeConfig.model_validate({"ambiguity_search": "constrained", "min_ratio_constrained": 2.5}).to_settings()
-    assert s.ambiguity_search == "constrained" and s.min_ratio_constrained == 2.5
-    assert AttitudeConfig.model_validate({}).to_settings().ambiguity_search == "lambda"
+    assert s.ambiguity.ambiguity_search == "constrained" and s.ambiguity.min_ratio_constrained == 2.5
+    assert AttitudeConfig.model_validate({}).to_settings().ambiguity.ambiguity_search == "lambda"
     with pytest.raises(ValueError):
         AttitudeConfig.model_validate({"ambiguity_search": "rounding"})
 

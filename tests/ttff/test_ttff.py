@@ -199,7 +199,7 @@ def test_payloads_are_deterministic():
     assert a == payloads(SimpleNamespace(sets=[]), cfg) and len(a) == 3
     assert "pcv" not in a[0]["overrides"]          # realism is the preset's own
     from worker.pipelines.ttff import _options
-    assert _options(a[0]["options"]).filter_settings_by_configuration == {"L2": {"ar_min_ratio_first_fix": 2.0}}
+    assert _options(a[0]["options"]).filter_settings_by_configuration == {"L2": {"ambiguity": {"min_ratio_first_fix": 2.0}}}
     b = payloads(SimpleNamespace(sets=[]), TtffConfig.model_validate({"simulate": {"count": 3, "seed": 2,
                                                                                    "realistic": False}}))
     assert all(b[0]["overrides"][k] == v for k, v in BENIGN_OVERRIDES.items())
@@ -239,7 +239,7 @@ def test_filter_integers_scored_against_truth(study_set):
 
     ss = study_set
     fr = run_filter(ss.pobs, ss.geom, ss.bl_idx, ss.body_baselines_m, ss.boresight_body,
-                    AttitudeSettings(signals=["L1", "L2"]), ss.R_ref_from_ecef[0])
+                    AttitudeSettings.preset("seed000", signals=["L1", "L2"]), ss.R_ref_from_ecef[0])
     log = fr.fix_log
     assert log["epoch"].size >= 10
     w = filter_integer_errors(ss, log, ["L1", "L2"])

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.e2e.conftest import Service
+from client.local_service import LocalService
 
 REPO = Path(__file__).resolve().parents[2]
 ARTIFACTS = REPO / "test-artifacts"
@@ -51,7 +51,7 @@ def browser():
 @pytest.fixture(scope="module")
 def site(tmp_path_factory):
     """The real service on a free port (API + one worker), shared by the tests of a module."""
-    svc = Service(tmp_path_factory.mktemp("ui"), "sqlite", None, None)
+    svc = LocalService(tmp_path_factory.mktemp("ui"), "sqlite", None, None)
     try:
         svc.start_api()
         svc.start_worker()

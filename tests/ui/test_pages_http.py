@@ -10,7 +10,7 @@ from app.keys import create_key
 from app.main import create_app
 from app.models import PcvMap
 from app.settings import Settings
-from tests.builders.rinex import write_sample_set
+from gnssatt.sim.sample_set import write_sample_set
 from worker import runner
 from worker.main import build_runtime
 

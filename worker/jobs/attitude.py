@@ -1,111 +1,85 @@
 """Job type `attitude`: multi-antenna carrier-phase attitude (seed 000 EKF, MLAMBDA, QUEST), the product's main job."""
 from __future__ import annotations
 
+import dataclasses
+import typing
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator
+from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator, model_validator
+
+from gnssatt.attitude.settings import (FLAT_TO_NESTED, GROUPS, PRESETS, SIGNAL_ALIASES, SIGNALS, AttitudeSettings,
+                                       cn0_mask_of)
 
 from worker.jobs.registry import JobType
 
 
-class AttitudeConfig(BaseModel):
-    """Filter settings; defaults are seed 000 Table 1 (noise) and Table 2 (editing limits)."""
+_BOUNDS = ("gt", "ge", "lt", "le", "min_length", "max_length")
+
+
+def _field_of(f: dataclasses.Field, hint):
+    """(type, pydantic Field) of one settings field from its dataclass metadata (default, bounds, description)."""
+    default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
+    kw = {k: v for k, v in f.metadata.items() if k in _BOUNDS}
+    return hint, Field(default, description=f.metadata.get("description"), **kw)
+
+
+def _model_of(record: type, name: str, extra: dict | None = None) -> type[BaseModel]:
+    """Pydantic model generated from a settings dataclass (fields without metadata job=False), extra="forbid"."""
+    hints = typing.get_type_hints(record)
+    spec = {f.name: _field_of(f, hints[f.name]) for f in dataclasses.fields(record)
+            if f.name not in GROUPS and f.metadata.get("job", True)}
+    return create_model(name, __config__=ConfigDict(extra="forbid"), __doc__=record.__doc__, **spec, **(extra or {}))
+
+
+#: job-only fields of the Table 2 group: the GPS L1/L2 C/N0 masks, pinned into cn0_mask_dbhz (null: the preset's)
+_TABLE2_JOB = {
+    "cn0_mask_l1_dbhz": (float | None, Field(None, ge=0, le=70, description="C/N0 mask of GPS L1 C/A (seed 000 "
+                                              "Table 2: 35; 0: none); null: the preset's.")),
+    "cn0_mask_l2_dbhz": (float | None, Field(None, ge=0, le=70, description="C/N0 mask of GPS L2 (seed 000 Table "
+                                              "2: 30; 0: none); null: the preset's.")),
+}
+_GROUP_MODELS = {g: _model_of(t, f"Attitude{t.__name__}", _TABLE2_JOB if g == "table2" else None)
+                 for g, t in GROUPS.items()}
+#: legacy flat keys of the job config -> "group.field" (the settings' FLAT_TO_NESTED + the job's L1/L2 masks)
+JOB_FLAT_TO_NESTED = {**{k: v for k, v in FLAT_TO_NESTED.items()
+                         if v.split(".")[1] in _GROUP_MODELS[v.split(".")[0]].model_fields},
+                      "cn0_mask_l1_dbhz": "table2.cn0_mask_l1_dbhz",
+                      "cn0_mask_l2_dbhz": "table2.cn0_mask_l2_dbhz"}
+
+
+class _AttitudeConfigBase(BaseModel):
+    """Attitude job config. Canonical JSON: nested groups ({"table1": {...}, "table2": {...}, "ambiguity",
+    "noise", "smoothing", "adaptive", "calibration"}) over a named `preset`; the old flat keys (e.g.
+    "sigma_code_m", "smoother") are accepted too and translated by JOB_FLAT_TO_NESTED. Defaults shown are the
+    seed000 preset's; with another preset, unset fields take the preset's values."""
 
     model_config = ConfigDict(extra="forbid")
-    mode: Literal["dynamic", "kinematic"] = Field(
-        "dynamic", description="dynamic: common angular velocity, no baseline process noise; kinematic: baseline "
-                               "process noise (sigma_baseline_kinematic_m per tau), no angular velocity.")
-    signals: list[str] = Field(["L1", "L2"], min_length=1, max_length=16,
-                               description="Signals, each one system on one frequency: 'L1' (GPS L1 C/A), 'L2' (GPS "
-                                           "L2 P(Y), L2C if P(Y) is absent), or system-qualified 'G:L5', 'E:E1', "
-                                           "'E:E5a', 'E:E5b', 'C:B1I', 'C:B2I', 'C:B3I', 'J:L1', 'J:L2', 'J:L5'.")
-    systems: list[Literal["G", "E", "C", "J"]] | None = Field(
-        None, min_length=1, max_length=4,
-        description="Preset replacing `signals`: the first two frequencies of each system (GPS/QZSS L1+L2, Galileo "
-                    "E1+E5b, BeiDou B1I+B2I), e.g. ['G', 'E', 'C', 'J']. GLONASS is not supported.")
-    cn0_mask_dbhz: dict[str, float] = Field(
-        {}, description="C/N0 masks (dB-Hz) of other signals by name (default: cn0_mask_default_dbhz).")
-    cn0_mask_default_dbhz: float | None = Field(
-        None, ge=0, le=70, description="C/N0 mask of signals not named; null (default): seed 000 Table 2 style, 35 on "
-                                       "the first frequency of a system, 30 on the others; 0: none (the noise model "
-                                       "weights weak signals; 'all phases', docs/attitude.md).")
-    sigma_code_m: float = Field(0.30, gt=0, le=100, description="Single-difference code noise (m).")
-    sigma_phase_m: float = Field(0.003, gt=0, le=1, description="Single-difference phase noise (m).")
-    weighting: Literal["none", "cn0", "elevation"] = Field("none", description="Observation weighting.")
-    noise_estimation: bool = Field(True, description="Estimate the white noise per signal from triple differences "
-                                                     "(keeps the predicted sigmas honest).")
-    sigma0_baseline_m: float = Field(2.0, gt=0, le=1000)
-    sigma_clock_s: float = Field(1e-6, gt=0, le=1e-2)
-    sigma0_omega_deg_s: float = Field(1.0, gt=0, le=100)
-    sigma_omega_deg_s: float = Field(0.03, ge=0, le=100, description="Angular velocity random walk per tau.")
-    tau_omega_s: float = Field(1.0, gt=0, le=3600)
-    sigma0_ambiguity_cyc: float = Field(500.0, gt=0, le=1e6)
-    sigma_baseline_kinematic_m: float = Field(1.0, gt=0, le=100)
-    elevation_mask_local_deg: float = Field(-90.0, ge=-90, le=90)
-    elevation_mask_antenna_deg: float = Field(
-        0.0, ge=-90, le=90, description="Antenna-frame elevation mask once fixed (seed 000 Table 2: 0; -90 keeps "
-                                         "every satellite, the noise model weighting low ones).")
-    cn0_mask_l1_dbhz: float = Field(35.0, ge=0, le=70, description="C/N0 mask of GPS L1 C/A (seed 000 Table 2; 0: none).")
-    cn0_mask_l2_dbhz: float = Field(30.0, ge=0, le=70, description="C/N0 mask of GPS L2 (seed 000 Table 2; 0: none).")
-    td_code_m: float = Field(0.5, gt=0, le=1000)
-    td_phase_cyc: float = Field(0.25, gt=0, le=100)
-    max_length_error_m: float = Field(0.03, gt=0, le=10)
-    min_ratio: float = Field(0.0, ge=0, le=1000, description="Also require this ratio (0: ratio only reported).")
-    ambiguity_search: Literal["lambda", "constrained"] = Field(
-        "lambda", description="Integer search of a baseline's first fix: lambda (MLAMBDA + length validation, "
-                              "seed 000) or constrained (C-LAMBDA: the known baseline length inside the search, "
-                              "accepted by the ratio of the constrained objective and the length test; fixes "
-                              "single-frequency starts sooner, docs/ttff.md).")
-    min_ratio_constrained: float = Field(3.0, ge=1, le=1000,
-                                         description="constrained: ratio of the constrained objective to accept.")
-    smoother: bool = Field(False, description="Dynamic mode: fixed-interval (RTS) smoothing of the angular velocity "
-                                              "and baselines after the forward pass, so each epoch also uses the "
-                                              "later data: no lag in slews, about half the noise (docs/attitude.md "
-                                              "'Where the slew errors come from'). Off: the forward filter's output.")
-    adaptive_omega_noise: bool = Field(
-        False, description="Dynamic mode: causal manoeuvre detection (docs/attitude.md 'Adaptive angular-velocity "
-                           "noise'): constant-angular-acceleration hypotheses against the angular-velocity random "
-                           "walk; the estimate follows them by their weight and a detection raises the random walk "
-                           "along the acceleration axis. Off: Table 1's random walk.")
-    adaptive_omega_threshold: float = Field(5.0, gt=0, le=100,
-                                            description="Log-likelihood ratio of a detected manoeuvre.")
-    adaptive_omega_mix_at: float = Field(0.0, ge=-20, le=100, description="Log-likelihood ratio at which the "
-                                                                          "estimate is half-way to the manoeuvre.")
-    adaptive_omega_sigma_acc_deg_s2: float = Field(0.05, gt=0, le=100, description="Prior sigma of the "
-                                                   "hypotheses' angular acceleration (deg/s^2).")
-    adaptive_omega_sigma_deg_s: float = Field(0.3, ge=0, le=100, description="Angular-velocity random walk per tau "
-                                                                             "along the axis after a detection.")
-    adaptive_omega_hold_epochs: int = Field(30, ge=0, le=3600, description="Updates the raised random walk lasts "
-                                                                           "after the last detection.")
-    smoother_adaptive_noise: bool = Field(False, description="Dynamic mode, implies `smoother`: the angular "
-                                          "velocity's random walk per epoch from the smoothed angular acceleration "
-                                          "of a first pass (low when steady, raised around manoeuvres), then the "
-                                          "whole filter run again with it and smoothed: about twice the CPU (docs/"
-                                          "attitude.md 'Adaptive process noise of the smoother'). Off: Table 1's.")
-    attitude_method: Literal["quest", "triad", "ml"] = Field(
-        "quest", description="quest: QUEST with weights by baseline length (seed 000); triad: the first baseline "
-                             "exact; ml: maximum likelihood with the baselines' full covariance (uses that a "
-                             "baseline's direction is known better in some directions than others; kinematic "
-                             "attitude rms 12 % lower on the simulated CASSIOPE pass, docs/attitude.md).")
-    initial_q_body_from_ecef: list[float] | None = Field(
-        None, min_length=4, max_length=4, description="Initial attitude; default Earth pointing (spacecraft) or "
-                                                      "level heading north (terrestrial).")
-    calibrated_baselines: dict | None = Field(
-        None, description="A calibration job's baselines.json object (CONVENTIONS.md) replacing the a priori "
-                          "antenna positions.")
-    pcv_empty_bins: Literal["exclude", "keep"] = Field(
-        "exclude", description="A fixed baseline's phase whose map bin is empty: exclude it (seed 000 sec. 3.2) or "
-                               "keep it uncorrected.")
-    pcv_map_ids: list[str] = Field(
-        [], max_length=32, description="Ids of stored differential PCV maps (/v1/pcv-maps), at most one per "
-                                       "baseline and signal, subtracted from the phase single differences of "
-                                       "fixed baselines (directions with an empty bin then leave the solution).")
 
-    @field_validator("signals")
+    @model_validator(mode="before")
+    @classmethod
+    def _nest_flat_keys(cls, data):
+        if not isinstance(data, dict):
+            return data
+        out: dict = {}
+        for key, val in data.items():
+            if key in JOB_FLAT_TO_NESTED:
+                g, name = JOB_FLAT_TO_NESTED[key].split(".")
+                grp = out.setdefault(g, {})
+                if not isinstance(grp, dict) or name in grp:
+                    raise ValueError(f"{key} given both flat and in {g}")
+                grp[name] = val
+            elif key in GROUPS and isinstance(val, dict) and isinstance(out.get(key), dict):
+                dup = sorted(set(out[key]) & set(val))
+                if dup:
+                    raise ValueError(f"{dup[0]} given both flat and in {key}")
+                out[key] = {**out[key], **val}
+            else:
+                out[key] = val
+        return out
+
+    @field_validator("signals", check_fields=False)
     @classmethod
     def _unique(cls, v):
-        from gnssatt.attitude.settings import SIGNAL_ALIASES, SIGNALS
-
         unknown = [x for x in v if x not in SIGNALS]
         if unknown:
             raise ValueError(f"unknown signals {unknown}; known: {', '.join(SIGNALS)}")
@@ -113,35 +87,61 @@ class AttitudeConfig(BaseModel):
             raise ValueError("signals must not repeat")
         return v
 
-    @field_validator("systems")
+    @field_validator("systems", check_fields=False)
     @classmethod
     def _unique_systems(cls, v):
         if v is not None and len(set(v)) != len(v):
             raise ValueError("systems must not repeat")
         return v
 
-    @field_validator("cn0_mask_dbhz")
-    @classmethod
-    def _known_masks(cls, v):
-        from gnssatt.attitude.settings import SIGNALS
-
-        bad = [k for k, x in v.items() if k not in SIGNALS or not 0 <= x <= 70]
+    @model_validator(mode="after")
+    def _known_masks(self):
+        bad = [k for k, x in self.table2.cn0_mask_dbhz.items() if k not in SIGNALS or not 0 <= x <= 70]
         if bad:
             raise ValueError(f"cn0_mask_dbhz: unknown signal or mask outside 0-70 dB-Hz: {bad}")
-        return v
+        return self
 
-    def to_settings(self):
-        from gnssatt.attitude.settings import AttitudeSettings
-
-        d = self.model_dump()
-        cn0 = {**d.pop("cn0_mask_dbhz"), "L1": d.pop("cn0_mask_l1_dbhz"), "L2": d.pop("cn0_mask_l2_dbhz")}
-        cal = d.pop("calibrated_baselines") or {}
-        d.pop("pcv_map_ids")          # resolved from the store by the pipeline (maps_for_settings)
+    def to_settings(self) -> AttitudeSettings:
+        """The filter settings: the preset, then every field given (nested or flat), the L1/L2 masks pinned."""
+        d = self.model_dump(exclude_unset=True)
+        preset = d.pop("preset", "seed000")
+        cal = d.pop("calibrated_baselines", None) or {}
+        d.pop("pcv_map_ids", None)          # resolved from the store by the pipeline (maps_for_settings)
+        t2 = d.setdefault("table2", {})
+        base = AttitudeSettings.preset(preset)
+        cn0 = {**t2.get("cn0_mask_dbhz", base.table2.cn0_mask_dbhz)}
+        for key, sig in (("cn0_mask_l1_dbhz", "L1"), ("cn0_mask_l2_dbhz", "L2")):
+            val = t2.pop(key, None)
+            cn0[sig] = cn0_mask_of(base, sig) if val is None else val
+        t2["cn0_mask_dbhz"] = cn0
         cal_map = {}
         for b in cal.get("baselines", []) if isinstance(cal, dict) else []:
             if {"from", "to", "calibrated_m"} <= set(b):
                 cal_map[(b["from"], b["to"])] = b["calibrated_m"]
-        return AttitudeSettings(cn0_mask_dbhz=cn0, calibrated_baselines=cal_map, **d)
+        d.setdefault("calibration", {})["calibrated_baselines"] = cal_map
+        return base.override(**d)
+
+
+_JOB_EXTRA = {
+    "preset": (Literal[tuple(PRESETS)], Field("seed000", description="Named settings the fields given here "
+                                               "override (gnssatt.attitude.settings.PRESETS): seed000 = Tables "
+                                               "1-2; all-phases = no C/N0 or antenna-frame masks; "
+                                               "all-phases-smoother; all-phases-adaptive-smoother.")),
+    "calibrated_baselines": (dict | None, Field(
+        None, description="A calibration job's baselines.json object (CONVENTIONS.md) replacing the a priori "
+                          "antenna positions.")),
+    "pcv_map_ids": (list[str], Field(
+        [], max_length=32, description="Ids of stored differential PCV maps (/v1/pcv-maps), at most one per "
+                                       "baseline and signal, subtracted from the phase single differences of "
+                                       "fixed baselines (directions with an empty bin then leave the solution).")),
+}
+_TOP_HINTS = typing.get_type_hints(AttitudeSettings)
+AttitudeConfig = create_model(
+    "AttitudeConfig", __base__=_AttitudeConfigBase, __doc__=_AttitudeConfigBase.__doc__,
+    **{f.name: _field_of(f, _TOP_HINTS[f.name]) for f in dataclasses.fields(AttitudeSettings)
+       if f.name not in GROUPS and f.metadata.get("job", True)},
+    **{g: (m, Field(default_factory=m, description=GROUPS[g].__doc__)) for g, m in _GROUP_MODELS.items()},
+    **_JOB_EXTRA)
 
 
 JOB_TYPE = JobType(
@@ -157,7 +157,7 @@ JOB_TYPE = JobType(
 
 
 def maps_for_settings(docs: list[tuple[str, dict]], baselines: list[tuple[str, str]]) -> dict:
-    """(first, second, frequency) -> map dict for AttitudeSettings.pcv_maps from (map id, CONVENTIONS JSON)
+    """(first, second, frequency) -> map dict for AttitudeSettings.calibration.pcv_maps from (map id, CONVENTIONS JSON)
     pairs; ValueError naming the map when one is malformed, is not for a baseline of the platform, or repeats a
     (pair, frequency)."""
     from gnssatt.gnss.io.errors import ParseError

@@ -15,8 +15,9 @@ from worker.jobs.registry import JobType
 #: comparison measures the calibration, and white noise left in both runs dilutes the std cut; with the job's
 #: plain defaults even the true calibration cuts the roll std of the bench's held-out pass by only 27.5 %
 #: (docs/calibration.md "Error budget"). `{}` gives the attitude job's defaults.
-HELD_OUT_ATTITUDE_DEFAULT: dict = {"smoother": True, "elevation_mask_antenna_deg": -90.0, "cn0_mask_l1_dbhz": 0.0,
-                                   "cn0_mask_l2_dbhz": 0.0, "cn0_mask_default_dbhz": 0.0}
+#: The preset "all-phases-smoother" is exactly the former flat default {"smoother": true,
+#: "elevation_mask_antenna_deg": -90, "cn0_mask_l1_dbhz": 0, "cn0_mask_l2_dbhz": 0, "cn0_mask_default_dbhz": 0}.
+HELD_OUT_ATTITUDE_DEFAULT: dict = {"preset": "all-phases-smoother"}
 
 
 class CalibrationConfig(BaseModel):

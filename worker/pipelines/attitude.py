@@ -53,7 +53,7 @@ def run(ctx: JobContext, config) -> None:
 
         docs = [(map_id, ctx.input_pcv_map(map_id)) for map_id in config.pcv_map_ids]
         try:
-            settings.pcv_maps = maps_for_settings(docs, list(inputs.platform.baselines))
+            settings.calibration.pcv_maps = maps_for_settings(docs, list(inputs.platform.baselines))
         except ValueError as exc:
             raise JobInputError("Unusable PCV map", str(exc), field="config.pcv_map_ids") from exc
     last = [0.0]

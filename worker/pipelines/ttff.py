@@ -28,9 +28,10 @@ def _options(d: dict):
                             min_ratio_constrained=d["min_ratio_constrained"])
     return StudyOptions(configurations=tuple(d["configurations"]), methods=tuple(d["methods"]),
                         max_duration_s=d["duration_s"], single_epoch_step_s=d["single_epoch_step_s"],
-                        filter_settings={"mode": d["filter_mode"], "max_length_error_m": d["max_length_error_m"]},
+                        filter_settings={"mode": d["filter_mode"],
+                                         "ambiguity": {"max_length_error_m": d["max_length_error_m"]}},
                         filter_settings_by_configuration={
-                            "L2": {"ar_min_ratio_first_fix": d.get("l2_min_ratio_first_fix", 2.0)}},
+                            "L2": {"ambiguity": {"min_ratio_first_fix": d.get("l2_min_ratio_first_fix", 2.0)}}},
                         single_epoch=se)
 
 

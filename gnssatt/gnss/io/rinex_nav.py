@@ -23,8 +23,8 @@ Time scales (kept as the file gives them, see each dataclass):
   `toe_sow` seconds of the BDT week (BDT week 0 starts at GPS week 1356). Use `KeplerEphemeris.toe_gpst()` /
   `toc_gpst()` for GPS-time values.
 - GLONASS: RINEX gives the epoch in UTC (RINEX-QUIRKS "GLONASS ephemeris times are UTC"); it is converted to GPS
-  time with the leap seconds (the built-in table `GPS_UTC_LEAP_S`, the header `LEAP SECONDS` after the table's
-  expiry; a header that disagrees with the table is reported).
+  time with the leap seconds (the project's table gnssatt.gnss.leap_seconds, the header `LEAP SECONDS` after the
+  table's expiry `LEAP_TABLE_EXPIRES`; a header that disagrees with the table is reported).
 
 Neglects: the RINEX 4 STO/EOP/ION messages, SBAS and NavIC records (skipped, counted).
 """
@@ -36,32 +36,23 @@ from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from gnssatt.gnss.constants import BDT_MINUS_GPST_S, BDT_WEEK_OFFSET
 from gnssatt.gnss.io.compression import read_text_bytes
 from gnssatt.gnss.io.errors import ParseError, ParseWarning
+from gnssatt.gnss.leap_seconds import EXPIRES as LEAP_TABLE_EXPIRES, gps_minus_utc_at_utc_s
 from gnssatt.gnss.time import SECONDS_PER_WEEK, GpsTime
 
 __all__ = [
     "KeplerEphemeris", "GlonassEphemeris", "NavData", "read_rinex_nav", "summarize_rinex_nav",
-    "select_ephemeris", "gps_minus_utc_s", "GPS_UTC_LEAP_S", "LEAP_TABLE_EXPIRES", "BDT_WEEK0_GPS_WEEK",
+    "select_ephemeris", "gps_minus_utc_s", "LEAP_TABLE_EXPIRES", "BDT_WEEK0_GPS_WEEK",
     "BDT_MINUS_GPST_S", "read_source_text",
 ]
 
 # --- constants -------------------------------------------------------------------------------------
 
-#: GPS-UTC in seconds from each UTC date on (IERS Bulletin C; GPS time = UTC + value).
-GPS_UTC_LEAP_S: tuple[tuple[tuple[int, int, int], int], ...] = (
-    ((1981, 7, 1), 1), ((1982, 7, 1), 2), ((1983, 7, 1), 3), ((1985, 7, 1), 4), ((1988, 1, 1), 5),
-    ((1990, 1, 1), 6), ((1991, 1, 1), 7), ((1992, 7, 1), 8), ((1993, 7, 1), 9), ((1994, 7, 1), 10),
-    ((1996, 1, 1), 11), ((1997, 7, 1), 12), ((1999, 1, 1), 13), ((2006, 1, 1), 14), ((2009, 1, 1), 15),
-    ((2012, 7, 1), 16), ((2015, 7, 1), 17), ((2017, 1, 1), 18),
-)
-#: The table above is known to be complete until this UTC date (IERS Bulletin C 70: no leap second at the end
-#: of December 2025; the IETF leap-seconds.list of that bulletin expires 2026-06-28).
-LEAP_TABLE_EXPIRES = (2026, 6, 28)
-#: BDT week 0 begins 2006-01-01T00:00:00 BDT = GPS week 1356 + 14 s (BDS-SIS-ICD-2.0 sec. 4.2).
-BDT_WEEK0_GPS_WEEK = 1356
-#: BDT - GPST in seconds (BDT started 14 s behind GPST and has no leap seconds since).
-BDT_MINUS_GPST_S = -14.0
+#: BDT week 0 begins 2006-01-01T00:00:00 BDT = GPS week 1356 + 14 s (BDS-SIS-ICD-2.0 sec. 4.2); BDT - GPST in
+#: seconds (BDT started 14 s behind GPST and has no leap seconds since): gnssatt.gnss.constants.
+BDT_WEEK0_GPS_WEEK = BDT_WEEK_OFFSET
 
 # Default half validity of a broadcast ephemeris around its toe, per system, in seconds. GPS/QZSS: half the
 # nominal 4 h curve-fit interval (IS-GPS-200 sec. 20.3.4.4; IS-QZSS-PNT sec. 4.1.2); Galileo 4 h and BeiDou
@@ -102,23 +93,9 @@ def _split_lines(text: str) -> list[str]:
 
 # --- leap seconds ----------------------------------------------------------------------------------------
 
-def _leap_table_seconds() -> tuple[np.ndarray, np.ndarray]:
-    dates = np.array([d for d, _ in GPS_UTC_LEAP_S])
-    # UTC instant of each step, as seconds in the GPS epoch count of the UTC calendar (before the step).
-    starts = GpsTime.from_calendar(dates[:, 0], dates[:, 1], dates[:, 2]).s
-    return starts, np.array([v for _, v in GPS_UTC_LEAP_S], dtype=np.int64)
-
-
-def gps_minus_utc_s(utc_calendar_s: np.ndarray) -> np.ndarray:
-    """GPS-UTC (int64 seconds) at UTC instants given as whole seconds of the UTC calendar since 1980-01-06.
-
-    Args:
-        utc_calendar_s: (n,) int64, `GpsTime.from_calendar(<UTC calendar>).s`.
-    Implements: IERS Bulletin C leap seconds (table `GPS_UTC_LEAP_S`, valid until `LEAP_TABLE_EXPIRES`).
-    """
-    starts, values = _leap_table_seconds()
-    idx = np.searchsorted(starts, np.asarray(utc_calendar_s, dtype=np.int64), side="right") - 1
-    return np.where(idx >= 0, values[np.clip(idx, 0, None)], 0)
+#: GPS-UTC (int64 s) at UTC instants given as whole seconds of the UTC calendar since 1980-01-06: the one
+#: leap-second table's `gps_minus_utc_at_utc_s` (gnssatt.gnss.leap_seconds, IERS Bulletin C, with `EXPIRES`).
+gps_minus_utc_s = gps_minus_utc_at_utc_s
 
 
 # --- dataclasses -----------------------------------------------------------------------------------------
@@ -724,16 +701,17 @@ def _build_glonass(ctx: _Ctx, rows, header_leap: int | None) -> GlonassEphemeris
                                     cal[:, 2].astype(np.int64), cal[:, 3].astype(np.int64),
                                     cal[:, 4].astype(np.int64), cal[:, 5])
     leap = gps_minus_utc_s(toc_utc.s)
-    expires = GpsTime.from_calendar(*LEAP_TABLE_EXPIRES).s
+    expires = GpsTime.from_calendar(LEAP_TABLE_EXPIRES.year, LEAP_TABLE_EXPIRES.month, LEAP_TABLE_EXPIRES.day).s
     after = toc_utc.s >= expires
     if n and after.any():
         if header_leap is None:
             ctx.warnings.append(ParseWarning("LEAP_TABLE_EXPIRED", "GLONASS epochs after the leap-second table "
-                                             f"expiry {LEAP_TABLE_EXPIRES} and no LEAP SECONDS in the header: "
-                                             f"GPS-UTC = {int(leap[-1])} s assumed", int(line_no[0])))
+                                             f"expiry {LEAP_TABLE_EXPIRES.isoformat()} and no LEAP SECONDS in the "
+                                             f"header: GPS-UTC = {int(leap[-1])} s assumed", int(line_no[0])))
         else:
             ctx.warnings.append(ParseWarning("LEAP_TABLE_EXPIRED", "GLONASS epochs after the leap-second table "
-                                             f"expiry: header LEAP SECONDS {header_leap} used", int(line_no[0])))
+                                             f"expiry {LEAP_TABLE_EXPIRES.isoformat()}: header LEAP SECONDS "
+                                             f"{header_leap} used", int(line_no[0])))
             leap = np.where(after, header_leap, leap)
     if n and header_leap is not None and not after.all() and header_leap != int(leap[~after][-1]):
         ctx.warnings.append(ParseWarning("LEAP_SECONDS_MISMATCH", f"header LEAP SECONDS {header_leap} differs from "

@@ -372,8 +372,36 @@ def _header_time(line: str) -> tuple[GpsTime, str]:
     return GpsTime(t.s, frac_s), line[48:51].strip() or "GPS"
 
 
-def _parse_header(lines: list[bytes], name: str) -> ObsHeader:
-    """ObsHeader from the header lines (lines[:n_header_lines], END OF HEADER included)."""
+class _HeaderCursor:
+    """Read position in the header lines while one record is parsed (multi-line records advance it)."""
+
+    def __init__(self, lines: list[bytes], name: str, major: int):
+        self.lines = lines
+        self.name = name
+        self.major = major
+        self.i = 1
+        self.line = ""
+        self.v2_types: list[str] = []
+
+    @property
+    def line_no(self) -> int:
+        return self.i + 1
+
+    def next_line(self) -> str | None:
+        """The next header line (a continuation), or None at the end of the header lines."""
+        self.i += 1
+        if self.i >= len(self.lines):
+            return None
+        self.line = self.lines[self.i].decode("latin-1")
+        return self.line
+
+
+def _parse_version_line(lines: list[bytes], name: str) -> ObsHeader:
+    """ObsHeader holding version, file type and system of line 1 (RINEX 3.05 Table A1 'RINEX VERSION / TYPE').
+
+    Raises ParseError for an empty file, a Hatanaka file that was not decoded, a missing label, an unreadable or
+    unsupported version, or a file type other than 'O'.
+    """
     if not lines or not lines[0].strip():
         raise ParseError(name, 1 if lines else None, "a RINEX observation file (first line RINEX VERSION / TYPE)",
                          "an empty file")
@@ -394,153 +422,182 @@ def _parse_header(lines: list[bytes], name: str) -> ObsHeader:
     if file_type.upper() != "O":
         raise ParseError(name, 1, "file type 'O' (observation data) in column 21", first, column=21)
     system = first[40:41].strip().upper() or "G"
-    hdr = ObsHeader(version=version, file_type="O", satellite_system=system)
+    return ObsHeader(version=version, file_type="O", satellite_system=system)
+
+
+def _h_comment(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    hdr.comments.append(cur.line[:60].rstrip())
+
+
+def _h_marker_name(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    hdr.marker_name = cur.line[:60].strip() or None
+
+
+def _h_marker_number(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    hdr.marker_number = cur.line[:20].strip() or None
+
+
+def _h_receiver(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    """REC # / TYPE / VERS: 3A20."""
+    line = cur.line
+    hdr.receiver_number = line[0:20].strip() or None
+    hdr.receiver_type = line[20:40].strip() or None
+    hdr.receiver_version = line[40:60].strip() or None
+
+
+def _h_antenna(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    """ANT # / TYPE: 2A20."""
+    hdr.antenna_number = cur.line[0:20].strip() or None
+    hdr.antenna_type = cur.line[20:40].strip() or None
+
+
+def _h_approx_position(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    """APPROX POSITION XYZ (3F14.4, m); 0 0 0 means unknown, a position far from the Earth is not trusted."""
+    xyz = [_f(cur.line[14 * k:14 * k + 14]) for k in range(3)]
+    if not all(v is not None for v in xyz):
+        return
+    pos = np.array(xyz, dtype=np.float64)
+    if np.all(pos == 0.0):
+        hdr.warnings.append(ParseWarning("approx-position-zero", "APPROX POSITION XYZ is 0 0 0 "
+                                         "(unknown, e.g. a moving or spaceborne receiver)", cur.line_no))
+        return
+    hdr.approx_position_ecef_m = pos
+    r = float(np.linalg.norm(pos))
+    if not 6.0e6 < r < 5.0e7:
+        hdr.warnings.append(ParseWarning("bad-approx-position", f"APPROX POSITION XYZ is {r:.0f} m "
+                                         "from the geocentre: not trusted", cur.line_no))
+
+
+def _h_antenna_delta(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    """ANTENNA: DELTA H/E/N (3F14.4, m)."""
+    hen = [_f(cur.line[14 * k:14 * k + 14]) for k in range(3)]
+    if all(v is not None for v in hen):
+        hdr.antenna_delta_hen_m = np.array(hen, dtype=np.float64)
+
+
+def _h_interval(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    """INTERVAL (F10.3, s); a non-positive interval is dropped with a warning."""
+    hdr.interval_s = _f(cur.line[0:10])
+    if hdr.interval_s is not None and hdr.interval_s <= 0:
+        hdr.warnings.append(ParseWarning("bad-interval", f"INTERVAL {hdr.interval_s:g} s is not positive",
+                                         cur.line_no))
+        hdr.interval_s = None
+
+
+def _h_time_first(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    hdr.time_first, hdr.time_system = _header_time(cur.line)
+
+
+def _h_time_last(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    hdr.time_last, _ = _header_time(cur.line)
+
+
+def _h_signal_strength_unit(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    hdr.signal_strength_unit = cur.line[:20].strip() or None
+
+
+def _type_codes(cur: _HeaderCursor, n: int, fields, blank_cols: int, so_far: str) -> list[str]:
+    """The `n` observation codes of a types record and its continuation lines (same label, `blank_cols` blank).
+
+    fields: the code fields of one line; so_far: the error's count text, '{}' for the codes read so far.
+    """
+    line, label = cur.line, cur.line[60:80].strip()
+    codes: list[str] = []
+    while True:
+        codes += [c.strip() for c in fields(line)]
+        codes = [c for c in codes if c]
+        if len(codes) >= n:
+            return codes
+        line = cur.next_line()
+        if line is None:
+            return codes
+        if line[60:80].strip() != label or line[0:blank_cols].strip():
+            sep = " " if label == "SYS / # / OBS TYPES" else ", "
+            raise ParseError(cur.name, cur.line_no, f"a continuation line of {label} ({n} types{sep}"
+                             + so_far.format(len(codes)) + ")", line)
+
+
+def _h_obs_types_v3(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    """SYS / # / OBS TYPES (A1,2X,I3,13(1X,A3), continued on lines with a blank column 1): RINEX 3.05 Table A2."""
+    name, line_no, line = cur.name, cur.line_no, cur.line
+    if cur.major == 2:
+        raise ParseError(name, line_no, "'# / TYPES OF OBSERV' in a RINEX 2 file", line)
+    sys_letter = line[0:1]
+    if sys_letter not in _SYSTEMS:
+        raise ParseError(name, line_no, f"a satellite system letter ({_SYSTEMS}) in column 1", line, column=1)
+    n = int(line[3:6])
+    codes = _type_codes(cur, n, lambda ln: [ln[7 + 4 * k:10 + 4 * k] for k in range(13)], 1,
+                        f"for {sys_letter}, {{}} so far: 13 per line, columns 8-58")
+    if len(codes) != n:
+        raise ParseError(name, line_no, f"{n} observation types for system {sys_letter}",
+                         f"{len(codes)}: {' '.join(codes)}")
+    bad = [c for c in codes if not ((len(c) == 3 and c[0] in "CLDSX" and c[1].isdigit())
+                                    or (len(c) == 2 and c[0] == "X" and c[1].isdigit()))]
+    if bad:
+        raise ParseError(name, line_no, "RINEX 3 observation codes like C1C, L2W, X1", " ".join(bad))
+    if sys_letter in hdr.obs_types:
+        raise ParseError(name, line_no, f"one SYS / # / OBS TYPES record for system {sys_letter}", "a second one")
+    hdr.obs_types[sys_letter] = codes
+
+
+def _h_obs_types_v2(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    """# / TYPES OF OBSERV (I6,9(4X,A2), continued on lines with blank columns 1-6): RINEX 2.11 Table A1."""
+    name, line_no, line = cur.name, cur.line_no, cur.line
+    if cur.major != 2:
+        raise ParseError(name, line_no, "'SYS / # / OBS TYPES' in a RINEX 3/4 file", line)
+    n = int(line[0:6])
+    codes = _type_codes(cur, n, lambda ln: [ln[10 + 6 * k:12 + 6 * k] for k in range(9)], 6,
+                        "{} so far: 9 per line, columns 11-60")
+    if len(codes) != n:
+        raise ParseError(name, line_no, f"{n} observation types", f"{len(codes)}: {' '.join(codes)}")
+    bad = [c for c in codes if len(c) != 2 or c[0] not in "CLDSP" or not c[1].isdigit()]
+    if bad:
+        raise ParseError(name, line_no, "RINEX 2 observation codes like C1, P2, L1, D1, S1", " ".join(bad))
+    cur.v2_types = codes
+
+
+def _h_glonass_slots(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    """GLONASS SLOT / FRQ # (I3,1X,8(A1,I2.2,1X,I2,1X)): RINEX 3.05 Table A2."""
+    line = cur.line
+    for k in range(8):
+        sat = line[4 + 7 * k:7 + 7 * k]
+        if sat.strip():
+            fcn = line[8 + 7 * k:10 + 7 * k].strip()
+            slot = sat[1:].strip(" ")
+            if (sat[0] == "R" and slot.isascii() and slot.isdigit() and fcn.isascii()
+                    and fcn.lstrip("-").isdigit()):   # ASCII only: int() refuses '²' and control chars
+                hdr.glonass_slots[f"R{int(slot):02d}"] = int(fcn)
+
+
+def _h_glonass_biases(hdr: ObsHeader, cur: _HeaderCursor) -> None:
+    if not cur.line[:60].strip():
+        hdr.warnings.append(ParseWarning("empty-glonass-cod-phs-bis", "GLONASS COD/PHS/BIS is blank: "
+                                         "code-phase biases unknown", cur.line_no))
+
+
+#: Header record label (columns 61-80) -> the function that reads it into the ObsHeader.
+_HEADER_RECORDS = {
+    "COMMENT": _h_comment,
+    "MARKER NAME": _h_marker_name,
+    "MARKER NUMBER": _h_marker_number,
+    "REC # / TYPE / VERS": _h_receiver,
+    "ANT # / TYPE": _h_antenna,
+    "APPROX POSITION XYZ": _h_approx_position,
+    "ANTENNA: DELTA H/E/N": _h_antenna_delta,
+    "INTERVAL": _h_interval,
+    "TIME OF FIRST OBS": _h_time_first,
+    "TIME OF LAST OBS": _h_time_last,
+    "SIGNAL STRENGTH UNIT": _h_signal_strength_unit,
+    "SYS / # / OBS TYPES": _h_obs_types_v3,
+    "# / TYPES OF OBSERV": _h_obs_types_v2,
+    "GLONASS SLOT / FRQ #": _h_glonass_slots,
+    "GLONASS COD/PHS/BIS": _h_glonass_biases,
+}
+
+
+def _header_warnings(hdr: ObsHeader) -> None:
+    """Add the warnings for missing or unusual optional header records (marker, antenna, interval, time)."""
     warn = hdr.warnings
-    major = SUPPORTED_VERSIONS[version]
-    seen: set[str] = set()
-    end = None
-    i = 1
-    v2_types: list[str] = []
-    while i < len(lines):
-        raw = lines[i]
-        line = raw.decode("latin-1")
-        label = line[60:80].strip()
-        line_no = i + 1
-        if label == "END OF HEADER":
-            end = i
-            break
-        seen.add(label)
-        try:
-            if label == "COMMENT":
-                hdr.comments.append(line[:60].rstrip())
-            elif label == "MARKER NAME":
-                hdr.marker_name = line[:60].strip() or None
-            elif label == "MARKER NUMBER":
-                hdr.marker_number = line[:20].strip() or None
-            elif label == "REC # / TYPE / VERS":
-                hdr.receiver_number = line[0:20].strip() or None
-                hdr.receiver_type = line[20:40].strip() or None
-                hdr.receiver_version = line[40:60].strip() or None
-            elif label == "ANT # / TYPE":
-                hdr.antenna_number = line[0:20].strip() or None
-                hdr.antenna_type = line[20:40].strip() or None
-            elif label == "APPROX POSITION XYZ":
-                xyz = [_f(line[14 * k:14 * k + 14]) for k in range(3)]
-                if all(v is not None for v in xyz):
-                    pos = np.array(xyz, dtype=np.float64)
-                    if np.all(pos == 0.0):
-                        warn.append(ParseWarning("approx-position-zero", "APPROX POSITION XYZ is 0 0 0 "
-                                                 "(unknown, e.g. a moving or spaceborne receiver)", line_no))
-                    else:
-                        hdr.approx_position_ecef_m = pos
-                        r = float(np.linalg.norm(pos))
-                        if not 6.0e6 < r < 5.0e7:
-                            warn.append(ParseWarning("bad-approx-position", f"APPROX POSITION XYZ is {r:.0f} m "
-                                                     "from the geocentre: not trusted", line_no))
-            elif label == "ANTENNA: DELTA H/E/N":
-                hen = [_f(line[14 * k:14 * k + 14]) for k in range(3)]
-                if all(v is not None for v in hen):
-                    hdr.antenna_delta_hen_m = np.array(hen, dtype=np.float64)
-            elif label == "INTERVAL":
-                hdr.interval_s = _f(line[0:10])
-                if hdr.interval_s is not None and hdr.interval_s <= 0:
-                    warn.append(ParseWarning("bad-interval", f"INTERVAL {hdr.interval_s:g} s is not positive",
-                                             line_no))
-                    hdr.interval_s = None
-            elif label == "TIME OF FIRST OBS":
-                hdr.time_first, hdr.time_system = _header_time(line)
-            elif label == "TIME OF LAST OBS":
-                hdr.time_last, _ = _header_time(line)
-            elif label == "SIGNAL STRENGTH UNIT":
-                hdr.signal_strength_unit = line[:20].strip() or None
-            elif label == "SYS / # / OBS TYPES":
-                if major == 2:
-                    raise ParseError(name, line_no, "'# / TYPES OF OBSERV' in a RINEX 2 file", line)
-                sys_letter = line[0:1]
-                if sys_letter not in _SYSTEMS:
-                    raise ParseError(name, line_no, f"a satellite system letter ({_SYSTEMS}) in column 1", line,
-                                     column=1)
-                n = int(line[3:6])
-                codes: list[str] = []
-                while True:
-                    codes += [line[7 + 4 * k:10 + 4 * k].strip() for k in range(13)]
-                    codes = [c for c in codes if c]
-                    if len(codes) >= n:
-                        break
-                    i += 1
-                    if i >= len(lines):
-                        break
-                    line = lines[i].decode("latin-1")
-                    if line[60:80].strip() != "SYS / # / OBS TYPES" or line[0:1].strip():
-                        raise ParseError(name, i + 1, f"a continuation line of SYS / # / OBS TYPES ({n} types "
-                                         f"for {sys_letter}, {len(codes)} so far: 13 per line, columns 8-58)",
-                                         line)
-                if len(codes) != n:
-                    raise ParseError(name, line_no, f"{n} observation types for system {sys_letter}",
-                                     f"{len(codes)}: {' '.join(codes)}")
-                bad = [c for c in codes if not ((len(c) == 3 and c[0] in "CLDSX" and c[1].isdigit())
-                                                or (len(c) == 2 and c[0] == "X" and c[1].isdigit()))]
-                if bad:
-                    raise ParseError(name, line_no, "RINEX 3 observation codes like C1C, L2W, X1",
-                                     " ".join(bad))
-                if sys_letter in hdr.obs_types:
-                    raise ParseError(name, line_no, f"one SYS / # / OBS TYPES record for system {sys_letter}",
-                                     "a second one")
-                hdr.obs_types[sys_letter] = codes
-            elif label == "# / TYPES OF OBSERV":
-                if major != 2:
-                    raise ParseError(name, line_no, "'SYS / # / OBS TYPES' in a RINEX 3/4 file", line)
-                n = int(line[0:6])
-                codes = []
-                while True:
-                    codes += [line[10 + 6 * k:12 + 6 * k].strip() for k in range(9)]
-                    codes = [c for c in codes if c]
-                    if len(codes) >= n:
-                        break
-                    i += 1
-                    if i >= len(lines):
-                        break
-                    line = lines[i].decode("latin-1")
-                    if line[60:80].strip() != "# / TYPES OF OBSERV" or line[0:6].strip():
-                        raise ParseError(name, i + 1, f"a continuation line of # / TYPES OF OBSERV ({n} types, "
-                                         f"{len(codes)} so far: 9 per line, columns 11-60)", line)
-                if len(codes) != n:
-                    raise ParseError(name, line_no, f"{n} observation types", f"{len(codes)}: {' '.join(codes)}")
-                bad = [c for c in codes if len(c) != 2 or c[0] not in "CLDSP" or not c[1].isdigit()]
-                if bad:
-                    raise ParseError(name, line_no, "RINEX 2 observation codes like C1, P2, L1, D1, S1",
-                                     " ".join(bad))
-                v2_types = codes
-            elif label == "GLONASS SLOT / FRQ #":
-                for k in range(8):
-                    sat = line[4 + 7 * k:7 + 7 * k]
-                    if sat.strip():
-                        fcn = line[8 + 7 * k:10 + 7 * k].strip()
-                        slot = sat[1:].strip(" ")
-                        if (sat[0] == "R" and slot.isascii() and slot.isdigit() and fcn.isascii()
-                                and fcn.lstrip("-").isdigit()):   # ASCII only: int() refuses '²' and control chars
-                            hdr.glonass_slots[f"R{int(slot):02d}"] = int(fcn)
-            elif label == "GLONASS COD/PHS/BIS":
-                if not line[:60].strip():
-                    warn.append(ParseWarning("empty-glonass-cod-phs-bis", "GLONASS COD/PHS/BIS is blank: "
-                                             "code-phase biases unknown", line_no))
-            elif not label and line.strip():
-                warn.append(ParseWarning("header-line-without-label", "a header line has no label in columns "
-                                         "61-80; ignored", line_no))
-        except ParseError:
-            raise
-        except (ValueError, IndexError):
-            raise ParseError(name, line_no, f"a valid '{label}' header record", line) from None
-        i += 1
-    if end is None:
-        raise ParseError(name, len(lines), "an 'END OF HEADER' record (columns 61-73)", "end of file")
-    hdr.n_header_lines = end + 1
-    if major == 2:
-        if not v2_types:
-            raise ParseError(name, end + 1, "a '# / TYPES OF OBSERV' header record before END OF HEADER", "")
-        hdr.obs_types = {"_v2": v2_types}  # resolved to systems once the data are read
-    elif not hdr.obs_types:
-        raise ParseError(name, end + 1, "'SYS / # / OBS TYPES' header records before END OF HEADER", "")
     if hdr.marker_name is None:
         warn.append(ParseWarning("missing-marker-name", "no MARKER NAME (or a blank one): the antenna cannot be "
                                  "matched to platform.json by name"))
@@ -554,6 +611,46 @@ def _parse_header(lines: list[bytes], name: str) -> ObsHeader:
     if hdr.time_system not in ("GPS", ""):
         warn.append(ParseWarning("time-system-not-gps", f"epochs are in time system {hdr.time_system}, kept as "
                                  "written (not converted to GPS time)"))
+
+
+def _parse_header(lines: list[bytes], name: str) -> ObsHeader:
+    """ObsHeader from the header lines (lines[:n_header_lines], END OF HEADER included).
+
+    Implements: RINEX 2.11 Table A1 and RINEX 3.05 Table A2 (observation header records); labels not listed in
+    `_HEADER_RECORDS` are skipped, a line without a label is a warning.
+    """
+    hdr = _parse_version_line(lines, name)
+    cur = _HeaderCursor(lines, name, SUPPORTED_VERSIONS[hdr.version])
+    end = None
+    while cur.i < len(lines):
+        cur.line = line = lines[cur.i].decode("latin-1")
+        label = line[60:80].strip()
+        line_no = cur.line_no
+        if label == "END OF HEADER":
+            end = cur.i
+            break
+        try:
+            handler = _HEADER_RECORDS.get(label)
+            if handler is not None:
+                handler(hdr, cur)
+            elif not label and line.strip():
+                hdr.warnings.append(ParseWarning("header-line-without-label", "a header line has no label in "
+                                                 "columns 61-80; ignored", line_no))
+        except ParseError:
+            raise
+        except (ValueError, IndexError):
+            raise ParseError(name, line_no, f"a valid '{label}' header record", cur.line) from None
+        cur.i += 1
+    if end is None:
+        raise ParseError(name, len(lines), "an 'END OF HEADER' record (columns 61-73)", "end of file")
+    hdr.n_header_lines = end + 1
+    if cur.major == 2:
+        if not cur.v2_types:
+            raise ParseError(name, end + 1, "a '# / TYPES OF OBSERV' header record before END OF HEADER", "")
+        hdr.obs_types = {"_v2": cur.v2_types}  # resolved to systems once the data are read
+    elif not hdr.obs_types:
+        raise ParseError(name, end + 1, "'SYS / # / OBS TYPES' header records before END OF HEADER", "")
+    _header_warnings(hdr)
     return hdr
 
 
@@ -639,11 +736,30 @@ def _parse_v3_epoch_python(line: str, name: str, line_no: int):
         raise ParseError(name, line_no, "an epoch line: " + _V3_EPOCH_LAYOUT, line) from None
 
 
-def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
-    n0 = hdr.n_header_lines  # line number offset (body line i is file line n0 + i + 1)
-    lines, starts, lens, buf = _split_lines(body)
-    n_lines = len(lines)
-    first = np.full(n_lines, 32, dtype=np.uint8)
+@dataclass
+class _EpochRows:
+    """Per-epoch arrays of the observation epochs (flags 0-1) of a data section."""
+
+    times: GpsTime
+    clock_offset_s: np.ndarray  # (n_epochs,) float64, NaN where not written
+    flags: np.ndarray  # (n_epochs,) int8
+
+
+@dataclass
+class _RecordRows:
+    """Per-record arrays of the satellite observation records, before they are scattered into epochs."""
+
+    keys: np.ndarray  # (n_rec,) int64 satellite key letter * 100 + prn
+    epoch: np.ndarray  # (n_rec,) int64 index into the observation epochs
+    sys_b: np.ndarray  # (n_rec,) uint8 system letter
+    values: np.ndarray  # (n_rec, n_fields) float64
+    lli: np.ndarray  # (n_rec, n_fields) int8
+    ssi: np.ndarray  # (n_rec, n_fields) int8
+
+
+def _v3_line_kinds(lines: list[bytes], starts: np.ndarray, lens: np.ndarray, buf: np.ndarray):
+    """(is_epoch, is_comment, is_blank) per data-section line: '>' in column 1, COMMENT label, blank."""
+    first = np.full(len(lines), 32, dtype=np.uint8)
     nz = lens > 0
     first[nz] = buf[starts[nz]]
     is_epoch = first == ord(">")
@@ -652,22 +768,23 @@ def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
     for i in np.flatnonzero((first == 32) & ~is_comment & ~is_blank):
         if not lines[i].strip():
             is_blank[i] = True
+    return is_epoch, is_comment, is_blank
 
-    # epoch lines: vectorised parse, Python only for the odd ones (events without date, unusual spacing)
-    ep_idx = np.flatnonzero(is_epoch)
+
+def _v3_epoch_fields(lines: list[bytes], ep_idx: np.ndarray, name: str, n0: int):
+    """(fields, flag, nrec, has_date) of the epoch lines `ep_idx`: fields (n_ep, 7) int64 y, m, d, h, mi, s, 1e-7 s.
+
+    Vectorised over the byte matrix; lines of unusual spacing or events without a date go through
+    `_parse_v3_epoch_python`. Implements: RINEX 3.05 Table A3 EPOCH record (A1,1X,I4,4(1X,I2.2),F11.7,2X,I1,I3).
+    """
     n_ep = len(ep_idx)
     E = _pad_rows(lines, ep_idx, 56)
     fmt_ok = (np.all(E[:, [1, 6, 9, 12, 15, 29, 30]] == 32, axis=1) & np.all(_DIG[E[:, 2:6]], axis=1)
               & np.all(_DIG_OR_SP[E[:, [7, 10, 13, 16, 18, 19]]], axis=1)
               & np.all(_DIG[E[:, [8, 11, 14, 17, 20, 31, 34]]], axis=1) & (E[:, 21] == 46)
               & np.all(_DIG[E[:, 22:29]], axis=1) & np.all(_DIG_OR_SP[E[:, 32:34]], axis=1))
-    year = _digits(E, range(2, 6))
-    month = _digits(E, (7, 8))
-    day = _digits(E, (10, 11))
-    hour = _digits(E, (13, 14))
-    minute = _digits(E, (16, 17))
-    whole_s = _digits(E, (18, 19, 20))
-    ticks = _digits(E, range(22, 29))
+    fields = np.stack([_digits(E, range(2, 6)), _digits(E, (7, 8)), _digits(E, (10, 11)), _digits(E, (13, 14)),
+                       _digits(E, (16, 17)), _digits(E, (18, 19, 20)), _digits(E, range(22, 29))], axis=1)
     flag = _digits(E, (31,))
     nrec = _digits(E, (32, 33, 34))
     has_date = np.ones(n_ep, dtype=bool)
@@ -676,18 +793,30 @@ def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
         f = _parse_v3_epoch_python(lines[li].decode("latin-1"), name, n0 + li + 1)
         if f[0] is None:
             has_date[j] = False
-            year[j], month[j], day[j], hour[j], minute[j], whole_s[j], ticks[j] = 1980, 1, 6, 0, 0, 0, 0
+            fields[j] = (1980, 1, 6, 0, 0, 0, 0)
         else:
-            year[j], month[j], day[j], hour[j], minute[j], whole_s[j], ticks[j] = f[:7]
+            fields[j] = f[:7]
         flag[j], nrec[j] = f[7], f[8]
+    month, day, hour, minute, whole_s = fields[:, 1], fields[:, 2], fields[:, 3], fields[:, 4], fields[:, 5]
     bad_date = has_date & ((month < 1) | (month > 12) | (day < 1) | (day > 31) | (hour > 23) | (minute > 59)
                            | (whole_s > 60))
     if bad_date.any() or (flag > 6).any():
         j = int(np.flatnonzero(bad_date | (flag > 6))[0])
         raise ParseError(name, n0 + int(ep_idx[j]) + 1, "an epoch line with a valid date and flag 0-6: "
                          + _V3_EPOCH_LAYOUT, lines[ep_idx[j]].decode("latin-1"))
+    return fields, flag, nrec, has_date
 
-    # events (flags 2-6): the next `nrec` lines are special records, not observations
+
+def _v3_events(hdr: ObsHeader, lines: list[bytes], is_epoch: np.ndarray, ep_idx: np.ndarray, epoch_fields,
+               name: str):
+    """(consumed, events): the special records after event lines (flags 2-6), which are not observations.
+
+    Implements: RINEX 3.05 Table A3 event flags 2-5 (special records follow; flag 4 a header splice, flag 3 a
+    new site occupation).
+    """
+    fields, flag, nrec, has_date = epoch_fields
+    n0 = hdr.n_header_lines
+    n_lines = len(lines)
     consumed = np.zeros(n_lines, dtype=bool)
     events: list[ObsEvent] = []
     for j in np.flatnonzero(flag >= 2):
@@ -699,17 +828,20 @@ def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
                              "next epoch line or the end of the file")
         recs = [ln.decode("latin-1") for ln in lines[li + 1:li + 1 + k]]
         consumed[li + 1:li + 1 + k] = True
-        t = (_times_from_fields(year[j], month[j], day[j], hour[j], minute[j], whole_s[j], ticks[j], 1e7)
-             if has_date[j] else None)
+        t = _times_from_fields(*fields[j], 1e7) if has_date[j] else None
         events.append(ObsEvent(int(flag[j]), n0 + li + 1, t, recs))
         if flag[j] == 4:
             _check_splice(recs, hdr, name, n0 + li + 2)
         if flag[j] == 3:
             hdr.warnings.append(ParseWarning("new-site-occupation", "event flag 3: a new site occupation starts "
                                              "here; the file mixes sites", n0 + li + 1))
+    return consumed, events
 
-    # observation records -> their epoch line
-    obs_rows = np.flatnonzero(~(is_epoch | is_comment | is_blank | consumed))
+
+def _v3_record_owners(lines: list[bytes], obs_rows: np.ndarray, ep_idx: np.ndarray, flag: np.ndarray,
+                      nrec: np.ndarray, name: str, n0: int) -> np.ndarray:
+    """Index of the epoch line owning each observation record; refuses counts that differ from the epoch line's."""
+    n_ep = len(ep_idx)
     if len(obs_rows) and (n_ep == 0 or obs_rows[0] < ep_idx[0]):
         li = int(obs_rows[0])
         raise ParseError(name, n0 + li + 1, "an epoch line starting with '>' before observation records "
@@ -725,26 +857,34 @@ def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
         raise ParseError(name, n0 + li + 1, f"{what}{expected[j]} satellite records after this epoch line "
                          "(the number in columns 33-35)", f"{counts[j]} records; epoch line: "
                          + lines[li].decode("latin-1").rstrip())
+    return owner
 
-    obs_ep = np.flatnonzero(flag <= 1)
-    ep_pos = np.full(n_ep, -1, dtype=np.int64)
-    ep_pos[obs_ep] = np.arange(len(obs_ep))
-    rec_epoch = ep_pos[owner]
-    times = _times_from_fields(year[obs_ep], month[obs_ep], day[obs_ep], hour[obs_ep], minute[obs_ep],
-                               whole_s[obs_ep], ticks[obs_ep], 1e7)
-    clock = np.full(len(obs_ep), np.nan)
-    clk_rows = np.flatnonzero(lens[ep_idx[obs_ep]] > 41)
-    for r in clk_rows:
-        txt = lines[ep_idx[obs_ep[r]]][41:56].strip()
+
+def _v3_clock_offsets(lines: list[bytes], lens: np.ndarray, epoch_lines: np.ndarray, name: str,
+                      n0: int) -> np.ndarray:
+    """Receiver clock offset (s, F15.12 in columns 42-56) of each epoch line, NaN where blank."""
+    clock = np.full(len(epoch_lines), np.nan)
+    for r in np.flatnonzero(lens[epoch_lines] > 41):
+        txt = lines[epoch_lines[r]][41:56].strip()
         if txt:
             try:
                 clock[r] = float(txt)
             except ValueError:
-                raise ParseError(name, n0 + int(ep_idx[obs_ep[r]]) + 1, "a receiver clock offset (F15.12) in "
-                                 "columns 42-56 or blanks", lines[ep_idx[obs_ep[r]]].decode("latin-1"),
+                raise ParseError(name, n0 + int(epoch_lines[r]) + 1, "a receiver clock offset (F15.12) in "
+                                 "columns 42-56 or blanks", lines[epoch_lines[r]].decode("latin-1"),
                                  column=42) from None
+    return clock
 
-    # satellite ids; each record becomes a row of 16-byte slots: slot 0 = 13 blanks + 'G01', slot k = field k
+
+def _v3_records(hdr: ObsHeader, lines: list[bytes], lens: np.ndarray, obs_rows: np.ndarray,
+                rec_epoch: np.ndarray, name: str) -> _RecordRows:
+    """_RecordRows of the observation records `obs_rows` (satellite id A1,I2.2, then m(F14.3,I1,I1)).
+
+    Each record becomes a row of 16-byte slots (slot 0 = 13 blanks + 'G01', slot k = field k) decoded at once.
+    Records of a system without SYS / # / OBS TYPES are skipped with a warning; text beyond the declared
+    fields is a warning. Implements: RINEX 3.05 Table A3 OBSERVATION record.
+    """
+    n0 = hdr.n_header_lines
     max_n = max(len(v) for v in hdr.obs_types.values())
     M = _slot_rows(lines, obs_rows, 13, 3 + 16 * max_n)
     sys_b = M[:, 13].copy()
@@ -758,7 +898,6 @@ def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
     prn = _digits(M, (14, 15))
     keys = sys_b.astype(np.int64) * 100 + prn
 
-    # records of systems without observation types: skipped with a warning
     declared = np.isin(sys_b, np.frombuffer("".join(hdr.obs_types).encode(), np.uint8))
     if not declared.all():
         missing = sorted({chr(c) for c in np.unique(sys_b[~declared])})
@@ -768,7 +907,6 @@ def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
         M, keys, rec_epoch, obs_rows = M[keep], keys[keep], rec_epoch[keep], obs_rows[keep]
         sys_b = sys_b[keep]
 
-    # text beyond the declared fields of each system
     n_types_of = np.zeros(256, dtype=np.int64)
     for s_letter, codes in hdr.obs_types.items():
         n_types_of[ord(s_letter)] = len(codes)
@@ -784,15 +922,38 @@ def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
         return n0 + li + 1, 16 * slot - 13 + 1, lines[li].decode("latin-1")
 
     vals, lli, ssi = _decode_slots(M, np.arange(1, max_n + 1), locate, name)
+    return _RecordRows(keys, rec_epoch, sys_b, vals, lli, ssi)
+
+
+def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
+    """RinexObs of a RINEX 3/4 data section: epoch lines, events, then observation records.
+
+    Implements: RINEX 3.05 sec. 5 and Table A3 (identical for 3.00-4.02).
+    """
+    n0 = hdr.n_header_lines  # line number offset (body line i is file line n0 + i + 1)
+    lines, starts, lens, buf = _split_lines(body)
+    is_epoch, is_comment, is_blank = _v3_line_kinds(lines, starts, lens, buf)
+    ep_idx = np.flatnonzero(is_epoch)
+    epoch_fields = _v3_epoch_fields(lines, ep_idx, name, n0)
+    fields, flag, nrec, _ = epoch_fields
+    consumed, events = _v3_events(hdr, lines, is_epoch, ep_idx, epoch_fields, name)
+
+    obs_rows = np.flatnonzero(~(is_epoch | is_comment | is_blank | consumed))
+    owner = _v3_record_owners(lines, obs_rows, ep_idx, flag, nrec, name, n0)
+    obs_ep = np.flatnonzero(flag <= 1)
+    ep_pos = np.full(len(ep_idx), -1, dtype=np.int64)
+    ep_pos[obs_ep] = np.arange(len(obs_ep))
+    epochs = _EpochRows(_times_from_fields(*fields[obs_ep].T, 1e7),
+                        _v3_clock_offsets(lines, lens, ep_idx[obs_ep], name, n0), flag[obs_ep].astype(np.int8))
+    recs = _v3_records(hdr, lines, lens, obs_rows, ep_pos[owner], name)
 
     codes_all: list[str] = []
     for codes in hdr.obs_types.values():
         for c in codes:
             if c not in codes_all:
                 codes_all.append(c)
-    return _assemble(hdr, times, clock, flag[obs_ep].astype(np.int8), keys, rec_epoch, sys_b, vals, lli, ssi,
-                     codes_all, {s: [codes_all.index(c) for c in v] for s, v in hdr.obs_types.items()}, events,
-                     name)
+    return _assemble(hdr, epochs, recs, codes_all,
+                     {s: [codes_all.index(c) for c in v] for s, v in hdr.obs_types.items()}, events, name)
 
 
 def _check_splice(recs: list[str], hdr: ObsHeader, name: str, first_line_no: int) -> None:
@@ -808,9 +969,15 @@ def _check_splice(recs: list[str], hdr: ObsHeader, name: str, first_line_no: int
                                              f"section: {rec[:60].strip()!r}", first_line_no + k))
 
 
-def _assemble(hdr, times, clock, flags, keys, rec_epoch, sys_b, vals, lli, ssi, codes_all, code_map, events,
-              name) -> RinexObs:
-    """Scatter per-record rows into (n_epochs, n_sats, n_codes) arrays; add data-vs-header warnings."""
+def _assemble(hdr: ObsHeader, epochs: _EpochRows, recs: _RecordRows, codes_all: list[str],
+              code_map: dict[str, list[int]], events: list[ObsEvent], name: str) -> RinexObs:
+    """Scatter per-record rows into (n_epochs, n_sats, n_codes) arrays; add data-vs-header warnings.
+
+    code_map: per system letter ('_v2' for every record of a RINEX 2 file), the column in `codes_all` of each
+    field of its records.
+    """
+    times, keys, rec_epoch, sys_b = epochs.times, recs.keys, recs.epoch, recs.sys_b
+    vals, lli, ssi = recs.values, recs.lli, recs.ssi
     n_epochs = len(times)
     uniq, sat_idx = np.unique(keys, return_inverse=True)
     sats = [_sat_name(int(k)) for k in uniq]
@@ -836,8 +1003,8 @@ def _assemble(hdr, times, clock, flags, keys, rec_epoch, sys_b, vals, lli, ssi, 
             hdr.warnings.append(ParseWarning("duplicate-satellite-records", f"{n_dup} satellite records repeat a "
                                              "satellite within its epoch; the last one is kept"))
     _data_warnings(hdr, times)
-    return RinexObs(header=hdr, time=times, epoch_flag=flags, clock_offset_s=clock, sats=sats, codes=codes_all,
-                    values=values, lli=lli_out, ssi=ssi_out, events=events, name=name)
+    return RinexObs(header=hdr, time=times, epoch_flag=epochs.flags, clock_offset_s=epochs.clock_offset_s,
+                    sats=sats, codes=codes_all, values=values, lli=lli_out, ssi=ssi_out, events=events, name=name)
 
 
 def _data_warnings(hdr: ObsHeader, times: GpsTime) -> None:
@@ -1009,9 +1176,9 @@ def _read_body_v2(hdr: ObsHeader, body: tuple, name: str):
     sys_b = (keys_arr // 100).astype(np.uint8)
     systems = sorted({chr(c) for c in np.unique(sys_b)}) or [default_sys if hdr.satellite_system != "M" else "G"]
     hdr.obs_types = {s: list(types) for s in systems}
-    return _assemble(hdr, times, np.array(clock, dtype=np.float64), np.array(ep_flags, dtype=np.int8), keys_arr,
-                     np.array(rec_epoch, dtype=np.int64), sys_b, vals, lli, ssi, list(types),
-                     {"_v2": list(range(n_types))}, events, name)
+    epochs = _EpochRows(times, np.array(clock, dtype=np.float64), np.array(ep_flags, dtype=np.int8))
+    recs = _RecordRows(keys_arr, np.array(rec_epoch, dtype=np.int64), sys_b, vals, lli, ssi)
+    return _assemble(hdr, epochs, recs, list(types), {"_v2": list(range(n_types))}, events, name)
 
 
 # --- entry points --------------------------------------------------------------------------------

@@ -16,6 +16,7 @@ import io
 import json
 import zipfile
 from collections import Counter
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterator
 
@@ -235,6 +236,226 @@ def _days_from_civil(y: int, m: int, d: int) -> int:
 _GPS_EPOCH_UNIX_DAYS = 3657
 
 
+@dataclass
+class _ScannedHeader:
+    """What `scan_rinex_obs` keeps of an observation header (RINEX 2.11 Table A1 / RINEX 3.05 Table A2)."""
+
+    version: float | None = None
+    first_line: str | None = None
+    marker: str | None = None
+    receiver: str | None = None
+    antenna: str | None = None
+    header_interval: float | None = None
+    approx: list[float] | None = None
+    obs_types: dict = field(default_factory=dict)  # system -> codes, plus 'G#' -> [announced count] (RINEX 3)
+    pending_sys: str | None = None
+    v2_types: list[str] = field(default_factory=list)
+    v2_count: int = 0
+    line_no: int = 0
+    end_of_header: bool = False
+    warnings: list[ParseWarning] = field(default_factory=list)
+
+
+def _scan_version_line(h: _ScannedHeader, line: str, name: str) -> None:
+    """Version from line 1 (RINEX VERSION / TYPE, F9.2 in columns 1-9); refuses anything but 2.x-4.x."""
+    h.first_line = line
+    if line[60:80].strip() != "RINEX VERSION / TYPE":
+        raise ParseError(name, 1, "'RINEX VERSION / TYPE' in columns 61-80 of the first line", line)
+    try:
+        h.version = float(line[0:9])
+    except ValueError as exc:
+        raise ParseError(name, 1, "the format version as F9.2 in columns 1-9", line) from exc
+    if not (2.0 <= h.version < 5.0):
+        raise ParseError(name, 1, "RINEX version 2.10-4.02", line[0:9])
+
+
+def _scan_header_record(h: _ScannedHeader, line: str, label: str, name: str) -> None:
+    """Note one header record (marker, receiver, antenna, interval, position, observation types) in `h`."""
+    line_no = h.line_no
+    if label == "MARKER NAME":
+        h.marker = line[0:60].strip() or None
+    elif label == "REC # / TYPE / VERS":
+        h.receiver = line[20:40].strip()
+    elif label == "ANT # / TYPE":
+        h.antenna = line[20:40].strip()
+    elif label == "INTERVAL":
+        try:
+            h.header_interval = float(line[0:10])
+        except ValueError:
+            h.warnings.append(ParseWarning("bad-interval", f"unreadable INTERVAL {line[0:10]!r}", line_no))
+    elif label == "APPROX POSITION XYZ":
+        try:
+            h.approx = [float(line[0:14]), float(line[14:28]), float(line[28:42])]
+        except ValueError:
+            h.warnings.append(ParseWarning("bad-approx-position", "unreadable APPROX POSITION XYZ", line_no))
+    elif label == "SYS / # / OBS TYPES":
+        if line[0:1].strip():
+            h.pending_sys = line[0]
+            try:
+                n = int(line[3:6])
+            except ValueError as exc:
+                raise ParseError(name, line_no, "the number of observation types as I3 in columns 4-6",
+                                 line) from exc
+            h.obs_types[h.pending_sys] = []
+            h.obs_types[h.pending_sys + "#"] = [n]  # type: ignore[list-item]
+        elif h.pending_sys is None:
+            raise ParseError(name, line_no, "a system letter in column 1 of the first SYS / # / OBS TYPES line",
+                             line)
+        h.obs_types[h.pending_sys].extend(line[7:60].split())
+    elif label == "# / TYPES OF OBSERV":
+        if line[0:6].strip():
+            try:
+                h.v2_count = int(line[0:6])
+            except ValueError as exc:
+                raise ParseError(name, line_no, "the number of observation types as I6", line) from exc
+        h.v2_types.extend(line[6:60].split())
+
+
+def _scan_obs_types(h: _ScannedHeader, name: str) -> dict[str, list[str]]:
+    """System -> observation codes, checked against the announced counts (a RINEX 2 list serves every system)."""
+    line_no = h.line_no
+    if h.version < 3:
+        if not h.v2_types:
+            raise ParseError(name, line_no, "a '# / TYPES OF OBSERV' header line", "none in the header")
+        if len(h.v2_types) != h.v2_count:
+            raise ParseError(name, line_no, f"{h.v2_count} observation types as announced in # / TYPES OF OBSERV",
+                             f"{len(h.v2_types)} listed")
+        sys_letter = (h.first_line[40:41] or "G").strip() or "G"
+        systems_declared = "GRESJC" if sys_letter == "M" else sys_letter
+        return {s: list(h.v2_types) for s in systems_declared}
+    counts = {k[0]: v[0] for k, v in h.obs_types.items() if k.endswith("#")}
+    obs_types = {k: v for k, v in h.obs_types.items() if not k.endswith("#")}
+    if not obs_types:
+        raise ParseError(name, line_no, "at least one 'SYS / # / OBS TYPES' header line", "none in the header")
+    for s, n in counts.items():
+        if len(obs_types[s]) != n:
+            raise ParseError(name, line_no, f"{n} observation types for system {s} as announced",
+                             f"{len(obs_types[s])} listed")
+    return obs_types
+
+
+def _scan_header(lines: Iterator[str], name: str) -> tuple[_ScannedHeader, dict[str, list[str]]]:
+    """(header, obs_types) read from `lines` up to END OF HEADER; mandatory records checked, warnings noted."""
+    h = _ScannedHeader()
+    for line in lines:
+        h.line_no += 1
+        label = line[60:80].strip()
+        if h.line_no == 1:
+            _scan_version_line(h, line, name)
+            continue
+        if label == "END OF HEADER":
+            h.end_of_header = True
+            break
+        _scan_header_record(h, line, label, name)
+    if h.version is None:
+        raise ParseError(name, 1, "a RINEX header", "an empty file")
+    if not h.end_of_header:
+        raise ParseError(name, h.line_no + 1, "an 'END OF HEADER' line closing the header", "end of file")
+    obs_types = _scan_obs_types(h, name)
+    if h.marker is None:
+        h.warnings.append(ParseWarning("missing-marker-name", "no MARKER NAME in the header"))
+    if h.antenna is not None and h.antenna.lower().startswith("unknown"):
+        h.warnings.append(ParseWarning("unknown-antenna", f"antenna type {h.antenna!r}: no phase-centre model "
+                                       "applies"))
+    return h, obs_types
+
+
+class _BodyScan:
+    """Line-by-line scan of a data section: epochs, events and satellite ids, with the running line number.
+
+    Implements: RINEX 3.05 Table A3 and RINEX 2.11 Table A2 (epoch lines, event flags 2-6 and their special
+    records, satellite lists); observation fields are not read.
+    """
+
+    def __init__(self, lines: Iterator[str], name: str, line_no: int, v3: bool, v2_lines_per_sat: int):
+        self.it = iter(lines)
+        self.name = name
+        self.line_no = line_no
+        self.v3 = v3
+        self.v2_lines_per_sat = v2_lines_per_sat
+        self.epochs = _EpochStats()
+        self.sats: set[str] = set()
+        self.events = 0
+
+    def need(self, count: int, what: str, epoch_line: int, events: bool = False) -> Iterator[str]:
+        """The next `count` lines after an epoch line (comment lines skipped unless they are event records)."""
+        got = 0
+        v3 = self.v3
+        while got < count:
+            try:
+                line = next(self.it)
+            except StopIteration:
+                raise ParseError(self.name, self.line_no + 1, f"{count} {what} after the epoch line {epoch_line}",
+                                 f"end of file after {got}") from None
+            self.line_no += 1
+            if not events and line[60:80].strip() == "COMMENT" and (not v3 or not line[0:3].strip()[:1].isalpha()
+                                                                     or line[0:1] == " "):
+                continue
+            got += 1
+            yield line
+
+    def skip_event(self, count: int) -> None:
+        """Count an event and pass over its `count` special records."""
+        self.events += 1
+        for _ in self.need(count, "event records", self.line_no, events=True):
+            pass
+
+    def epoch_v3(self, line: str) -> None:
+        """One RINEX 3/4 epoch line ('>') and its satellite records or special records."""
+        name, line_no = self.name, self.line_no
+        if not line.startswith(">"):
+            if line[60:80].strip() == "COMMENT":
+                return
+            raise ParseError(name, line_no, "an epoch line starting with '>'", line)
+        t, flag, count = _epoch_v3(line, name, line_no)
+        if flag not in (0, 1):
+            self.skip_event(count)
+            return
+        for rec in self.need(count, "satellite records", line_no):
+            sid = rec[0:3].replace(" ", "0")
+            if not (sid[0].isalpha() and sid[1:].isdigit()):
+                raise ParseError(name, self.line_no, "a satellite record starting with a satellite id like G01",
+                                 rec)
+            self.sats.add(sid)
+        self.epochs.add(t)
+
+    def epoch_v2(self, line: str) -> None:
+        """One RINEX 2 epoch line, its satellite list continuation lines and its observation lines."""
+        name = self.name
+        if _is_special_v2(line):
+            _, flag, count = _epoch_v2(" 00  1  1  0  0  0.0000000" + line[26:], name, self.line_no)
+            self.skip_event(count)
+            return
+        t, flag, count = _epoch_v2(line, name, self.line_no)
+        if flag not in (0, 1):
+            self.skip_event(count)
+            return
+        sat_ids = [line[32 + 3 * i:35 + 3 * i] for i in range(min(count, 12))]
+        epoch_line = self.line_no
+        if count > 12:
+            for cont in self.need((count - 1) // 12, "satellite list continuation lines", epoch_line):
+                sat_ids += [cont[32 + 3 * i:35 + 3 * i] for i in range(12)]
+            sat_ids = sat_ids[:count]
+        for sid in sat_ids:
+            sid = (sid[0] if sid[0] != " " else "G") + sid[1:].replace(" ", "0")
+            if not sid[1:].isdigit():
+                raise ParseError(name, epoch_line, "satellite ids like G01 in columns 33-68", line)
+            self.sats.add(sid)
+        for _ in self.need(count * self.v2_lines_per_sat, "observation lines", epoch_line):
+            pass
+        self.epochs.add(t)
+
+    def run(self) -> None:
+        for line in self.it:
+            self.line_no += 1
+            if not line.strip():
+                continue
+            if self.v3:
+                self.epoch_v3(line)
+            else:
+                self.epoch_v2(line)
+
+
 def scan_rinex_obs(lines: Iterator[str], name: str, compression: str | None = None) -> dict:
     """Summary of a RINEX observation file from a line iterator, in bounded memory.
 
@@ -242,174 +463,16 @@ def scan_rinex_obs(lines: Iterator[str], name: str, compression: str | None = No
     signals per system, satellites and warnings. Raises ParseError for missing mandatory header lines,
     malformed epoch lines and truncated epochs.
     """
-    warnings: list[ParseWarning] = []
-    version = None
-    obs_types: dict[str, list[str]] = {}
-    marker = receiver = antenna = None
-    header_interval = None
-    approx = None
-    line_no = 0
-    pending_sys = None
-    v2_types: list[str] = []
-    v2_count = 0
-    end_of_header = False
-    first_line = None
-    for line in lines:
-        line_no += 1
-        label = line[60:80].strip()
-        if line_no == 1:
-            first_line = line
-            if label != "RINEX VERSION / TYPE":
-                raise ParseError(name, 1, "'RINEX VERSION / TYPE' in columns 61-80 of the first line", line)
-            try:
-                version = float(line[0:9])
-            except ValueError as exc:
-                raise ParseError(name, 1, "the format version as F9.2 in columns 1-9", line) from exc
-            if not (2.0 <= version < 5.0):
-                raise ParseError(name, 1, "RINEX version 2.10-4.02", line[0:9])
-            continue
-        if label == "END OF HEADER":
-            end_of_header = True
-            break
-        if label == "MARKER NAME":
-            marker = line[0:60].strip() or None
-        elif label == "REC # / TYPE / VERS":
-            receiver = line[20:40].strip()
-        elif label == "ANT # / TYPE":
-            antenna = line[20:40].strip()
-        elif label == "INTERVAL":
-            try:
-                header_interval = float(line[0:10])
-            except ValueError:
-                warnings.append(ParseWarning("bad-interval", f"unreadable INTERVAL {line[0:10]!r}", line_no))
-        elif label == "APPROX POSITION XYZ":
-            try:
-                approx = [float(line[0:14]), float(line[14:28]), float(line[28:42])]
-            except ValueError:
-                warnings.append(ParseWarning("bad-approx-position", "unreadable APPROX POSITION XYZ", line_no))
-        elif label == "SYS / # / OBS TYPES":
-            if line[0:1].strip():
-                pending_sys = line[0]
-                try:
-                    n = int(line[3:6])
-                except ValueError as exc:
-                    raise ParseError(name, line_no, "the number of observation types as I3 in columns 4-6",
-                                     line) from exc
-                obs_types[pending_sys] = []
-                obs_types[pending_sys + "#"] = [n]  # type: ignore[list-item]
-            elif pending_sys is None:
-                raise ParseError(name, line_no, "a system letter in column 1 of the first SYS / # / OBS TYPES line",
-                                 line)
-            obs_types[pending_sys].extend(line[7:60].split())
-        elif label == "# / TYPES OF OBSERV":
-            if line[0:6].strip():
-                try:
-                    v2_count = int(line[0:6])
-                except ValueError as exc:
-                    raise ParseError(name, line_no, "the number of observation types as I6", line) from exc
-            v2_types.extend(line[6:60].split())
-    if version is None:
-        raise ParseError(name, 1, "a RINEX header", "an empty file")
-    if not end_of_header:
-        raise ParseError(name, line_no + 1, "an 'END OF HEADER' line closing the header", "end of file")
-    if version < 3:
-        if not v2_types:
-            raise ParseError(name, line_no, "a '# / TYPES OF OBSERV' header line", "none in the header")
-        if len(v2_types) != v2_count:
-            raise ParseError(name, line_no, f"{v2_count} observation types as announced in # / TYPES OF OBSERV",
-                             f"{len(v2_types)} listed")
-        sys_letter = (first_line[40:41] or "G").strip() or "G"
-        systems_declared = "GRESJC" if sys_letter == "M" else sys_letter
-        obs_types = {s: list(v2_types) for s in systems_declared}
-    else:
-        counts = {k[0]: v[0] for k, v in obs_types.items() if k.endswith("#")}
-        obs_types = {k: v for k, v in obs_types.items() if not k.endswith("#")}
-        if not obs_types:
-            raise ParseError(name, line_no, "at least one 'SYS / # / OBS TYPES' header line", "none in the header")
-        for s, n in counts.items():
-            if len(obs_types[s]) != n:
-                raise ParseError(name, line_no, f"{n} observation types for system {s} as announced",
-                                 f"{len(obs_types[s])} listed")
-    if marker is None:
-        warnings.append(ParseWarning("missing-marker-name", "no MARKER NAME in the header"))
-    if antenna is not None and antenna.lower().startswith("unknown"):
-        warnings.append(ParseWarning("unknown-antenna", f"antenna type {antenna!r}: no phase-centre model applies"))
-
-    # Data section.
-    epochs = _EpochStats()
-    sats: set[str] = set()
-    events = 0
-    it = iter(lines)
+    h, obs_types = _scan_header(lines, name)
+    warnings = h.warnings
+    version, header_interval = h.version, h.header_interval
     v3 = version >= 3
-
-    def need(count: int, what: str, epoch_line: int, events: bool = False) -> Iterator[str]:
-        nonlocal line_no
-        got = 0
-        while got < count:
-            try:
-                line = next(it)
-            except StopIteration:
-                raise ParseError(name, line_no + 1, f"{count} {what} after the epoch line {epoch_line}",
-                                 f"end of file after {got}") from None
-            line_no += 1
-            if not events and line[60:80].strip() == "COMMENT" and (not v3 or not line[0:3].strip()[:1].isalpha()
-                                                     or line[0:1] == " "):
-                continue
-            got += 1
-            yield line
-
     v2_lines_per_sat = (max(len(v) for v in obs_types.values()) + 4) // 5 if not v3 else 1
-    for line in it:
-        line_no += 1
-        if not line.strip():
-            continue
-        if v3:
-            if not line.startswith(">"):
-                if line[60:80].strip() == "COMMENT":
-                    continue
-                raise ParseError(name, line_no, "an epoch line starting with '>'", line)
-            t, flag, count = _epoch_v3(line, name, line_no)
-            if flag in (0, 1):
-                for rec in need(count, "satellite records", line_no):
-                    sid = rec[0:3].replace(" ", "0")
-                    if not (sid[0].isalpha() and sid[1:].isdigit()):
-                        raise ParseError(name, line_no, "a satellite record starting with a satellite id like G01",
-                                         rec)
-                    sats.add(sid)
-                epochs.add(t)
-            else:
-                events += 1
-                for _ in need(count, "event records", line_no, events=True):
-                    pass
-        else:
-            if _is_special_v2(line):
-                _, flag, count = _epoch_v2(" 00  1  1  0  0  0.0000000" + line[26:], name, line_no)
-                events += 1
-                for _ in need(count, "event records", line_no, events=True):
-                    pass
-                continue
-            t, flag, count = _epoch_v2(line, name, line_no)
-            if flag not in (0, 1):
-                events += 1
-                for _ in need(count, "event records", line_no, events=True):
-                    pass
-                continue
-            sat_ids = [line[32 + 3 * i:35 + 3 * i] for i in range(min(count, 12))]
-            epoch_line = line_no
-            if count > 12:
-                for cont in need((count - 1) // 12, "satellite list continuation lines", epoch_line):
-                    sat_ids += [cont[32 + 3 * i:35 + 3 * i] for i in range(12)]
-                sat_ids = sat_ids[:count]
-            for sid in sat_ids:
-                sid = (sid[0] if sid[0] != " " else "G") + sid[1:].replace(" ", "0")
-                if not sid[1:].isdigit():
-                    raise ParseError(name, epoch_line, "satellite ids like G01 in columns 33-68", line)
-                sats.add(sid)
-            for _ in need(count * v2_lines_per_sat, "observation lines", epoch_line):
-                pass
-            epochs.add(t)
+    scan = _BodyScan(lines, name, h.line_no, v3, v2_lines_per_sat)
+    scan.run()
+    epochs, sats = scan.epochs, scan.sats
     if not epochs.count:
-        raise ParseError(name, line_no + 1, "at least one epoch with observations", "none")
+        raise ParseError(name, scan.line_no + 1, "at least one epoch with observations", "none")
     if epochs.backwards:
         warnings.append(ParseWarning("epochs-not-increasing", f"{epochs.backwards} epochs go back in time"))
     interval = epochs.median_step_s()
@@ -421,11 +484,11 @@ def scan_rinex_obs(lines: Iterator[str], name: str, compression: str | None = No
     systems = sorted({s[0] for s in sats})
     return {
         "format": "RINEX observation", "version": version, "compression": compression,
-        "marker_name": marker, "receiver_type": receiver, "antenna_type": antenna,
-        "approx_position_ecef_m": approx,
+        "marker_name": h.marker, "receiver_type": h.receiver, "antenna_type": h.antenna,
+        "approx_position_ecef_m": h.approx,
         "time_first": epochs.first.iso(), "time_last": epochs.last.iso(),
         "duration_s": float(epochs.last - epochs.first), "interval_s": interval, "header_interval_s": header_interval,
-        "n_epochs": epochs.count, "n_events": events,
+        "n_epochs": epochs.count, "n_events": scan.events,
         "systems": systems, "signals": {s: obs_types.get(s, []) for s in systems},
         "satellites": sorted(sats),
         "warnings": [w.to_dict() for w in warnings],

@@ -152,35 +152,64 @@ def _convert_time(ctx: _Ctx, t: GpsTime, time_system: str) -> GpsTime:
                     time_system)
 
 
-def read_sp3(source, *, name: str | None = None) -> Sp3Data:
-    """Epochs, satellites, positions, clocks (and velocities) of an SP3-a/b/c/d file (path or bytes).
+@dataclass
+class _Sp3Header:
+    """The SP3 header fields read_sp3 keeps (lines 1-2, '+' lines, '%c' and '/*' lines)."""
 
-    Args:
-        source: path or bytes (gzip/.Z/zip detected by magic bytes); name: file name for messages.
-    Returns: `Sp3Data` (see its docstring for shapes and units). Raises `ParseError` for a broken file.
-    Implements: SP3-c (Hilla 2010) / SP3-d (Hilla 2016) sec. "Format" line by line (see module docstring).
-    """
-    text, display = read_source_text(source, name)
-    ctx = _Ctx(display)
-    lines = _split_lines(text)
+    version: str
+    pos_vel_flag: str
+    n_epochs_header: int
+    data_used: str
+    coordinate_system: str
+    orbit_type: str
+    agency: str
+    interval_s: float
+    sats: list[str] = field(default_factory=list)
+    sat_line_no: int = 3  # line number of the first '+' line
+    file_type: str = "G"
+    time_system: str = "GPS"
+    comments: list[str] = field(default_factory=list)
+
+
+@dataclass
+class _Sp3Body:
+    """Records of the body in file units (km, microseconds, dm/s, 1e-4 microseconds/s), NaN where bad/absent."""
+
+    epoch_lines: list[int]
+    cal: np.ndarray  # (n_ep, 6) y, m, d, h, mi, s of each epoch line
+    pos: np.ndarray
+    clk: np.ndarray
+    vel: np.ndarray
+    rate: np.ndarray
+    seen_p: np.ndarray
+    seen_v: np.ndarray
+    eof: bool = False
+
+
+def _sp3_lines_1_2(ctx: _Ctx, lines: list[str]) -> _Sp3Header:
+    """_Sp3Header of lines 1 ('#cP' start epoch, count, data used, frame, orbit type, agency) and 2 ('##')."""
     if len(lines) < 2:
         raise ctx.error(len(lines) or 1, "an SP3 header ('#a'..'#d' line 1, '##' line 2)", lines[0] if lines else "")
     l1 = lines[0]
     if len(l1) < 3 or l1[0] != "#" or l1[1] not in "abcd" or l1[2] not in "PV":
         raise ctx.error(1, "'#aP', '#bP', '#cP', '#dP' (or ...V) in columns 1-3", l1, 1)
-    version, pv = l1[1], l1[2]
     _epoch(ctx, "*  " + l1[3:], 1)  # line 1 has the epoch line's layout from column 4 on
     n_epochs_header = _int(ctx, l1, 32, 39, 1, "number of epochs")
-    data_used = l1[40:45].strip()
-    coord = l1[46:51].strip()
-    orbit_type = l1[52:55].strip()
-    agency = l1[56:60].strip()
     l2 = lines[1]
     if not l2.startswith("##"):
         raise ctx.error(2, "'##' GPS week / seconds of week / interval line", l2, 1)
     interval_s = _flt(ctx, l2, 24, 38, 2, "epoch interval")
+    return _Sp3Header(version=l1[1], pos_vel_flag=l1[2], n_epochs_header=n_epochs_header,
+                      data_used=l1[40:45].strip(), coordinate_system=l1[46:51].strip(),
+                      orbit_type=l1[52:55].strip(), agency=l1[56:60].strip(), interval_s=interval_s)
 
-    i = 2
+
+def _sp3_satellites(ctx: _Ctx, lines: list[str], i: int, hdr: _Sp3Header) -> int:
+    """Read the '+' satellite-id lines from line index `i` into hdr.sats; index of the line after them.
+
+    Implements: SP3-d sec. "Lines 3-...": count I3 in columns 4-6, 17 ids (A1,I2) per line from column 10;
+    the ids after the count must be empty ('  0').
+    """
     plus: list[tuple[int, str]] = []
     while i < len(lines) and lines[i].startswith("+") and not lines[i].startswith("++"):
         plus.append((i + 1, lines[i]))
@@ -204,90 +233,91 @@ def read_sp3(source, *, name: str | None = None) -> Sp3Data:
     if len(set(listed)) != len(listed):
         dup = next(s for s in listed if listed.count(s) > 1)
         raise ctx.error(ln0, "each satellite listed once in the '+' lines", f"{dup} listed twice")
-    sats: list[str] = listed  # type: ignore[assignment]
+    hdr.sats = listed  # type: ignore[assignment]
+    hdr.sat_line_no = ln0
+    return i
+
+
+def _sp3_descriptors(ctx: _Ctx, lines: list[str], i: int, hdr: _Sp3Header) -> int:
+    """Skip '++' lines, read '%c' (file type, time system: SP3-c/d only) and '/*' comments; first body line index."""
     while i < len(lines) and lines[i].startswith("++"):
         i += 1
-    file_type, time_system = "G", "GPS"
-    comments: list[str] = []
     n_pc = 0
     while i < len(lines) and lines[i][:2] in ("%c", "%f", "%i", "/*", "%/"):
         ln = lines[i]
         if ln.startswith("%c"):
-            if n_pc == 0 and version in "cd":
-                file_type = ln[3:5].strip() or "G"
-                time_system = ln[9:12].strip()
-                if time_system.lower() == "ccc" or not time_system:
-                    time_system = "GPS"
+            if n_pc == 0 and hdr.version in "cd":
+                hdr.file_type = ln[3:5].strip() or "G"
+                hdr.time_system = ln[9:12].strip()
+                if hdr.time_system.lower() == "ccc" or not hdr.time_system:
+                    hdr.time_system = "GPS"
             n_pc += 1
         elif ln.startswith("/*"):
-            comments.append(ln[3:].rstrip())
+            hdr.comments.append(ln[3:].rstrip())
         i += 1
-    if version in "ab":
-        time_system = "GPS"
+    if hdr.version in "ab":
+        hdr.time_system = "GPS"
     if i >= len(lines) or not lines[i].startswith("*"):
         raise ctx.error(i + 1, "the first epoch line '*  yyyy mm dd ...' after the header",
                         lines[i] if i < len(lines) else "<end of file>", 1)
+    return i
 
-    body_start = i
+
+def _sp3_pv_record(ctx: _Ctx, body: _Sp3Body, e: int, index: dict[str, int], ln: str, lno: int) -> None:
+    """Store one 'P' (x, y, z km, clock us) or 'V' (dm/s, 1e-4 us/s) record (3F14.6, F14.6) of epoch `e`."""
+    c0 = ln[:1]
+    if len(ln) < 46:
+        raise ctx.error(lno, f"a {c0} record with x, y, z (3F14.6) in columns 5-46", ln, len(ln) + 1)
+    sat = _sat_id(ctx, ln[1:4], lno, ln, 1)
+    j = index.get(sat) if sat is not None else None
+    if j is None:
+        raise ctx.error(lno, "a satellite listed in the header's '+' lines", f"{ln[1:4]!r} in: {ln}", 2)
+    xyz = (_flt(ctx, ln, 4, 18, lno, "x"), _flt(ctx, ln, 18, 32, lno, "y"), _flt(ctx, ln, 32, 46, lno, "z"))
+    c_txt = ln[46:60]
+    cval = _flt(ctx, ln, 46, 60, lno, "clock") if c_txt.strip() else np.nan
+    bad_xyz = any(v == 0.0 or abs(v) >= BAD_CLOCK_US for v in xyz)
+    bad_c = not (abs(cval) < BAD_CLOCK_US)
+    seen, xyz_out, c_out = ((body.seen_p, body.pos, body.clk) if c0 == "P"
+                            else (body.seen_v, body.vel, body.rate))
+    if seen[e, j]:
+        raise ctx.error(lno, f"one {c0} record per satellite and epoch ({sat} repeated)", ln, 2)
+    seen[e, j] = True
+    if not bad_xyz:
+        xyz_out[e, j] = xyz
+    if not bad_c:
+        c_out[e, j] = cval
+
+
+def _sp3_body(ctx: _Ctx, lines: list[str], body_start: int, hdr: _Sp3Header) -> _Sp3Body:
+    """_Sp3Body of the lines from `body_start`: '*' epochs, 'P'/'V' records, 'EP'/'EV' skipped, 'EOF'."""
     epoch_lines = [k for k in range(body_start, len(lines)) if lines[k].startswith("*")]
     n_ep = len(epoch_lines)
-    if n_ep != n_epochs_header:
-        ctx.warnings.append(ParseWarning("EPOCH_COUNT_MISMATCH", f"line 1 announces {n_epochs_header} epochs, "
+    if n_ep != hdr.n_epochs_header:
+        ctx.warnings.append(ParseWarning("EPOCH_COUNT_MISMATCH", f"line 1 announces {hdr.n_epochs_header} epochs, "
                                          f"the body has {n_ep}", 1))
-    index = {s: j for j, s in enumerate(sats)}
-    ns = len(sats)
-    pos = np.full((n_ep, ns, 3), np.nan)
-    clk = np.full((n_ep, ns), np.nan)
-    vel = np.full((n_ep, ns, 3), np.nan)
-    rate = np.full((n_ep, ns), np.nan)
-    seen_p = np.zeros((n_ep, ns), dtype=bool)
-    seen_v = np.zeros((n_ep, ns), dtype=bool)
-    cal = np.zeros((n_ep, 6))
+    index = {s: j for j, s in enumerate(hdr.sats)}
+    ns = len(hdr.sats)
+    body = _Sp3Body(epoch_lines, np.zeros((n_ep, 6)), np.full((n_ep, ns, 3), np.nan), np.full((n_ep, ns), np.nan),
+                    np.full((n_ep, ns, 3), np.nan), np.full((n_ep, ns), np.nan), np.zeros((n_ep, ns), dtype=bool),
+                    np.zeros((n_ep, ns), dtype=bool))
     e = -1
-    eof = False
     for k in range(body_start, len(lines)):
         ln = lines[k]
         lno = k + 1
         c0 = ln[:1]
-        if eof:
+        if body.eof:
             if ln.strip():
                 raise ctx.error(lno, "nothing after the 'EOF' line", ln, 1)
             continue
         if c0 == "*":
             e += 1
-            cal[e] = _epoch(ctx, ln, lno)
-            if cal[e, 5] >= 60.0:
+            body.cal[e] = _epoch(ctx, ln, lno)
+            if body.cal[e, 5] >= 60.0:
                 ctx.count("EPOCH_SECONDS_60", "epoch lines with seconds >= 60 were rolled over", lno)
         elif c0 == "P" or c0 == "V":
-            if len(ln) < 46:
-                raise ctx.error(lno, f"a {c0} record with x, y, z (3F14.6) in columns 5-46", ln, len(ln) + 1)
-            sat = _sat_id(ctx, ln[1:4], lno, ln, 1)
-            j = index.get(sat) if sat is not None else None
-            if j is None:
-                raise ctx.error(lno, "a satellite listed in the header's '+' lines", f"{ln[1:4]!r} in: {ln}", 2)
-            xyz = (_flt(ctx, ln, 4, 18, lno, "x"), _flt(ctx, ln, 18, 32, lno, "y"), _flt(ctx, ln, 32, 46, lno, "z"))
-            c_txt = ln[46:60]
-            cval = _flt(ctx, ln, 46, 60, lno, "clock") if c_txt.strip() else np.nan
-            bad_xyz = any(v == 0.0 or abs(v) >= BAD_CLOCK_US for v in xyz)
-            bad_c = not (abs(cval) < BAD_CLOCK_US)
-            if c0 == "P":
-                if seen_p[e, j]:
-                    raise ctx.error(lno, f"one P record per satellite and epoch ({sat} repeated)", ln, 2)
-                seen_p[e, j] = True
-                if not bad_xyz:
-                    pos[e, j] = xyz
-                if not bad_c:
-                    clk[e, j] = cval
-            else:
-                if seen_v[e, j]:
-                    raise ctx.error(lno, f"one V record per satellite and epoch ({sat} repeated)", ln, 2)
-                seen_v[e, j] = True
-                if not bad_xyz:
-                    vel[e, j] = xyz
-                if not bad_c:
-                    rate[e, j] = cval
+            _sp3_pv_record(ctx, body, e, index, ln, lno)
         elif ln.startswith("EOF"):
-            eof = True
+            body.eof = True
         elif c0 == "E" and ln[1:2] in ("P", "V"):
             continue
         elif not ln.strip():
@@ -296,39 +326,72 @@ def read_sp3(source, *, name: str | None = None) -> Sp3Data:
             raise ctx.error(lno, "an epoch ('*'), 'P', 'V', 'EP', 'EV' record or 'EOF'", ln, 1)
         if e < 0 and c0 != "*":
             raise ctx.error(lno, "an epoch line before the first record", ln, 1)
-    if not eof:
+    return body
+
+
+def _sp3_completeness(ctx: _Ctx, body: _Sp3Body, hdr: _Sp3Header, n_lines: int) -> bool:
+    """Whether velocities are present; refuses listed satellites without records, warns of missing ones."""
+    if not body.eof:
         ctx.warnings.append(ParseWarning("MISSING_EOF", "the file ends without an 'EOF' line (truncated?)",
-                                         len(lines)))
+                                         n_lines))
+    seen_p, seen_v = body.seen_p, body.seen_v
     absent = ~seen_p.any(axis=0)
     if absent.any():
-        raise ctx.error(plus[0][0], "every satellite listed in the '+' lines to have records in the body",
-                        f"no P record for {', '.join(s for s, a in zip(sats, absent) if a)}")
+        raise ctx.error(hdr.sat_line_no, "every satellite listed in the '+' lines to have records in the body",
+                        f"no P record for {', '.join(s for s, a in zip(hdr.sats, absent) if a)}")
     missing_p = int((~seen_p).sum())
     if missing_p:
         ctx.warnings.append(ParseWarning("MISSING_RECORDS", f"{missing_p} satellite-epochs without a P record "
                                          "(NaN)", None))
-    has_vel = pv == "V" or seen_v.any()
+    has_vel = hdr.pos_vel_flag == "V" or seen_v.any()
     if has_vel:
         miss_v = int((seen_p & ~seen_v).sum())
         if miss_v:
             ctx.warnings.append(ParseWarning("MISSING_VELOCITY", f"{miss_v} P records without a V record "
                                              "(velocity NaN)", None))
+    return bool(has_vel)
+
+
+def _sp3_times(ctx: _Ctx, body: _Sp3Body, lines: list[str], time_system: str) -> GpsTime:
+    """GpsTime of the epoch lines, refused unless strictly increasing, converted to GPS time."""
+    cal = body.cal
     t = GpsTime.from_calendar(cal[:, 0].astype(np.int64), cal[:, 1].astype(np.int64), cal[:, 2].astype(np.int64),
                               cal[:, 3].astype(np.int64), cal[:, 4].astype(np.int64), cal[:, 5])
-    if n_ep > 1:
+    if len(cal) > 1:
         step = t[1:] - t[:-1]
         if np.any(step <= 0):
             r = int(np.argmax(step <= 0)) + 1
-            raise ctx.error(epoch_lines[r] + 1, "epochs in strictly increasing time order",
-                            lines[epoch_lines[r]], 1)
-    t = _convert_time(ctx, t, time_system)
+            raise ctx.error(body.epoch_lines[r] + 1, "epochs in strictly increasing time order",
+                            lines[body.epoch_lines[r]], 1)
+    return _convert_time(ctx, t, time_system)
+
+
+def read_sp3(source, *, name: str | None = None) -> Sp3Data:
+    """Epochs, satellites, positions, clocks (and velocities) of an SP3-a/b/c/d file (path or bytes).
+
+    Args:
+        source: path or bytes (gzip/.Z/zip detected by magic bytes); name: file name for messages.
+    Returns: `Sp3Data` (see its docstring for shapes and units). Raises `ParseError` for a broken file.
+    Implements: SP3-c (Hilla 2010) / SP3-d (Hilla 2016) sec. "Format" line by line (see module docstring).
+    """
+    text, display = read_source_text(source, name)
+    ctx = _Ctx(display)
+    lines = _split_lines(text)
+    hdr = _sp3_lines_1_2(ctx, lines)
+    i = _sp3_satellites(ctx, lines, 2, hdr)
+    body_start = _sp3_descriptors(ctx, lines, i, hdr)
+    body = _sp3_body(ctx, lines, body_start, hdr)
+    has_vel = _sp3_completeness(ctx, body, hdr, len(lines))
+    t = _sp3_times(ctx, body, lines, hdr.time_system)
     ctx.flush()
     return Sp3Data(
-        name=display, version=version, pos_vel_flag=pv, time=t, sats=sats, position_ecef_m=pos * 1000.0,
-        clock_s=clk * 1e-6, velocity_ecef_m_s=vel * 0.1 if has_vel else None,
-        clock_rate_s_s=rate * 1e-10 if has_vel else None, data_used=data_used, coordinate_system=coord,
-        orbit_type=orbit_type, agency=agency, time_system=time_system, file_type=file_type, interval_s=interval_s,
-        n_epochs_header=n_epochs_header, comments=comments, warnings=ctx.warnings)
+        name=display, version=hdr.version, pos_vel_flag=hdr.pos_vel_flag, time=t, sats=hdr.sats,
+        position_ecef_m=body.pos * 1000.0, clock_s=body.clk * 1e-6,
+        velocity_ecef_m_s=body.vel * 0.1 if has_vel else None,
+        clock_rate_s_s=body.rate * 1e-10 if has_vel else None, data_used=hdr.data_used,
+        coordinate_system=hdr.coordinate_system, orbit_type=hdr.orbit_type, agency=hdr.agency,
+        time_system=hdr.time_system, file_type=hdr.file_type, interval_s=hdr.interval_s,
+        n_epochs_header=hdr.n_epochs_header, comments=hdr.comments, warnings=ctx.warnings)
 
 
 def summarize_sp3(source, *, name: str | None = None) -> dict:

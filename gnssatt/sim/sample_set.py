@@ -1,7 +1,9 @@
-"""Small, valid RINEX files written by the tests themselves (no real data needed).
+"""Small, valid RINEX 3.04 observation files and a platform.json made without the simulator (no real data needed),
+for the service tests, the UI tests and the service-load benchmark.
 
 Values are plausible (pseudoranges ~2e7 m, phases in cycles, C/N0 35-50 dB-Hz) but carry no geometry:
-these files exercise the service (upload, validation, jobs), not the science.
+these files exercise the service (upload, validation, jobs), not the science (gnssatt.sim.simulate_scenario makes
+sets with geometry and truth).
 """
 from __future__ import annotations
 

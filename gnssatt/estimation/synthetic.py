@@ -1,6 +1,6 @@
 """Synthetic single-epoch attitude problems: random GPS-like geometry, a rigid antenna platform, DD phase and code.
 
-Used by the tests and by ``bench/bench_lambda.py``. Everything is drawn from a seeded numpy Generator.
+Used by the estimation tests and by ``bench/bench_lambda.py``. Everything is drawn from a seeded numpy Generator.
 The noise is simulated per antenna and satellite (undifferenced), then differenced, so the correlation between
 baselines sharing the master antenna and between the DDs sharing the reference satellite is the physical one.
 """
@@ -11,10 +11,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from gnssatt.estimation.constrained_search import DDBlock, FloatSolution, dd_geometry, single_epoch_float
+from gnssatt.gnss.signals import WAVELENGTH_GPS_L1_M, WAVELENGTH_GPS_L2_M
 
 #: GPS L1 and L2 wavelengths, metres (c / 1575.42 MHz, c / 1227.60 MHz).
-L1_WAVELENGTH_M = 299_792_458.0 / 1575.42e6
-L2_WAVELENGTH_M = 299_792_458.0 / 1227.60e6
+L1_WAVELENGTH_M = WAVELENGTH_GPS_L1_M
+L2_WAVELENGTH_M = WAVELENGTH_GPS_L2_M
 #: CASSIOPE-like body baselines (CONVENTIONS.md example platform), metres: GPS-2 -> GPS-0, GPS-2 -> GPS-1.
 CASSIOPE_BODY_M = np.array([[1.04653, -0.07191, 0.0], [0.0, 1.13969, 0.0]])
 #: CubeSat-like: two ~10 cm baselines at right angles.

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tests.attitude.truth import _n_at, load_arcs
+from gnssatt.attitude.truth import ambiguity_at, load_arcs
 from gnssatt.gnss.constants import C_M_S
 
 __all__ = ["true_integer_floor", "used_phase_mask"]
@@ -52,7 +52,7 @@ def true_integer_floor(sol, truth_dir: Path, sigma_m=None, mask: np.ndarray | No
         dn = np.full((n_ep, n_sat, n_sig), np.nan)
         for s, sat in enumerate(pobs.sats):
             for f, sg in enumerate(pobs.signals):
-                dn[:, s, f] = _n_at(arcs, (b, sat, sg), t_s) - _n_at(arcs, (a, sat, sg), t_s)
+                dn[:, s, f] = ambiguity_at(arcs, (b, sat, sg), t_s) - ambiguity_at(arcs, (a, sat, sg), t_s)
         sd = pobs.phase_m[ib] - pobs.phase_m[ia] - lam[None, None, :] * dn          # (n_ep, n_sat, n_sig)
         ok = np.isfinite(sd) & geom.valid[:, :, None]
         if mask is not None:

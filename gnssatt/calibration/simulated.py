@@ -1,5 +1,6 @@
-"""Simulated calibration campaigns for the calibration tests and bench: sets made by the project simulator, read
-back as InputSets exactly as the service would hand them to a pipeline.
+"""Simulated calibration campaigns and their truth, for the calibration tests and bench/bench_calibration.py:
+sets made by the project simulator (gnssatt.sim), and the injected offsets, PCO and PCV expressed in the
+calibration's baseline/map split (gnssatt.calibration.decomposition), to score a campaign's products against.
 
 Each set is simulated as pass 0 of its own run (`count: 1`) with its own start time and orbit phase, so all sets
 share the antennas' hidden offsets, PCO and PCV: the simulator draws PCO/PCV per pass index (see
@@ -13,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from worker.context import InputFile, InputSet
-from gnssatt.gnss.io.sniff import identify
 from gnssatt.gnss.time import GpsTime
+
+__all__ = ["SPACING_S", "simulate_campaign", "truth_of", "truth_map_mm", "compare_maps_mm", "truth_split"]
 
 SPACING_S = 2 * 86400.0 + 5 * 3600.0 + 11 * 60.0  # the calibration preset's pass spacing
 
@@ -36,19 +37,6 @@ def simulate_campaign(out: Path, n_sets: int, duration_s: float, *, seed: int = 
             simulate_scenario("calibration", d, seed=seed, overrides=ov)
         dirs.append(d)
     return dirs
-
-
-def input_set(directory: Path, set_id: str | None = None, skip: tuple = ()) -> InputSet:
-    """The InputSet of a directory (every file but truth/, identified and summarised like an upload)."""
-    directory = Path(directory)
-    files = []
-    for p in sorted(directory.rglob("*")):
-        rel = str(p.relative_to(directory))
-        if p.is_file() and not rel.startswith("truth") and rel not in skip:
-            kind, summary = identify(p, rel)
-            files.append(InputFile(rel, kind, p, summary))
-    sid = set_id or directory.name
-    return InputSet(sid, sid, files, {})
 
 
 def truth_of(directory: Path) -> dict:

@@ -1,0 +1,277 @@
+"""One adapter per compiled kernel: the kernel called with the inputs of its readable reference
+(gnssatt.attitude.reference_*, gnssatt.estimation.ekf_reference) and its outputs returned by name.
+
+The kernel tests call the kernels only through these functions, so when the kernels' signatures change (record
+types instead of positional arguments) only this module changes. `close` is the one comparison of floats: a
+tolerance always, never bit equality across implementations.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from gnssatt.attitude import kernels as K, qc_kernels as QK, update_kernels as UK
+from gnssatt.attitude.reference_noise import NoiseEstimates, NoiseSettings
+from gnssatt.attitude.reference_qc import (AmbiguityBook, AntennaView, ClockState, PreviousEpoch, QcLimits, SdEpoch,
+                                           TripleDifferences)
+from gnssatt.attitude.reference_records import EpochFlags
+from gnssatt.attitude.reference_update import FixState, RoundingLimits, StateLayout, UpdateObs, UsedRows, VarianceModel
+from gnssatt.estimation import ekf_kernels as EK
+
+
+def close(actual, expected, *, rtol: float = 0.0, atol: float = 0.0, what: str = "") -> None:
+    """assert |actual - expected| <= atol + rtol |expected| elementwise (NaN where expected is NaN); a tolerance
+    must be given (rtol or atol > 0)."""
+    assert rtol > 0 or atol > 0, "a tolerance is required"
+    np.testing.assert_allclose(np.asarray(actual, dtype=np.float64), np.asarray(expected, dtype=np.float64),
+                               rtol=rtol, atol=atol, equal_nan=True, err_msg=what)
+
+
+def same(actual, expected, what: str = "") -> None:
+    """Integer / boolean outputs (flags, counts, indices, reason codes): exactly equal."""
+    a, e = np.asarray(actual), np.asarray(expected)
+    assert a.dtype.kind in "biu" and e.dtype.kind in "biu", f"{what}: exact comparison is for integers and flags"
+    np.testing.assert_array_equal(a, e, err_msg=what)
+
+
+# --- gnssatt.estimation.ekf_kernels ------------------------------------------------------------------------------
+
+def call_gather_AHt(A, cols, coef):
+    return EK.gather_AHt(A, cols, coef)
+
+
+def call_gather_HA(A, cols, coef):
+    return EK.gather_HA(A, cols, coef)
+
+
+def call_symmetric_plus_diag(S, R):
+    return EK.symmetric_plus_diag(S, R)
+
+
+def call_joseph_combine(AP, X, Y):
+    return EK.joseph_combine(AP, X, Y)
+
+
+def call_rotation_rk4_stm(b_m, omega_rad_s, dt_s, max_step_s):
+    """(b1 (n_b, 3), Phi_bb (3, 3), Phi_bw (n_b, 3, 3))."""
+    return EK.rotation_rk4_stm_kernel(b_m, omega_rad_s, dt_s, max_step_s)
+
+
+def call_propagate_rotation_cov(P, w_idx, b_idx, Phi_bb, Phi_bw, Qw, b1, dt_s):
+    """Phi P Phi^T + Q as a new array (the kernel works in place on a copy)."""
+    out = np.array(P, dtype=np.float64)
+    EK.propagate_rotation_cov(out, np.asarray(w_idx, np.int64), b_idx, Phi_bb, Phi_bw, Qw, b1, dt_s)
+    return out
+
+
+def call_sequential_update(x, P, cols, coef, R, z, joseph_ratio):
+    """(good, x, P) after the sequential update of copies of x, P."""
+    x1, P1 = x.copy(), P.copy()
+    good = EK.sequential_update_sparse(x1, P1, cols, coef, R, z, joseph_ratio)
+    return good, x1, P1
+
+
+# --- gnssatt.attitude.kernels ------------------------------------------------------------------------------------
+
+def call_np_sum(a):
+    return K.np_sum(a)
+
+
+def call_masked_median_axis1(a, ok):
+    return K.masked_median_axis1(a, ok)
+
+
+def call_count_pairs_masked(first, second, mask, n_first, n_second):
+    return K.count_pairs_masked(first, second, mask, n_first, n_second)
+
+
+def call_measurement_rows(rows: UsedRows, layout: StateLayout, obs: UpdateObs):
+    """(cols, coef, z)."""
+    return K.measurement_rows(rows.jc, rows.sc, rows.fc, rows.jp, rows.sp, rows.fp, layout.b_idx, obs.u,
+                              obs.clock_factor, layout.clk, layout.pclk, layout.bias, layout.amb_index,
+                              obs.wavelength_m, obs.sdc_c_m, obs.sdp_c_m, obs.pcv_m)
+
+
+def call_cn0_growth(td: TripleDifferences, ln_factor, wavelength_m, est: NoiseEstimates, settings: NoiseSettings):
+    """cn0_growth_samples + cn0_growth_update, est updated in place."""
+    xs, rs, off = K.cn0_growth_samples(td.code_m, td.phase_m, td.code_ok, td.phase_ok, td.median_code_m,
+                                       td.median_phase_m, ln_factor, wavelength_m)
+    K.cn0_growth_update(xs, np.log(rs), off, est.moments, est.n_growth, est.gamma, settings.memory_epochs,
+                        settings.min_epochs, settings.min_var_ln_factor, K.POW2)
+
+
+def call_white_noise(td: TripleDifferences, weights, est: NoiseEstimates, settings: NoiseSettings):
+    """white_noise_update, est updated in place."""
+    K.white_noise_update(td.code_m, td.phase_m, td.code_ok, td.phase_ok, td.median_code_m, td.median_phase_m,
+                         weights[0], weights[1], est.var_code_m2, est.var_phase_m2, est.n_white,
+                         settings.memory_epochs, K.POW2)
+
+
+# --- gnssatt.attitude.qc_kernels ---------------------------------------------------------------------------------
+
+def call_reset_white_clocks(x, P, white, var_m2):
+    x1, P1 = x.copy(), P.copy()
+    QK.reset_white_clocks(x1, P1, white, var_m2)
+    return x1, P1
+
+
+def call_propagate_dynamic(x, P, b_idx, Qw, dt_s, max_step_s, white, var_clock_m2):
+    """(x, P, Phi_bb, Phi_bw) on copies."""
+    x1, P1 = x.copy(), P.copy()
+    Pbb, Pbw = QK.propagate_dynamic(x1, P1, np.arange(3), b_idx, Qw, dt_s, max_step_s, white, var_clock_m2)
+    return x1, P1, Pbb, Pbw
+
+
+def call_propagate_kinematic(x, P, b_flat, q_dt_m2, white, var_clock_m2):
+    x1, P1 = x.copy(), P.copy()
+    QK.propagate_kinematic(x1, P1, b_flat, q_dt_m2, white, var_clock_m2)
+    return x1, P1
+
+
+def call_clip_pair(a, b):
+    out = np.empty((2,) + a.shape)
+    QK.clip_pair(a, b, out)
+    return out
+
+
+def call_epoch_geometry(u, R, bs_a_T, bs_b_T, x, b_idx):
+    """(los_b (n_sat, 3), ub (n_bl, n_sat), asn_in (2, n_sat, n_bl))."""
+    asn = np.empty((2, u.shape[0], b_idx.shape[0]))
+    los, ub = QK.epoch_geometry(u, R, bs_a_T, bs_b_T, x, b_idx, asn)
+    return los, ub, asn
+
+
+def call_qc_epoch(sd: SdEpoch, view: AntennaView, ub_m, prev: PreviousEpoch, clock: ClockState, t_s: float,
+                  limits: QcLimits) -> dict:
+    """qc_epoch's outputs by name (the names of reference_qc.QcEpoch / TripleDifferences / EpochClock), with the
+    clock state after the epoch as a ClockState."""
+    n_bl, n_sat, n_sig = sh = sd.sdc_m.shape
+    el = np.zeros((3, n_bl, n_sat))
+    reason = np.zeros(sh, np.int64)
+    wb, wf = np.zeros((5,) + sh, bool), np.zeros((4,) + sh)
+    clk_state = clock.as_array()
+    clk_out, jump, mcp = np.zeros((2, n_bl)), np.zeros(n_bl, bool), np.zeros((2, n_bl, n_sig))
+    asn = np.ascontiguousarray(np.stack([view.asn_a_rad, view.asn_b_rad]))
+    n_jump, n_common = QK.qc_epoch(asn, view.az_rad, view.mask_on, view.ever_fixed, limits.el_mask_ant_rad,
+                                   sd.reason0, sd.pcv_empty, view.pcv_on, sd.low_cn0, sd.avail_p, sd.sdc_m, sd.sdp_m,
+                                   sd.clock_factor, ub_m, prev.ub_m, prev.do_td, prev.sdc_m, prev.sdp_m,
+                                   sd.baseline_ok, sd.lli, t_s, clk_state, limits.clock_jump_m, limits.td_max_dt_s,
+                                   el[0], el[1], el[2], reason, wb, wf, clk_out, jump, mcp)
+    td = TripleDifferences(wf[2], wf[3], wb[3], wb[4], mcp[0], mcp[1])
+    return dict(el_w_rad=el[0], el_ant_rad=el[1], az_ant_rad=el[2], reason=reason, use_c=wb[0], use_p=wb[1],
+                slip=wb[2], sdc_c_m=wf[0], sdp_c_m=wf[1], td=td, clock_m=clk_out[0], predicted_m=clk_out[1],
+                jump=jump, n_jump=n_jump, n_common_jumps=n_common, clock_state=ClockState(*clk_state),
+                _wb=wb, _wf=wf, _mcp=mcp)
+
+
+def call_growth_weights(update: bool, td: TripleDifferences, ln_factor, wavelength_m, est: NoiseEstimates,
+                        settings: NoiseSettings):
+    """(2, n_bl, n_sat, n_sig) C/N0 weights factor^gamma after growth_weights (est updated in place if update)."""
+    glw = np.zeros((2,) + ln_factor.shape)
+    z = np.zeros(0)
+    xs, log_rs, off = z, z, np.zeros(2 * wavelength_m.size + 1, np.int64)
+    if update:
+        xs, rs, off = K.cn0_growth_samples(td.code_m, td.phase_m, td.code_ok, td.phase_ok, td.median_code_m,
+                                           td.median_phase_m, ln_factor, wavelength_m)
+        log_rs = np.log(rs)
+    QK.growth_weights(update, xs, log_rs, off, est.moments, est.n_growth, est.gamma, settings.memory_epochs,
+                      settings.min_epochs, settings.min_var_ln_factor, ln_factor, glw)
+    return np.exp(glw)
+
+
+def call_td_checks(qc: dict, weights, est: NoiseEstimates, settings: NoiseSettings, sd: SdEpoch,
+                   prev: PreviousEpoch, book: AmbiguityBook, t_s: float, limits: QcLimits, noise_on: bool) -> dict:
+    """td_checks after call_qc_epoch (qc's reason / use_c / slip updated in place, est too when noise_on):
+    ev_td, ev_lli, drop, need and the counts."""
+    sh = sd.sdc_m.shape
+    ev, bk = np.zeros((2,) + sh, bool), np.zeros((2,) + sh, bool)
+    n_td, n_lli, n_gap, n_drop, n_need = QK.td_checks(
+        prev.do_td, noise_on, weights, est.var_code_m2, est.var_phase_m2, est.n_white, settings.memory_epochs,
+        limits.td_code_m, limits.td_phase_cyc, limits.wavelength_m, sd.avail_p, sd.lli, qc["reason"], qc["_wb"],
+        qc["_wf"], qc["_mcp"], prev.consecutive, prev.sdp_m, book.amb_index, book.amb_last_t_s, book.n_fixed_part,
+        t_s, limits.max_gap_s, ev, bk)
+    return dict(ev_td=ev[0], ev_lli=ev[1], drop=bk[0], need=bk[1], n_td=n_td, n_lli=n_lli, n_gap=n_gap,
+                n_drop=n_drop, n_need=n_need)
+
+
+def call_record_epoch(k: int, flags: EpochFlags, el_ant_rad, az_ant_rad, cn0_dbhz, post_m, rows: UsedRows,
+                      buffers: dict, sdc_c_m, sdp_c_m, b_out_m, u) -> None:
+    """record_epoch into buffers (ibuf, fbuf, pos, prev_sdc, prev_sdp, prev_ub, lookup), updated in place."""
+    b = buffers
+    b["pos"] = QK.record_epoch(k, flags.avail_c, flags.avail_p, flags.use_c, flags.use_p, flags.reason, el_ant_rad,
+                               az_ant_rad, cn0_dbhz, post_m, post_m.size, rows.jc, rows.sc, rows.fc, rows.jp,
+                               rows.sp, rows.fp, b["lookup"], b["ibuf"], b["fbuf"], b["pos"], sdc_c_m, sdp_c_m,
+                               b["prev_sdc"], b["prev_sdp"], b_out_m, u, b["prev_ub"])
+
+
+def call_take_square(P, idx):
+    return QK.take_square(P, idx)
+
+
+def call_grow_square(P, k, var):
+    return QK.grow_square(P, k, var)
+
+
+# --- gnssatt.attitude.update_kernels -----------------------------------------------------------------------------
+
+def call_measurement_variances(rows: UsedRows, obs: UpdateObs, model: VarianceModel):
+    """(var, v_white, v_mp)."""
+    return UK.measurement_variances(rows.jc, rows.sc, rows.fc, rows.jp, rows.sp, rows.fp, model.var_code_m2,
+                                    model.var_phase_m2, obs.cn0_dbhz, model.gamma, model.cn0_growth, obs.el_e_rad,
+                                    model.elevation_weighting, obs.el_w_rad, model.mp_model, model.mp_sigma_m,
+                                    model.mp_mult)
+
+
+def call_white_variances(est_var_m2, est_n, floor_var_m2, min_epochs, estimate):
+    return UK.white_variances(est_var_m2, est_n, floor_var_m2, min_epochs, estimate)
+
+
+def call_measurement_update(x, P, rows: UsedRows, layout: StateLayout, obs: UpdateObs, model: VarianceModel,
+                            fix: FixState, amb_last_t_s, t_s: float, joseph_ratio: float, n_bl: int,
+                            n_sat: int) -> dict:
+    """measurement_update on copies of x, P, amb_last_t; outputs by the names of reference_update.UpdateResult."""
+    x1, P1, last_t = x.copy(), P.copy(), amb_last_t_s.copy()
+    out = UK.measurement_update(x1, P1, rows.jc, rows.sc, rows.fc, rows.jp, rows.sp, rows.fp, layout.b_idx, obs.u,
+                                obs.clock_factor, layout.clk, layout.pclk, layout.bias, layout.amb_index,
+                                obs.wavelength_m, obs.sdc_c_m, obs.sdp_c_m, obs.pcv_m, model.var_code_m2,
+                                model.var_phase_m2, obs.cn0_dbhz, model.gamma, model.cn0_growth, obs.el_e_rad,
+                                model.elevation_weighting, obs.el_w_rad, model.mp_model, model.mp_sigma_m,
+                                model.mp_mult, fix.amb_fixed, layout.n_fixed_part, last_t, t_s, joseph_ratio,
+                                fix.amb_key, n_bl, n_sat)
+    names = ("cols", "coef", "z", "var_m2", "v_mp_m2", "post_m", "good", "mp_num", "mp_den", "n_mp", "n_used",
+             "n_fixed_used", "n_unfixed", "n_fix_rows", "ms_fix_m2", "has_fix")
+    return dict(zip(names, out), x=x1, P=P1, amb_last_t_s=last_t)
+
+
+def call_phase_row_stats(rows: UsedRows, cols, fix: FixState, post_m, n_fixed_part, n_bl, n_sat) -> dict:
+    out = UK.phase_row_stats(rows.jp, rows.sp, cols, rows.n_code, fix.amb_fixed, n_fixed_part, post_m, n_bl, n_sat)
+    return dict(zip(("n_used", "n_fixed_used", "n_unfixed", "n_fix_rows", "ms_fix_m2"), out))
+
+
+def call_round_newcomers_rows(x, P, fix: FixState, n_fixed_part, idx_j, sig_j, el_j, n_sig, j,
+                              limits: RoundingLimits):
+    """(new, ref, integers, amb_fixed) with amb_fixed a copy updated by the kernel."""
+    amb_fixed = fix.amb_fixed.copy()
+    new, ref, val = UK.round_newcomers_rows(x, P, fix.amb_key, amb_fixed, n_fixed_part, idx_j, sig_j, el_j, n_sig, j,
+                                            limits.max_sigma_cyc, limits.max_frac_cyc)
+    return new, ref, val, amb_fixed
+
+
+def call_fix_newcomers(x, P, fix: FixState, n_fixed_part, cols, rows: UsedRows, el_loc_rad, n_sig, j,
+                       limits: RoundingLimits):
+    """(x, P, new, ref, integers, amb_fixed) on copies; the phase rows of the update as the filter passes them."""
+    x1, P1, amb_fixed = x.copy(), P.copy(), fix.amb_fixed.copy()
+    new, ref, val = UK.fix_newcomers(x1, P1, fix.amb_key, amb_fixed, n_fixed_part, cols, rows.n_code, rows.jp,
+                                     rows.sp, rows.fp, el_loc_rad, n_sig, j, limits.max_sigma_cyc,
+                                     limits.max_frac_cyc, limits.var_cyc2)
+    return x1, P1, new, ref, val, amb_fixed
+
+
+def call_quest_dcm(b_ref, b_body, w):
+    return UK.quest_dcm(b_ref, b_body, w)
+
+
+def call_store_outputs(x, P, all_b_idx, k, out: dict, dynamic, baseline_ok, n_used, ever_fixed, n_fixed_used,
+                       fixed_min_sats):
+    """store_outputs into out's arrays (b_m, P_b_m2, omega_rad_s, ok, fixed, n_sats) at row k; returns fixed_now."""
+    return UK.store_outputs(x, P, all_b_idx, k, out["b_m"], out["P_b_m2"], out["omega_rad_s"], dynamic, baseline_ok,
+                            n_used, ever_fixed, n_fixed_used, fixed_min_sats, out["ok"], out["fixed"], out["n_sats"])
