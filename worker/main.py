@@ -69,7 +69,7 @@ def _warm_up_kernels() -> None:
         from gnssatt.attitude.update_kernels import warm_up as warm_up_update
         from gnssatt.estimation.ekf_kernels import warm_up as warm_up_ekf
 
-        print("loading the filter kernels (a cold cache compiles them once, ~15-60 s; docs/DEPENDENCIES.md)",
+        print("loading the filter kernels (a cold cache compiles them once, ~60-100 s; docs/DEPENDENCIES.md)",
               flush=True)
         t0 = time.perf_counter()
         warm_up_ekf()
