@@ -8,9 +8,9 @@ from fastapi.security import APIKeyHeader, HTTPAuthorizationCredentials, HTTPBea
 from sqlalchemy.orm import Session
 
 from app.keys import team_for_key
-from app.models import Team
 from app.problems import ProblemError
-from app.settings import Settings
+from core.models import Team
+from core.settings import Settings
 
 bearer_scheme = HTTPBearer(auto_error=False, description="API key as a bearer token")
 api_key_scheme = APIKeyHeader(name="X-API-Key", auto_error=False, description="API key")

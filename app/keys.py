@@ -7,7 +7,7 @@ import secrets
 from sqlalchemy import select
 from sqlalchemy.orm import Session
 
-from app.models import ApiKey, Team, utcnow
+from core.models import ApiKey, Team, utcnow
 
 KEY_PREFIX = "gk_"
 

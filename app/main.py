@@ -6,13 +6,13 @@ from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
 
-from app.db import make_engine, make_sessionmaker
-from app.migrate import migrate
 from app.problems import install_problem_handlers
 from app.routes import health, job_types, jobs, observation_sets, pcv_maps
 from app.routes.pages import install_pages
-from app.settings import Settings
-from app.store.blobs import BlobStore
+from core.blobs import BlobStore
+from core.db import make_engine, make_sessionmaker
+from core.migrate import migrate
+from core.settings import Settings
 from worker.queue import make_huey
 
 API_VERSION = "0.1.0"

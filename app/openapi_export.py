@@ -7,7 +7,7 @@ import tempfile
 from pathlib import Path
 
 from app.main import create_app
-from app.settings import Settings
+from core.settings import Settings
 
 
 def openapi_document() -> dict:

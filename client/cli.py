@@ -39,7 +39,7 @@ def cmd_serve(args) -> None:
     import uvicorn
 
     from app.main import create_app
-    from app.settings import Settings
+    from core.settings import Settings
 
     settings = Settings()
     uvicorn.run(create_app(settings), host=args.host, port=args.port, log_level=settings.log_level.lower(),
@@ -51,16 +51,16 @@ def cmd_worker(args) -> None:
     # per-epoch matrices only oversubscribes the cores (measured 4-8x slower fan-out tasks on 2 cores).
     for var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
         os.environ.setdefault(var, "1")
-    from app.settings import Settings
+    from core.settings import Settings
     from worker.main import run_worker
 
     run_worker(Settings(), concurrency=args.concurrency)
 
 
 def _admin_session():
-    from app.db import make_engine, make_sessionmaker
-    from app.migrate import migrate
-    from app.settings import Settings
+    from core.db import make_engine, make_sessionmaker
+    from core.migrate import migrate
+    from core.settings import Settings
 
     settings = Settings()
     engine = make_engine(settings)
@@ -159,6 +159,36 @@ def cmd_simulate(args) -> None:
         print(entry["dir"])
 
 
+def cmd_run(args) -> None:
+    """Run a job here, without a server: the worker's pipeline on local files (worker/local.py)."""
+    from gnssatt.gnss.io.errors import ParseError
+    from worker.errors import JobInputError
+    from worker.local import local_set, run_job_locally
+
+    config = json.loads(Path(args.config).read_text()) if args.config else {}
+    pcv_maps = {}
+    for item in args.pcv_map or []:
+        map_id, sep, path = item.partition("=")
+        pcv_maps[map_id if sep else Path(map_id).stem] = Path(path if sep else map_id)
+    try:
+        sets = ([local_set([Path(p) for p in args.paths], "set-1")] if args.paths else [])
+        sets += [local_set([Path(d)], f"set-{len(sets) + 1}") for d in args.set or []]
+        written = run_job_locally(args.type, sets, config, Path(args.out), pcv_maps=pcv_maps,
+                                  progress=None if args.quiet else _stderr_progress())
+    except JobInputError as exc:
+        sys.exit(f"gnssatt run: {exc.title}: {exc.detail}")
+    except ParseError as exc:
+        sys.exit(f"gnssatt run: {exc}")
+    for path in written.values():
+        print(path)
+
+
+def _stderr_progress():
+    from worker.local import stderr_progress
+
+    return stderr_progress
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="gnssatt", description="GNSS attitude determination service and client.")
     sub = p.add_subparsers(dest="command", required=True)
@@ -195,6 +225,18 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--no-wait", action="store_true", help="print the job id and return")
     s.add_argument("paths", nargs="+")
     s.set_defaults(func=cmd_submit)
+
+    s = sub.add_parser("run", help="run a job here on local files, without a server (same pipeline as the worker)")
+    s.add_argument("type", help="job type (inspect, attitude, calibration, ttff, simulate, selftest)")
+    s.add_argument("paths", nargs="*", help="files (or directories) of the first observation set")
+    s.add_argument("--set", action="append", metavar="DIR", help="one more observation set: a directory of files "
+                   "(repeat for jobs taking several sets, e.g. calibration)")
+    s.add_argument("--config", default=None, help="JSON file with the job config")
+    s.add_argument("--pcv-map", action="append", metavar="[ID=]FILE", help="a PCV map (CONVENTIONS JSON) the "
+                   "config names by id (default id: the file's stem)")
+    s.add_argument("--out", default="products", help="directory for the products")
+    s.add_argument("--quiet", action="store_true", help="no progress bar")
+    s.set_defaults(func=cmd_run)
 
     s = sub.add_parser("status", help="one job, or the list of jobs")
     client_opts(s)

@@ -1,10 +1,10 @@
-"""Alembic environment: the URL or an open connection comes from app.migrate, never from alembic.ini."""
+"""Alembic environment: the URL or an open connection comes from core.migrate, never from alembic.ini."""
 from __future__ import annotations
 
 from alembic import context
 from sqlalchemy import create_engine
 
-from app.models import Base
+from core.models import Base
 
 config = context.config
 target_metadata = Base.metadata

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 from worker.errors import JobCancelled, JobInputError, LeaseLost
+from worker.inprocess import run_locally
 
 MEDIA_TYPES = {".csv": "text/csv", ".json": "application/json", ".png": "image/png", ".html": "text/html",
                ".txt": "text/plain", ".aem": "text/plain", ".nmea": "text/plain", ".atx": "text/plain",
@@ -118,7 +119,6 @@ class JobContext:
         `shared`: one picklable object every task needs (e.g. maps): stored once in the blob store instead of in
         every task row, and handed to each task as payload["_shared"]."""
         if self._map is None:
-            from worker.fanout import run_locally
             if shared is not None:
                 payloads = [{**p, "_shared": shared} for p in payloads]
             return run_locally(self, function, payloads, progress_span, stage)

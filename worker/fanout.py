@@ -10,7 +10,6 @@ results its earlier attempt already has.
 """
 from __future__ import annotations
 
-import importlib
 import logging
 import pickle
 import threading
@@ -18,25 +17,23 @@ import time
 import traceback
 import uuid
 from datetime import timedelta
-from typing import Any, Callable
+from typing import Any
 
 from sqlalchemy import func, select, update
 from sqlalchemy.dialects.postgresql import insert as pg_insert
 from sqlalchemy.dialects.sqlite import insert as sqlite_insert
 
-from app.models import Job, JobTask, utcnow
+from core.models import Job, JobTask, utcnow
 from worker.context import InputSet
+from worker.inprocess import load_task_function, log_task_records, task_record
+from worker.queue import enqueue_task
+from worker.runtime import get_runtime, load_inputs
 
 log = logging.getLogger("gnssatt.fanout")
 
 
 class TaskFailed(RuntimeError):
     pass
-
-
-def _load(function: str) -> Callable[[dict, list[InputSet]], Any]:
-    module_name, _, func_name = function.partition(":")
-    return getattr(importlib.import_module(module_name), func_name)
 
 
 def create_tasks(rt, job_id: str, function: str, payloads: list[dict], offset: int = 0) -> None:
@@ -54,8 +51,6 @@ def create_tasks(rt, job_id: str, function: str, payloads: list[dict], offset: i
 
 
 def ring(rt, job_id: str) -> None:
-    from worker.queue import enqueue_task
-
     with rt.Session() as s:
         ids = s.execute(select(JobTask.id).where(JobTask.job_id == job_id, JobTask.state == "pending")
                         .order_by(JobTask.idx)).scalars().all()  # queue order = task order (longest first)
@@ -90,8 +85,6 @@ def claim_task(rt, task_id: str | None = None, job_id: str | None = None) -> tup
 
 def run_task(rt, task_id: str, token: str, sets: list[InputSet] | None = None) -> bool:
     """Run a claimed task; True when its result was stored."""
-    from worker.runner import load_inputs
-
     with rt.Session() as s:
         task = s.get(JobTask, task_id)
         function, payload, job_id, attempts = task.function, dict(task.payload), task.job_id, task.attempts
@@ -121,7 +114,7 @@ def run_task(rt, task_id: str, token: str, sets: list[InputSet] | None = None) -
             sets = load_inputs(rt, job_id)
         if "_shared_sha256" in payload:
             payload["_shared"] = _shared_object(rt, payload["_shared_sha256"])
-        result = _load(function)(payload, sets)
+        result = load_task_function(function)(payload, sets)
         sha, _ = rt.blobs.put_bytes(pickle.dumps(result, protocol=5))
         ok = _settle(rt, task_id, token, state="done", result_sha256=sha)
         log.info("task %s of job %s (#%s) done by %s in %.2f s", task_id[:8], job_id[:8], payload.get("label", ""),
@@ -159,8 +152,6 @@ def _settle(rt, task_id: str, token: str, **values) -> bool:
 
 def run_task_message(task_id: str) -> None:
     """Queue entry point: claim and run one task if it is still pending."""
-    from worker.runner import get_runtime
-
     rt = get_runtime()
     claimed = claim_task(rt, task_id=task_id)
     if claimed is not None:
@@ -199,10 +190,10 @@ def gather(rt, ctx, function: str, payloads: list[dict], progress_span: tuple[fl
             time.sleep(0.2)
     with rt.Session() as s:
         rows = s.execute(select(JobTask).where(*in_this).order_by(JobTask.idx)).scalars().all()
-        records = [_record(stage, r.idx - offset, r.payload.get("label", ""), r.worker, r.attempts, r.started_at,
-                           r.finished_at) for r in rows]
+        records = [task_record(stage, r.idx - offset, r.payload.get("label", ""), r.worker, r.attempts,
+                               r.started_at, r.finished_at) for r in rows]
         shas = [r.result_sha256 for r in rows]
-    _log_records(ctx, records)
+    log_task_records(ctx, records)
     return [pickle.loads(rt.blobs.path(sha).read_bytes()) for sha in shas]
 
 
@@ -222,37 +213,6 @@ def reap_tasks(rt) -> int:
                             .execution_options(synchronize_session=False))
             if res.rowcount == 1:
                 ids.append(task_id)
-    from worker.queue import enqueue_task
     for task_id in ids:
         enqueue_task(rt.huey, task_id)
     return len(ids)
-
-
-def run_locally(ctx, function: str, payloads: list[dict], progress_span: tuple[float, float],
-                stage: str) -> list[Any]:
-    """The same contract without a service (scripts, unit tests): run every task here, in order."""
-    lo, hi = progress_span
-    fn = _load(function)
-    out, records = [], []
-    for i, payload in enumerate(payloads):
-        ctx.progress(lo + (hi - lo) * i / max(len(payloads), 1), f"{stage}: {i}/{len(payloads)} done")
-        start = utcnow()
-        out.append(fn(payload, ctx.sets))
-        records.append(_record(stage, i, payload.get("label", ""), "local", 1, start, utcnow()))
-    _log_records(ctx, records)
-    return out
-
-
-def _record(stage: str, index: int, label: str, worker: str | None, attempts: int, started_at, finished_at) -> dict:
-    seconds = (finished_at - started_at).total_seconds() if started_at and finished_at else None
-    return {"stage": stage, "index": index, "label": str(label), "worker": worker, "attempts": attempts,
-            "started_at": started_at, "finished_at": finished_at, "seconds": seconds}
-
-
-def _log_records(ctx, records: list[dict]) -> None:
-    """Keep the fan-out's task records on the context (ctx.task_records) and in the job log."""
-    ctx.task_records.extend(records)
-    for r in records:
-        secs = "?" if r["seconds"] is None else f"{r['seconds']:.2f}"
-        ctx.log(f"task {r['index']:4d} {r['label']:<24} worker={r['worker']} attempts={r['attempts']} "
-                f"started={r['started_at'].isoformat() if r['started_at'] else '?'} seconds={secs}")

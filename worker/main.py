@@ -3,12 +3,13 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 
-from app.db import make_engine, make_sessionmaker
-from app.migrate import migrate
-from app.settings import Settings
-from app.store.blobs import BlobStore
-from worker import runner
+from core.blobs import BlobStore
+from core.db import make_engine, make_sessionmaker
+from core.migrate import migrate
+from core.settings import Settings
+from worker import fanout, runner
 from worker.queue import make_huey
 
 log = logging.getLogger("gnssatt.worker")
@@ -19,7 +20,9 @@ def build_runtime(settings: Settings, *, immediate: bool = False, name: str | No
     engine = make_engine(settings)
     migrate(engine, settings)
     rt = runner.Runtime(settings=settings, engine=engine, Session=make_sessionmaker(engine),
-                        blobs=BlobStore(settings.blobs_dir), huey=make_huey(settings, immediate=immediate),
+                        blobs=BlobStore(settings.blobs_dir),
+                        huey=make_huey(settings, immediate=immediate, run_job=runner.run_claimed_job_message,
+                                       run_task=fanout.run_task_message),
                         worker_name=name or runner.default_worker_name())
     runner.set_runtime(rt)
     return rt
@@ -68,10 +71,14 @@ def _warm_up_kernels() -> None:
         from gnssatt.attitude.update_kernels import warm_up as warm_up_update
         from gnssatt.estimation.ekf_kernels import warm_up as warm_up_ekf
 
+        print("loading the filter kernels (a cold cache compiles them once, ~60-100 s; docs/DEPENDENCIES.md)",
+              flush=True)
+        t0 = time.perf_counter()
         warm_up_ekf()
         warm_up_attitude()
         warm_up_qc()
         warm_up_update()
+        print(f"filter kernels ready in {time.perf_counter() - t0:.1f} s", flush=True)
     except Exception:                       # a job would report the same error; the worker still serves others
         log.exception("numba kernels failed to compile at start")
 

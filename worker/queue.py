@@ -5,16 +5,27 @@ the job row, with its lease, is the truth (worker/runner.py claims, renews and r
 """
 from __future__ import annotations
 
+from typing import Callable
+
 from huey import Huey, RedisHuey, SqliteHuey
 
-from app.settings import Settings
+from core.settings import Settings
 
 TASK_NAME = "gnssatt.run_job"
 TASK_NAME_FANOUT = "gnssatt.run_task"
 
 
-def make_huey(settings: Settings, *, immediate: bool = False) -> Huey:
-    """A Huey instance for the configured backend, with the one task `gnssatt.run_job(job_id)` registered."""
+def _enqueue_only(message_id: str) -> None:
+    raise RuntimeError("this process only enqueues: the worker's consumer registers the task handlers "
+                       "(worker.main.build_runtime)")
+
+
+def make_huey(settings: Settings, *, immediate: bool = False,
+              run_job: Callable[[str], None] = _enqueue_only,
+              run_task: Callable[[str], None] = _enqueue_only) -> Huey:
+    """A Huey instance for the configured backend, with the tasks `gnssatt.run_job(job_id)` and
+    `gnssatt.run_task(task_id)` registered. The consumer passes their bodies (worker.runner / worker.fanout);
+    the API, which only enqueues, passes none: so this module imports nothing of the runtime it serves."""
     if settings.queue_url:
         huey: Huey = RedisHuey(settings.queue_name, url=settings.queue_url, results=False, immediate=immediate)
     else:
@@ -22,18 +33,20 @@ def make_huey(settings: Settings, *, immediate: bool = False) -> Huey:
         huey = SqliteHuey(settings.queue_name, filename=str(settings.data_dir / "queue.db"), results=False,
                           immediate=immediate, timeout=30)
 
+    job_body, task_body = run_job, run_task
+
+    # defined here, not registered directly: Huey names a task after the module of its function, and the API and
+    # the worker must agree on the name (worker.queue.gnssatt.run_job) whatever bodies they pass
     @huey.task(name=TASK_NAME)
-    def run_job(job_id: str) -> None:
-        from worker.runner import run_claimed_job_message
-        run_claimed_job_message(job_id)
+    def _run_job(job_id: str) -> None:
+        job_body(job_id)
 
     @huey.task(name=TASK_NAME_FANOUT)
-    def run_task(task_id: str) -> None:
-        from worker.fanout import run_task_message
-        run_task_message(task_id)
+    def _run_task(task_id: str) -> None:
+        task_body(task_id)
 
-    huey.run_job = run_job  # type: ignore[attr-defined]
-    huey.run_task = run_task  # type: ignore[attr-defined]
+    huey.run_job = _run_job  # type: ignore[attr-defined]
+    huey.run_task = _run_task  # type: ignore[attr-defined]
     return huey
 
 

@@ -16,47 +16,25 @@ import threading
 import time
 import traceback
 import uuid
-from dataclasses import dataclass
 from datetime import datetime, timedelta
 
 from sqlalchemy import select, update
-from sqlalchemy.engine import Engine
-from sqlalchemy.orm import Session, sessionmaker
 
-from app.models import Job, JobSet, ObservationSet, Product, utcnow
-from app.settings import Settings
-from app.store.blobs import BlobStore
-from worker.context import InputFile, InputSet, JobContext
+from core.models import Job, Product, utcnow
+from core.pcv_store import add_pcv_map
+from core.settings import Settings
+from worker.context import JobContext
 from worker.errors import JobCancelled, LeaseLost, is_permanent, problem_for_exception
+from worker.fanout import gather, reap_tasks
 from worker.jobs.registry import get_job_type
+from worker.queue import enqueue
+from worker.runtime import Runtime, get_runtime, load_inputs, load_pcv_map, set_runtime
+
+__all__ = ["Runtime", "set_runtime", "get_runtime", "load_inputs", "execute_job", "reap", "claim"]
 
 log = logging.getLogger("gnssatt.worker")
 
 TERMINAL_STATES = ("succeeded", "failed", "cancelled")
-
-
-@dataclass
-class Runtime:
-    settings: Settings
-    engine: Engine
-    Session: sessionmaker[Session]
-    blobs: BlobStore
-    huey: object
-    worker_name: str
-
-
-_RUNTIME: Runtime | None = None
-
-
-def set_runtime(runtime: Runtime | None) -> None:
-    global _RUNTIME
-    _RUNTIME = runtime
-
-
-def get_runtime() -> Runtime:
-    if _RUNTIME is None:
-        raise RuntimeError("worker runtime not configured (worker.main.build_runtime)")
-    return _RUNTIME
 
 
 def run_claimed_job_message(job_id: str) -> None:
@@ -148,7 +126,6 @@ def _publish_success(rt: Runtime, job_id: str, token: str, ctx: JobContext) -> b
                           sha256=rec.sha256, size_bytes=rec.size_bytes))
         if ctx.pcv_maps:
             team_id = s.execute(select(Job.team_id).where(Job.id == job_id)).scalar_one()
-            from app.store.pcv import add_pcv_map
             from gnssatt.gnss.io.pcv_map import parse_pcv_map
 
             for name, doc in ctx.pcv_maps:
@@ -158,32 +135,6 @@ def _publish_success(rt: Runtime, job_id: str, token: str, ctx: JobContext) -> b
 
 def _log_text(ctx: JobContext) -> str | None:
     return "\n".join(ctx.log_lines[-2000:]) or None
-
-
-# --- inputs ---------------------------------------------------------------------------------------
-
-def load_inputs(rt: Runtime, job_id: str) -> list[InputSet]:
-    with rt.Session() as s:
-        rows = s.execute(select(ObservationSet).join(JobSet, JobSet.set_id == ObservationSet.id)
-                         .where(JobSet.job_id == job_id).order_by(JobSet.position)).scalars().all()
-        return [InputSet(id=o.id, name=o.name, summary=o.summary or {},
-                         files=[InputFile(name=f.name, kind=f.kind, path=rt.blobs.path(f.sha256),
-                                          summary=f.summary or {}) for f in o.files])
-                for o in rows]
-
-
-def load_pcv_map(rt: Runtime, job_id: str, map_id: str) -> dict | None:
-    """The JSON of PCV map `map_id` when it belongs to the job's team, else None."""
-    import json
-
-    from app.models import PcvMap
-
-    with rt.Session() as s:
-        row = s.get(PcvMap, map_id)
-        team_id = s.execute(select(Job.team_id).where(Job.id == job_id)).scalar_one()
-        if row is None or row.team_id != team_id:
-            return None
-        return json.loads(rt.blobs.path(row.sha256).read_bytes())
 
 
 # --- the whole life of one attempt ----------------------------------------------------------------
@@ -205,8 +156,6 @@ def execute_job(rt: Runtime, job_id: str) -> str | None:
         with rt.Session.begin() as s2:
             s2.execute(update(Job).where(Job.id == job_id, Job.lease_owner == token)
                        .values(progress=fraction, stage=stage).execution_options(synchronize_session=False))
-
-    from worker.fanout import gather
 
     ctx = JobContext(job_id=job_id, attempt=attempt, sets=[], workdir=workdir,
                      _store_blob=lambda p: rt.blobs.put_file(p), _flush_progress=flush,
@@ -246,7 +195,6 @@ def execute_job(rt: Runtime, job_id: str) -> str | None:
             return "failed"
         log.warning("job %s attempt %d failed, will retry: %s", job_id, attempt, problem.get("detail"))
         if _finish(rt, job_id, token, state="queued", error=problem, enqueued_at=utcnow(), stage="retrying"):
-            from worker.queue import enqueue
             enqueue(rt.huey, job_id, delay_s=min(2.0 * attempt, 30.0))
         return "queued"
     finally:
@@ -264,8 +212,6 @@ def reap(rt: Runtime) -> dict[str, int]:
     so reapers on many machines, and a worker claiming the job meanwhile, can never be overwritten by a
     stale read; on PostgreSQL the candidates are also read with FOR UPDATE SKIP LOCKED.
     """
-    from worker.queue import enqueue
-
     now = utcnow()
     to_enqueue: list[str] = []
     counts = {"requeued": 0, "failed": 0, "cancelled": 0, "rerung": 0}
@@ -306,7 +252,6 @@ def reap(rt: Runtime) -> dict[str, int]:
                 counts["rerung"] += 1
     for job_id in to_enqueue:
         enqueue(rt.huey, job_id)
-    from worker.fanout import reap_tasks
     counts["tasks_requeued"] = reap_tasks(rt)
     if any(counts.values()):
         log.info("reaper: %s", counts)

@@ -13,10 +13,10 @@ from sqlalchemy import func, select, update
 from starlette.concurrency import run_in_threadpool
 
 from app.deps import SessionDep, TeamDep
-from app.models import Job, JobSet, ObservationSet, PcvMap, Product, utcnow
 from app.problems import Problem, ProblemError, not_found
 from app.schemas.common import Page
 from app.schemas.jobs import JobCreate, JobPublic, JobState, ProductPublic
+from core.models import Job, JobSet, ObservationSet, PcvMap, Product, utcnow
 from worker.jobs.registry import get_job_type, job_types
 from worker.queue import enqueue
 

@@ -8,12 +8,12 @@ from sqlalchemy import func, select
 from starlette.concurrency import run_in_threadpool
 
 from app.deps import SessionDep, SettingsDep, TeamDep
-from app.models import Job, JobSet, ObservationSet
 from app.problems import Problem, ProblemError, not_found
 from app.schemas.common import Page
 from app.schemas.observation_sets import ObservationSetPublic, SetFilePublic
 from app.store.sets import store_set, validate_staged
 from app.store.uploads import expand_bundles, receive_multipart
+from core.models import Job, JobSet, ObservationSet
 
 router = APIRouter(prefix="/v1/observation-sets", tags=["observation sets"])
 

@@ -29,8 +29,8 @@ from starlette.datastructures import Headers
 
 from app.deps import SessionDep
 from app.keys import team_for_key
-from app.models import Job, JobSet, ObservationSet, PcvMap, Product, Team
 from app.problems import ProblemError, problem_response
+from core.models import Job, JobSet, ObservationSet, PcvMap, Product, Team
 from gnssatt.report import format_value
 
 APP_DIR = Path(__file__).resolve().parents[1]

@@ -8,11 +8,11 @@ from sqlalchemy import func, select
 from starlette.concurrency import run_in_threadpool
 
 from app.deps import SessionDep, TeamDep
-from app.models import PcvMap
 from app.problems import Problem, ProblemError, not_found
 from app.schemas.common import Page
 from app.schemas.pcv_maps import PcvMapCreate, PcvMapPublic
-from app.store.pcv import add_pcv_map
+from core.models import PcvMap
+from core.pcv_store import add_pcv_map
 from gnssatt.gnss.io.errors import ParseError
 from gnssatt.gnss.io.pcv_map import PcvMap as PcvGrid
 from gnssatt.gnss.io.pcv_map import parse_pcv_map, read_pcv_antex, write_pcv_antex

@@ -5,10 +5,10 @@ from dataclasses import dataclass
 
 from sqlalchemy.orm import Session
 
-from app.models import ObservationSet, SetFile
 from app.problems import ProblemError
-from app.store.blobs import BlobStore
 from app.store.uploads import StagedUpload
+from core.blobs import BlobStore
+from core.models import ObservationSet, SetFile
 from gnssatt.gnss.io.errors import ParseError
 from gnssatt.gnss.io.platform import match_observation_files, parse_platform
 from gnssatt.gnss.io.sniff import identify

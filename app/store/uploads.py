@@ -21,7 +21,7 @@ from python_multipart.multipart import MultipartParser, parse_options_header
 from starlette.requests import Request
 
 from app.problems import ProblemError
-from app.settings import Settings
+from core.settings import Settings
 
 COPY_CHUNK = 1024 * 1024
 

@@ -4,10 +4,10 @@ from __future__ import annotations
 import pytest
 from fastapi.testclient import TestClient
 
-from app.db import make_engine, make_sessionmaker
 from app.keys import create_key
 from app.main import create_app
-from app.settings import Settings
+from core.db import make_engine, make_sessionmaker
+from core.settings import Settings
 from worker import runner
 from worker.main import build_runtime
 
@@ -47,7 +47,7 @@ def stored_state(settings: Settings) -> dict:
     Session = make_sessionmaker(engine)
     from sqlalchemy import func, select
 
-    from app.models import ObservationSet, SetFile
+    from core.models import ObservationSet, SetFile
     with Session() as s:
         n_sets = s.execute(select(func.count()).select_from(ObservationSet)).scalar_one()
         n_files = s.execute(select(func.count()).select_from(SetFile)).scalar_one()

@@ -6,7 +6,7 @@ import io
 
 import pytest
 
-from app.store.blobs import BlobStore
+from core.blobs import BlobStore
 
 
 class Exploding(io.BytesIO):

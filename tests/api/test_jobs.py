@@ -85,7 +85,7 @@ def test_input_error_is_not_retried(api):
 
 
 def test_cancel_queued_job_and_refuse_finished(api):
-    from app.models import Job
+    from core.models import Job
     job_id = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]
     assert api.post(f"/v1/jobs/{job_id}/cancel").status_code == 409  # already succeeded
     with api.rt.Session.begin() as s:  # a job no worker has reached yet
@@ -100,7 +100,7 @@ def test_cancel_queued_job_and_refuse_finished(api):
 
 
 def test_set_in_use_cannot_be_deleted(api):
-    from app.models import Job, JobSet
+    from core.models import Job, JobSet
     set_id = _set(api)
     with api.rt.Session.begin() as s:
         team_id = s.execute(__import__("sqlalchemy").text("select team_id from observation_sets")).scalar()
@@ -205,7 +205,7 @@ def test_reaper_leaves_a_reclaimed_job_alone(api):
 
     from sqlalchemy import update
 
-    from app.models import Job, utcnow
+    from core.models import Job, utcnow
     from worker import runner
 
     job_id = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]

@@ -8,8 +8,8 @@ from fastapi.testclient import TestClient
 
 from app.keys import create_key
 from app.main import create_app
-from app.models import PcvMap
-from app.settings import Settings
+from core.models import PcvMap
+from core.settings import Settings
 from gnssatt.sim.sample_set import write_sample_set
 from worker import runner
 from worker.main import build_runtime

@@ -5,7 +5,7 @@ from sqlalchemy import create_engine, event
 from sqlalchemy.engine import Engine
 from sqlalchemy.orm import Session, sessionmaker
 
-from app.settings import Settings
+from core.settings import Settings
 
 
 def make_engine(settings: Settings) -> Engine:

@@ -14,7 +14,7 @@ from alembic.config import Config
 from sqlalchemy import text
 from sqlalchemy.engine import Engine
 
-from app.settings import Settings
+from core.settings import Settings
 
 MIGRATIONS_DIR = Path(__file__).resolve().parents[1] / "migrations"
 _PG_LOCK_KEY = 0x676E737361747400  # "gnssatt\0": an arbitrary constant shared by every process

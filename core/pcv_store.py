@@ -2,13 +2,16 @@
 from __future__ import annotations
 
 import json
+from typing import TYPE_CHECKING
 
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session
 
-from app.models import PcvMap
-from app.store.blobs import BlobStore
-from gnssatt.gnss.io.pcv_map import PcvMap as PcvGrid
+from core.blobs import BlobStore
+from core.models import PcvMap
+
+if TYPE_CHECKING:  # the grid arrives parsed; core imports no numerics
+    from gnssatt.gnss.io.pcv_map import PcvMap as PcvGrid
 
 
 def add_pcv_map(session: Session, blobs: BlobStore, team_id: str, name: str, grid: PcvGrid,
