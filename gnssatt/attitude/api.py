@@ -8,11 +8,11 @@ not matter. See docs/library.md for a runnable example.
 """
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Callable, Iterable
 
 from gnssatt.attitude.process import AttitudeSolution, load_inputs, process
+from gnssatt.attitude.products import write_products
 from gnssatt.attitude.settings import AttitudeSettings
 
 __all__ = ["solve", "write_products", "identify_files"]
@@ -58,29 +58,3 @@ def solve(files: Iterable[str | Path], platform: str | Path | None = None, nav: 
     if settings is None or isinstance(settings, str):
         settings = AttitudeSettings.preset(settings or "seed000")
     return process(load_inputs(triples), settings, progress)
-
-
-def _json_default(value):
-    """numpy scalars and arrays and paths in summary.json, as the worker's JobContext.write_product writes them."""
-    if hasattr(value, "tolist"):
-        return value.tolist()
-    if isinstance(value, Path):
-        return str(value)
-    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
-
-
-def write_products(sol: AttitudeSolution, out_dir: str | Path) -> dict[str, Path]:
-    """Write the attitude job's text products of `sol` (gnssatt.attitude.products.all_products) into out_dir
-    (created), JSON as the service writes it; returns product name -> path. Plots and report.html are not made."""
-    from gnssatt.attitude.products import all_products
-
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    written = {}
-    for name, content in all_products(sol).items():
-        if isinstance(content, (dict, list)):
-            content = json.dumps(content, indent=2, sort_keys=False, default=_json_default) + "\n"
-        path = out_dir / name
-        path.write_bytes(content.encode("utf-8") if isinstance(content, str) else bytes(content))
-        written[name] = path
-    return written

@@ -71,8 +71,8 @@ class AttitudeSolution:
         return None if self.att_epochs is None else self.pobs.time[self.att_epochs]
 
     def write_products(self, out_dir) -> dict:
-        """The job's text products in out_dir (gnssatt.attitude.api.write_products); name -> path."""
-        from gnssatt.attitude.api import write_products
+        """The job's text products in out_dir (gnssatt.attitude.products.write_products); name -> path."""
+        from gnssatt.attitude.products import write_products
         return write_products(self, out_dir)
 
 
