@@ -42,7 +42,7 @@ def output(tmp_path_factory) -> str:
 
 def test_every_capability_has_an_example():
     text = "\n".join(_blocks())
-    for call in ("simulate_set(", "read_rinex_obs(", "read_rinex_nav(", "read_sp3(", "identify(", "solve(",
+    for call in ("study_set(", "simulate_set(", "read_rinex_obs(", "read_rinex_nav(", "read_sp3(", "identify(", "solve(",
                  "write_products(", "attitude_errors_deg("):
         assert call in text, f"docs/library.md has no runnable example calling {call}"
     assert "/work" not in DOC.read_text() and "/tmp" not in DOC.read_text(), "machine paths in docs/library.md"
@@ -84,3 +84,18 @@ def test_products_written(output):
     # summary.json's fix rate is the fraction of fixed attitude epochs printed above (rounded to 0.1 % there)
     fixed_pct = float(_value(output, r"fixed: ([\d.]+) %"))
     assert abs(float(_value(output, r"fix rate in summary.json: ([\d.]+)")) - fixed_pct / 100) < 0.0015
+
+
+def test_ttff_example(output):
+    offset = [float(x) for x in _value(output, r"^initial offset yaw/pitch/roll: \[(.*)\] deg").split(",")]
+    # the ttff preset starts far from the assumed Earth-pointing attitude (docs/ttff.md): tens of degrees
+    assert max(abs(a) for a in offset) > 10.0, offset
+    runs = re.findall(r"^ttff (\S+) (\S+): (\S+) s, right: (\S+)$", output, re.M)
+    assert {(m, b) for m, b, _, _ in runs} == {(m, b) for m in ("filter", "epoch-lambda")
+                                               for b in ("GPS-2>GPS-0", "GPS-2>GPS-1")}, runs
+    for method, baseline, ttff_s, right in runs:
+        # two minutes of data: a first fix, if any, is within them
+        assert ttff_s == "None" or 0.0 <= float(ttff_s) <= 120.0, (method, baseline, ttff_s)
+        if method == "filter":
+            # L1+L2 on ~1 m baselines, white noise and 2 min of data: the filter fixes both baselines, rightly
+            assert ttff_s != "None" and right == "True", (method, baseline, ttff_s, right)
