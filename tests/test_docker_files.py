@@ -33,8 +33,32 @@ def test_dockerfile_copies_every_package():
     include = tomllib.loads((REPO_ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"]["find"]
     packages = {pattern.rstrip("*") for pattern in include["include"]}
     assert {"gnssatt", "core", "app", "worker", "client", "migrations"} <= packages, packages
-    for pkg in sorted(packages | {"pyproject.toml"}):
+    for pkg in sorted(packages | {"pyproject.toml", "requirements"}):
         assert pkg in copied, f"docker/Dockerfile does not COPY {pkg}"
+
+
+def test_dockerfile_installs_from_the_lock():
+    """The image gets the tested versions: the hash-checked lock, and the project without resolving again."""
+    text = (REPO_ROOT / "docker" / "Dockerfile").read_text()
+    assert re.search(r"pip install .*--require-hashes .*-r requirements/lock\.txt", text)
+    project = [line for line in text.splitlines() if re.search(r"pip install .* \.$", line)]
+    assert project and all("--no-deps" in line for line in project), project
+
+
+def test_lock_pins_every_package_with_hashes():
+    """Every requirement of the lock is `name==version` with at least one sha256, and pyproject's direct
+    dependencies are all in it (a dependency added to pyproject without `make lock` fails here)."""
+    lock = (REPO_ROOT / "requirements" / "lock.txt").read_text()
+    entries = re.findall(r"^([A-Za-z0-9_.-]+)==(\S+) \\\n((?:\s+--hash=sha256:[0-9a-f]{64}(?: \\)?\n)+)", lock, re.M)
+    names = {n.lower().replace("_", "-") for n, _, _ in entries}
+    assert len(entries) == len(re.findall(r"^[A-Za-z0-9]", lock, re.M)), "an entry without version or hash"
+    import tomllib
+
+    proj = tomllib.loads((REPO_ROOT / "pyproject.toml").read_text())["project"]
+    direct = proj["dependencies"] + proj["optional-dependencies"]["test"]
+    for req in direct:
+        name = re.match(r"[A-Za-z0-9_.-]+", req).group(0).lower().replace("_", "-")
+        assert name in names, f"{name} is in pyproject.toml but not in requirements/lock.txt (run make lock)"
 
 
 def test_readme_documents_every_setting():

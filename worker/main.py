@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import logging
 import threading
+import time
 
 from core.blobs import BlobStore
 from core.db import make_engine, make_sessionmaker
@@ -70,10 +71,14 @@ def _warm_up_kernels() -> None:
         from gnssatt.attitude.update_kernels import warm_up as warm_up_update
         from gnssatt.estimation.ekf_kernels import warm_up as warm_up_ekf
 
+        print("loading the filter kernels (a cold cache compiles them once, ~60-100 s; docs/DEPENDENCIES.md)",
+              flush=True)
+        t0 = time.perf_counter()
         warm_up_ekf()
         warm_up_attitude()
         warm_up_qc()
         warm_up_update()
+        print(f"filter kernels ready in {time.perf_counter() - t0:.1f} s", flush=True)
     except Exception:                       # a job would report the same error; the worker still serves others
         log.exception("numba kernels failed to compile at start")
 

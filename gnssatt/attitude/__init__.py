@@ -6,3 +6,11 @@ common epochs), geometry (platform state, lines of sight), filter (the EKF with 
 + baseline-length validation), solution (QUEST/TRIAD, Euler angles, formal sigmas), products (CSV, JSON, CCSDS
 AEM, NMEA HDT), process (the whole job on files).
 """
+from gnssatt._lazy import lazy_exports
+
+#: public entry points (imported on first use): solve(files, platform, nav, settings) -> AttitudeSolution and
+#: write_products(solution, out_dir); see gnssatt.attitude.api and docs/library.md
+_EXPORTS = {"solve": "api", "write_products": "api", "identify_files": "api", "AttitudeSolution": "process",
+            "InputProblem": "process", "AttitudeSettings": "settings"}
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

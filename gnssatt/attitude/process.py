@@ -65,6 +65,16 @@ class AttitudeSolution:
     baseline_table: dict = field(default_factory=dict)   # column arrays of baselines.csv
     summary: dict = field(default_factory=dict)
 
+    @property
+    def time(self) -> GpsTime | None:
+        """GPS time of each attitude row (None with one baseline)."""
+        return None if self.att_epochs is None else self.pobs.time[self.att_epochs]
+
+    def write_products(self, out_dir) -> dict:
+        """The job's text products in out_dir (gnssatt.attitude.products.write_products); name -> path."""
+        from gnssatt.attitude.products import write_products
+        return write_products(self, out_dir)
+
 
 def load_inputs(files: list[tuple[str, str, Path]]) -> AttitudeInputs:
     """Parse a set given as (name, kind, path) with kinds rinex_obs, rinex_nav, sp3, platform, reference_attitude."""

@@ -9,13 +9,15 @@ QUATERNION_TYPE = FIRST, ATTITUDE_DIR = A2B from GCRF to the body frame); NMEA 0
 from __future__ import annotations
 
 import io
+import json
+from pathlib import Path
 
 import numpy as np
 
 from gnssatt.attitude.filter import REASONS
 
 __all__ = ["attitude_csv", "baselines_csv", "residuals_csv", "events_csv", "aem_kvn", "nmea_hdt", "all_products",
-           "product_tables"]
+           "product_tables", "write_products"]
 
 
 def _time_cols(t) -> tuple[list[str], np.ndarray, np.ndarray]:
@@ -261,3 +263,27 @@ def product_tables(sol) -> dict[str, dict[str, np.ndarray]]:
         **{c: np.asarray(r[c], float) for c in ("residual_m", "az_ant_deg", "el_ant_deg", "cn0_dbhz")},
         "used": (r["reason"] == 0).astype(float), "reason": reasons[r["reason"]]}
     return out
+
+
+def _json_default(value):
+    """numpy scalars and arrays and paths in summary.json, as the worker's JobContext.write_product writes them."""
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if isinstance(value, Path):
+        return str(value)
+    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
+
+
+def write_products(sol, out_dir: str | Path) -> dict[str, Path]:
+    """Write the attitude job's text products of `sol` (all_products) into out_dir
+    (created), JSON as the service writes it; returns product name -> path. Plots and report.html are not made."""
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    written = {}
+    for name, content in all_products(sol).items():
+        if isinstance(content, (dict, list)):
+            content = json.dumps(content, indent=2, sort_keys=False, default=_json_default) + "\n"
+        path = out_dir / name
+        path.write_bytes(content.encode("utf-8") if isinstance(content, str) else bytes(content))
+        written[name] = path
+    return written

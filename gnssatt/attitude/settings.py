@@ -3,7 +3,6 @@ as defaults, every value with its unit in the name.
 """
 from __future__ import annotations
 
-import warnings
 
 from dataclasses import dataclass, field, fields, replace
 from typing import Literal
@@ -305,16 +304,6 @@ class AttitudeSettings:
                     raise ValueError(f"unknown attitude setting {g}.{bad[0]}")
                 setattr(out, g, replace(getattr(out, g), **kw))
         return out
-
-    def __getattr__(self, name: str):
-        """Transitional read access by an old flat name (FLAT_TO_NESTED), with a DeprecationWarning, for code
-        written against the flat settings while it is being rewritten; new code uses the nested path."""
-        path = FLAT_TO_NESTED.get(name)
-        if path is None or not name.isidentifier() or name.startswith("__"):
-            raise AttributeError(name)
-        warnings.warn(f"AttitudeSettings.{name} is now .{path}", DeprecationWarning, stacklevel=2)
-        g, f = path.split(".")
-        return getattr(self.__dict__[g], f)
 
 
 #: old flat field name -> "group.field" (every field that moved into a group)

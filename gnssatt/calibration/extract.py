@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gnssatt.calibration.kinematic import BaselineFix, solve_baseline
+from gnssatt.calibration.kinematic import BaselineFix, BaselineObservations, solve_baseline
 from gnssatt.calibration.pcv import FixedPhases
 from gnssatt.calibration.reference import ReferenceAtEpochs, reference_at_epochs
 from gnssatt.gnss.constants import C_M_S
@@ -257,9 +257,8 @@ def extract(data: SetData, baselines_body: dict, options: ExtractOptions,
                     corr[..., k] = f(az, el) * 1e-3
         vfac = cn0_variance_factor(data.cn0_dbhz[a1], data.cn0_dbhz[a2], options.cn0_reference_dbhz) \
             if options.cn0_weighting else None
-        fix = solve_baseline(ph, cd, data.los_ecef, data.range_rate_m_s, b_pred, data.wavelength_m, sigma_sd,
-                             correction_m=corr, gate_m=options.gate_m,
-                             fix_correction_m=None, variance_factor=vfac)
+        obs = BaselineObservations(ph, cd, data.los_ecef, data.range_rate_m_s, data.wavelength_m, sigma_sd, vfac)
+        fix = solve_baseline(obs, b_pred, correction_m=corr, gate_m=options.gate_m, fix_correction_m=None)
         fixes.append(fix)
         az_list.append(az)
         el_list.append(el)

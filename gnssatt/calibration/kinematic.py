@@ -151,23 +151,40 @@ class BaselineFix:
     residual_m: np.ndarray
 
 
-def solve_baseline(phase_sd_m: np.ndarray, code_sd_m: np.ndarray, los_ecef: np.ndarray, range_rate_m_s: np.ndarray,
-                   b_pred_ecef_m: np.ndarray, wavelength_m: np.ndarray, sigma_phase_m: np.ndarray, *,
+@dataclass(frozen=True)
+class BaselineObservations:
+    """The single-differenced observations of one baseline over a set (second antenna minus first).
+
+    phase_sd_m, code_sd_m: (n_ep, n_sat, n_sig) single differences, m.
+    los_ecef: (n_ep, n_sat, 3) unit LOS; range_rate_m_s: (n_ep, n_sat).
+    wavelength_m, sigma_phase_m: (n_sig,).
+    variance_factor: (n_ep, n_sat, n_sig) multiplies sigma_phase_m^2 per sample (C/N0 weighting), or None.
+    """
+
+    phase_sd_m: np.ndarray
+    code_sd_m: np.ndarray
+    los_ecef: np.ndarray
+    range_rate_m_s: np.ndarray
+    wavelength_m: np.ndarray
+    sigma_phase_m: np.ndarray
+    variance_factor: np.ndarray | None = None
+
+
+def solve_baseline(obs: BaselineObservations, b_pred_ecef_m: np.ndarray, *,
                    correction_m: np.ndarray | None = None, gate_m: float = DEFAULT_GATE_M,
                    max_rejections: int = DEFAULT_MAX_REJECTIONS, fix_pred_ecef_m: np.ndarray | None = None,
-                   fix_correction_m: np.ndarray | None = None,
-                   variance_factor: np.ndarray | None = None) -> BaselineFix:
+                   fix_correction_m: np.ndarray | None = None) -> BaselineFix:
     """BaselineFix of one baseline: integers fixed with the prediction, then epoch-wise least squares.
 
     Args:
-        phase_sd_m, code_sd_m: (n_ep, n_sat, n_sig) single differences (second minus first), m.
-        los_ecef: (n_ep, n_sat, 3) unit LOS; range_rate_m_s: (n_ep, n_sat).
+        obs: the baseline's single differences, geometry and phase noise (BaselineObservations).
         b_pred_ecef_m: (n_ep, 3) predicted baseline (reference attitude x body baseline), NaN where none.
-        wavelength_m, sigma_phase_m: (n_sig,).
         correction_m: (n_ep, n_sat, n_sig) PCV correction subtracted from the phases before the solution, or None.
         fix_pred_ecef_m, fix_correction_m: prediction used only to fix the integers (default: the above).
-        variance_factor: (n_ep, n_sat, n_sig) multiplies sigma_phase_m^2 per sample (C/N0 weighting), or None.
     """
+    phase_sd_m, code_sd_m, los_ecef = obs.phase_sd_m, obs.code_sd_m, obs.los_ecef
+    range_rate_m_s, wavelength_m, sigma_phase_m = obs.range_rate_m_s, obs.wavelength_m, obs.sigma_phase_m
+    variance_factor = obs.variance_factor
     n_ep, n_sat, n_sig = phase_sd_m.shape
     kappa = clock_from_code_m(code_sd_m, los_ecef, b_pred_ecef_m)
     rate_term = (kappa[:, None] * range_rate_m_s / C_M_S)[..., None]  # (n_ep, n_sat, 1)
@@ -207,5 +224,6 @@ def solve_baseline(phase_sd_m: np.ndarray, code_sd_m: np.ndarray, los_ecef: np.n
                        np.where(keep, sol.residual.reshape(n_ep, n_sat, n_sig), np.nan))
 
 
-__all__ = ["clock_from_code_m", "fix_integers", "EpochSolution", "epoch_lsq", "BaselineFix", "solve_baseline",
+__all__ = ["clock_from_code_m", "fix_integers", "EpochSolution", "epoch_lsq", "BaselineFix", "BaselineObservations",
+           "solve_baseline",
            "DEFAULT_GATE_M"]

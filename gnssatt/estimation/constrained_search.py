@@ -345,18 +345,28 @@ def _sphere_dual_bound(b: list, w: list, Vt: list, length_m: float, iterations: 
     return max(g, 0.0)
 
 
+def _metric_eig(w: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """(4, 3) float64 C-contiguous: row 0 = the eigenvalues w of W = V diag(w) V^T, rows 1-3 = V^T (the argument
+    ``metric_eig`` of ``_sphere_dual_bound_nb``)."""
+    return np.ascontiguousarray(np.vstack([np.asarray(w, np.float64), np.asarray(V, np.float64).T]))
+
+
 @njit(cache=True, nogil=True)
-def _sphere_dual_bound_nb(b0: float, b1: float, b2: float, w0: float, w1: float, w2: float,
-                          v00: float, v01: float, v02: float, v10: float, v11: float, v12: float,
-                          v20: float, v21: float, v22: float, length_m: float, three: float,
+def _sphere_dual_bound_nb(b0: float, b1: float, b2: float, metric_eig: np.ndarray, length_m: float, three: float,
                           iterations: int = 10) -> float:
-    """``_sphere_dual_bound`` compiled, on scalars (Vt = [[v00, v01, v02], ...]); the same IEEE operations in
-    the same order, ``ny ** 3`` as pow(ny, three) with three = 3.0 given at run time, as Python computes it.
-    The C-LAMBDA DFS calls it at every node (~250,000 calls in a 200-start ttff job's 12 sets): ~25 us in
-    Python, ~1 us here. tests/estimation/test_constrained_few_satellites.py compares it with the Python one.
+    """``_sphere_dual_bound`` compiled, on the centre's scalars and the metric's eigen-decomposition
+    ``metric_eig`` (4, 3) float64 (``_metric_eig``: row 0 = w ascending, rows 1-3 = V^T); the same IEEE
+    operations in the same order, ``ny ** 3`` as pow(ny, three) with three = 3.0 given at run time, as Python
+    computes it. The C-LAMBDA DFS calls it at every node (~250,000 calls in a 200-start ttff job's 12 sets):
+    ~25 us in Python, ~2 us here (one array argument dispatches faster than twelve floats or a namedtuple).
+    tests/estimation/test_constrained_few_satellites.py compares it with the Python one.
 
     Implements: the Lagrangian dual bound of the trust-region problem (More & Sorensen 1983), as
     ``_sphere_dual_bound``."""
+    w0, w1, w2 = metric_eig[0, 0], metric_eig[0, 1], metric_eig[0, 2]
+    v00, v01, v02 = metric_eig[1, 0], metric_eig[1, 1], metric_eig[1, 2]
+    v10, v11, v12 = metric_eig[2, 0], metric_eig[2, 1], metric_eig[2, 2]
+    v20, v21, v22 = metric_eig[3, 0], metric_eig[3, 1], metric_eig[3, 2]
     c0 = v00 * b0 + v01 * b1 + v02 * b2
     c1 = v10 * b0 + v11 * b1 + v12 * b2
     c2 = v20 * b0 + v21 * b1 + v22 * b2
@@ -702,15 +712,14 @@ def constrained_search(a_float_cyc: np.ndarray, Q_a: np.ndarray, b_float_m: np.n
         def leaf_fn(b):
             return sphere_fit(np.array(b), W_leaf, float(lengths[0]))
 
-        # per level: (w0, w1, w2, Vt row-major) as floats for the compiled bound
-        eig_py = [None if e is None else tuple(float(v) for v in e[0]) + tuple(float(v) for v in e[1].T.ravel())
-                  for e in eig_k]
+        # per level: the metric's eigen-decomposition as one (4, 3) array for the compiled bound
+        eig_py = [None if e is None else _metric_eig(e[0], e[1]) for e in eig_k]
         l0 = float(lengths[0])
 
         def tight_fn(k, b):
             # a lower bound of min_{|b| = l} ||b_hat(z_{k:}) - b||^2_{Q_b|z_{k:}} (module docstring)
             e = eig_py[k]
-            return 0.0 if e is None else _sphere_dual_bound_nb(b[0], b[1], b[2], *e, l0, 3.0)
+            return 0.0 if e is None else _sphere_dual_bound_nb(b[0], b[1], b[2], e, l0, 3.0)
         dof = n + 1
     else:
         bound_fn = _bound_two_baselines(F) if q == 2 else _bound_lengths(lengths)

@@ -6,6 +6,7 @@ Implements: RINEX 3.04 sec. 5 and Tables A1-A3: header labels, EPOCH record
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -22,32 +23,56 @@ def _t(t: GpsTime) -> tuple:
     return int(y), int(mo), int(d), int(hh), int(mi), float(ss)
 
 
-def write_obs(path: Path, *, marker: str, obs_types: list[str], epochs: GpsTime, sats: list[str],
-              values: np.ndarray, lli: np.ndarray, ssi: np.ndarray, interval_s: float, approx_xyz_m,
-              antenna_delta_xyz_m, boresight, receiver: str, antenna_type: str, leap_s: int,
-              comments: list[str], date_text: str) -> Path:
+@dataclass(frozen=True)
+class ObsHeader:
+    """What the header of one simulated observation file says besides the data (RINEX 3.04 Table A2 labels)."""
+
+    marker: str                      # MARKER NAME (the antenna id)
+    obs_types: list[str]             # SYS / # / OBS TYPES, e.g. ["C1C", "L1C", "D1C", "S1C"]
+    interval_s: float                # INTERVAL
+    approx_xyz_m: np.ndarray         # APPROX POSITION XYZ (ECEF, m)
+    antenna_delta_xyz_m: np.ndarray  # ANTENNA: DELTA X/Y/Z (body frame, m)
+    boresight: np.ndarray            # ANTENNA: B.SIGHT XYZ (body frame unit vector)
+    receiver: str                    # REC # / TYPE / VERS (also decides MARKER TYPE)
+    antenna_type: str                # ANT # / TYPE
+    leap_s: int                      # LEAP SECONDS
+    comments: list[str]              # COMMENT lines
+    date_text: str                   # PGM / RUN BY / DATE
+
+
+def write_obs(path: Path, header: ObsHeader, *, epochs: GpsTime, sats: list[str], values: np.ndarray,
+              lli: np.ndarray, ssi: np.ndarray) -> Path:
     """Write one RINEX 3.04 GPS observation file.
 
     Args:
+        header: the header fields (ObsHeader).
         values: (n_ep, n_sv, n_obs) float, NaN = blank; lli/ssi: (n_ep, n_sv, n_obs) int, 0 = blank.
         epochs: (n_ep,) receiver time tags (epochs without any value are skipped).
     """
-    n_ep, n_sv, n_obs = values.shape
     present = ~np.isnan(values)
     any_sat = present.any(axis=2)
-    keep = any_sat.any(axis=1)
+    idx = np.nonzero(any_sat.any(axis=1))[0]
+    out = [_header_text(header, epochs, idx, values.shape[2])]
+    out += _epoch_records(epochs, sats, values, lli, ssi, idx)
+    path.write_text("".join(out), encoding="ascii")
+    return path
+
+
+def _header_text(hd: ObsHeader, epochs: GpsTime, idx: np.ndarray, n_obs: int) -> str:
+    """The header of the file, RINEX 3.04 Table A2; ``idx`` are the epochs written (first/last obs)."""
+    marker, obs_types, receiver = hd.marker, hd.obs_types, hd.receiver
     head = [_h(f"{'3.04':>9s}{'':11s}{'OBSERVATION DATA':<20s}{'G: GPS':<20s}", "RINEX VERSION / TYPE"),
-            _h(f"{'gnssatt-sim':<20s}{'gnssatt':<20s}{date_text:<20s}", "PGM / RUN BY / DATE")]
-    head += [_h(c, "COMMENT") for c in comments]
+            _h(f"{'gnssatt-sim':<20s}{'gnssatt':<20s}{hd.date_text:<20s}", "PGM / RUN BY / DATE")]
+    head += [_h(c, "COMMENT") for c in hd.comments]
     head += [_h(marker, "MARKER NAME"), _h("SPACEBORNE" if "space" in receiver.lower() else "GEODETIC",
                                            "MARKER TYPE"),
              _h(f"{'simulator':<20s}{'gnssatt':<40s}", "OBSERVER / AGENCY"),
              _h(f"{'SIM-' + marker:<20.20s}{receiver:<20.20s}{'sim':<20s}", "REC # / TYPE / VERS"),
-             _h(f"{'SIM-' + marker:<20.20s}{antenna_type:<20.20s}", "ANT # / TYPE"),
-             _h("".join(f"{v:14.4f}" for v in approx_xyz_m), "APPROX POSITION XYZ"),
+             _h(f"{'SIM-' + marker:<20.20s}{hd.antenna_type:<20.20s}", "ANT # / TYPE"),
+             _h("".join(f"{v:14.4f}" for v in hd.approx_xyz_m), "APPROX POSITION XYZ"),
              _h("".join(f"{v:14.4f}" for v in (0.0, 0.0, 0.0)), "ANTENNA: DELTA H/E/N"),
-             _h("".join(f"{v:14.4f}" for v in antenna_delta_xyz_m), "ANTENNA: DELTA X/Y/Z"),
-             _h("".join(f"{v:14.4f}" for v in boresight), "ANTENNA: B.SIGHT XYZ")]
+             _h("".join(f"{v:14.4f}" for v in hd.antenna_delta_xyz_m), "ANTENNA: DELTA X/Y/Z"),
+             _h("".join(f"{v:14.4f}" for v in hd.boresight), "ANTENNA: B.SIGHT XYZ")]
     types = "".join(f" {t}" for t in obs_types)
     head.append(_h(f"G{n_obs:5d}{types[:52]}", "SYS / # / OBS TYPES"))
     rest = obs_types[13:]
@@ -55,8 +80,7 @@ def write_obs(path: Path, *, marker: str, obs_types: list[str], epochs: GpsTime,
         head.append(_h(f"{'':6s}" + "".join(f" {t}" for t in rest[:13]), "SYS / # / OBS TYPES"))
         rest = rest[13:]
     head.append(_h("DBHZ", "SIGNAL STRENGTH UNIT"))
-    head.append(_h(f"{interval_s:10.3f}", "INTERVAL"))
-    idx = np.nonzero(keep)[0]
+    head.append(_h(f"{hd.interval_s:10.3f}", "INTERVAL"))
     if len(idx):
         for k, label in ((idx[0], "TIME OF FIRST OBS"), (idx[-1], "TIME OF LAST OBS")):
             y, mo, d, hh, mi, ss = _t(epochs[int(k)])
@@ -64,9 +88,17 @@ def write_obs(path: Path, *, marker: str, obs_types: list[str], epochs: GpsTime,
     for t in obs_types:
         if t.startswith("L"):
             head.append(_h(f"G {t} {0.0:8.5f}", "SYS / PHASE SHIFT"))
-    head.append(_h(f"{leap_s:6d}", "LEAP SECONDS"))
+    head.append(_h(f"{hd.leap_s:6d}", "LEAP SECONDS"))
     head.append(_h("", "END OF HEADER"))
-    out = ["".join(head)]
+    return "".join(head)
+
+
+def _epoch_records(epochs: GpsTime, sats: list[str], values: np.ndarray, lli: np.ndarray, ssi: np.ndarray,
+                   idx: np.ndarray) -> list[str]:
+    """EPOCH and observation records of the epochs ``idx`` (RINEX 3.04 Table A3), blanks where NaN / 0."""
+    present = ~np.isnan(values)
+    any_sat = present.any(axis=2)
+    out = []
     y, mo, d, hh, mi, ss = (np.atleast_1d(a) for a in epochs.calendar())
     # preformat every field: 14.3f + LLI + SSI, or 16 blanks
     vtxt = np.where(present, values, 0.0)
@@ -86,5 +118,4 @@ def write_obs(path: Path, *, marker: str, obs_types: list[str], epochs: GpsTime,
             fields = [(f"{v:14.3f}{(str(l) if l >= 0 else ' ')}{(str(s) if s >= 0 else ' ')}" if p else blank)
                       for v, p, l, s in zip(vv, pp, ll, sg)]
             out.append((sat + "".join(fields)).rstrip() + "\n")
-    path.write_text("".join(out), encoding="ascii")
-    return path
+    return out

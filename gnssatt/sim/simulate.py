@@ -24,7 +24,7 @@ from gnssatt.sim import observables as ob
 from gnssatt.sim._constants import (C_M_S, F_L1_HZ, F_L2_HZ, GAMMA_L2, LEAP_TABLE_EXPIRES,
                                    leap_expiry_warning)
 from gnssatt.sim._frames import EarthRotation
-from gnssatt.sim._rinex_obs_out import write_obs
+from gnssatt.sim._rinex_obs_out import ObsHeader, write_obs
 from gnssatt.sim.constellation import gps_from_nav, synthetic_gps
 from gnssatt.sim.scenarios import SimParams, list_scenarios, make_params
 from gnssatt.sim.trajectory import (AttitudeProfile, Platform, orbit_from_sp3_file, orbit_kepler_j2, orbit_tle,
@@ -98,7 +98,55 @@ def _validate(p: SimParams):
 
 
 # ----------------------------------------------------------------------------------------------- one set
+_LAMBDA_M = {"L1": C_M_S / F_L1_HZ, "L2": C_M_S / F_L2_HZ}
+_TGD_FACTOR = {"L1": 1.0, "L2": GAMMA_L2}       # IS-GPS-200 20.3.3.3.3.2: T_GD on L1, gamma T_GD on L2
+
+
+@dataclass
+class _SetContext:
+    """What every stage of one simulated set shares: parameters, identity, epochs, platform and constellation.
+
+    Epochs are receiver time tags t0 + dt_tag (s); the constellation's own time is off + dt_tag.
+    """
+
+    p: SimParams
+    scenario: str
+    seed: int
+    pidx: int
+    set_dir: Path
+    t0: GpsTime
+    dt_tag: np.ndarray
+    tags: GpsTime
+    earth: EarthRotation
+    platform: Platform
+    const: object
+    off: float
+    sigs: list[str]
+
+    @property
+    def n_ep(self) -> int:
+        return int(self.dt_tag.size)
+
+    @property
+    def n_sv(self) -> int:
+        return int(self.const.n)
+
+    def rng(self, ant_idx: int, stream: str) -> np.random.Generator:
+        return _rng(self.seed, self.pidx, ant_idx, stream)
+
+
+@dataclass
+class _Atmosphere:
+    """Common atmosphere of a set, once per epoch at the CoM along the master's lines of sight (m)."""
+
+    iono: dict                   # signal -> (n_ep, n_sv) ionospheric group delay on that signal
+    trop: np.ndarray             # (n_ep, n_sv) troposphere (terrestrial only, else zero)
+    rate: dict                   # signal -> (n_ep, n_sv) d(trop - iono)/dt, m/s (enters the Doppler)
+    sin_el_local: np.ndarray     # (n_ep, n_sv) sine of the local elevation
+
+
 def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: int, progress) -> dict:
+    """Simulate and write one set (pass): platform, antennas, geometry, atmosphere, observables, files."""
     set_dir.mkdir(parents=True, exist_ok=True)
     for sub in ("obs", "nav", "truth", "truth/pcv"):
         (set_dir / sub).mkdir(parents=True, exist_ok=True)
@@ -107,124 +155,31 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
     first = float(start - t0)
     n_ep = int(np.floor(p.duration_s / p.interval_s + 1e-9)) + 1
     dt_tag = first + np.arange(n_ep) * p.interval_s
-    tags = t0 + dt_tag
     span = (dt_tag[0] - 5.0, dt_tag[-1] + 5.0)
     earth = EarthRotation(int(t0.s), span)
     progress(0.02, "orbit and attitude")
-
-    # --- platform ---
-    att_rng = _rng(seed, pidx, 0, "att")
-    attitude = _attitude_profile(p, att_rng, int(t0.s))
-    if p.kind == "spacecraft":
-        if p.orbit_source == "kepler-j2":
-            com = orbit_kepler_j2(earth, span, perigee_alt_km=p.perigee_alt_km, apogee_alt_km=p.apogee_alt_km,
-                                  inclination_deg=p.inclination_deg, raan_deg=p.raan_deg, argp_deg=p.argp_deg,
-                                  mean_anomaly_deg=p.mean_anomaly_deg + 360.0 * 0.37 * pidx)
-        elif p.orbit_source == "tle":
-            com = orbit_tle(earth, span, int(t0.s), earth.leap_s, p.tle_line1, p.tle_line2)
-        elif p.orbit_source == "sp3":
-            com = orbit_from_sp3_file(earth, span, int(t0.s), p.orbit_sp3_path)
-        else:
-            raise ValueError(f"orbit_source must be kepler-j2, tle or sp3, not {p.orbit_source!r}")
-    else:
-        com = (terrestrial_from_csv(earth, int(t0.s), p.trajectory_csv) if p.trajectory_csv
-               else terrestrial_static(earth, p.lat_deg, p.lon_deg, p.height_m))
-    platform = Platform(p.kind, com, attitude, earth)
-
+    attitude = _attitude_profile(p, _rng(seed, pidx, 0, "att"), int(t0.s))
+    platform = Platform(p.kind, _centre_of_mass(p, earth, span, t0, pidx), attitude, earth)
     const = gps_from_nav(p.nav_file, t0) if p.nav_file else synthetic_gps(t0, seed=p.constellation_seed)
-    off = float(t0 - const.t_ref)                   # const time = off + dt
-    n_sv = const.n
+    ctx = _SetContext(p, scenario, seed, pidx, set_dir, t0, dt_tag, t0 + dt_tag, earth, platform, const,
+                      float(t0 - const.t_ref), [s for s in ("L1", "L2") if s in p.signals])
+    n_sv = ctx.n_sv
     ant_ids = list(p.antennas)
-    sigs = [s for s in ("L1", "L2") if s in p.signals]
-    lam = {"L1": C_M_S / F_L1_HZ, "L2": C_M_S / F_L2_HZ}
-    tgd_k = {"L1": 1.0, "L2": GAMMA_L2}
 
     # --- nominal-epoch quantities: CoM, attitude, satellite axes ---
     r_com_nom, R_e_b_nom, R_e_i_nom = platform.state(dt_tag)
-    r_sv_nom, _ = const.position_clock(off + dt_tag[:, None] + np.zeros((1, n_sv)))
-    r_sv_nom1, _ = const.position_clock(off + dt_tag[:, None] + 1.0 + np.zeros((1, n_sv)))
-    x_s, y_s = ob.satellite_axes(r_sv_nom, r_sv_nom1, 1.0)
+    r_sv_nom, _ = const.position_clock(ctx.off + dt_tag[:, None] + np.zeros((1, n_sv)))
+    r_sv_nom1, _ = const.position_clock(ctx.off + dt_tag[:, None] + 1.0 + np.zeros((1, n_sv)))
+    sat_axes = ob.satellite_axes(r_sv_nom, r_sv_nom1, 1.0)
 
-    # --- antenna static truth ---
     sat_phase_bias = {f: _rng(seed, pidx, 99, "bias").uniform(0, 1, n_sv) if f == "L1"
-                      else _rng(seed, pidx, 98, "bias").uniform(0, 1, n_sv) for f in sigs}
-    antennas = {}
-    for ai, aid in enumerate(ant_ids):
-        spec = p.antennas[aid]
-        pos = np.asarray(spec["position_m"], dtype=np.float64)
-        bore = np.asarray(spec.get("boresight", [0, 0, -1]), dtype=np.float64)
-        offset = np.asarray(p.antenna_offsets_mm.get(aid, [0, 0, 0]), dtype=np.float64) / 1e3
-        R_a_b = ob.antenna_frame(bore)
-        # PCV and PCO belong to the antennas, not to a pass: every pass of a multi-pass run (a calibration
-        # campaign) sees the same hardware, so their random streams do not depend on the pass index.
-        prng = _rng(seed, 0, ai, "pcv")
-        pcv = {f: ob.pcv_grid_mm(prng, p.pcv_peak_to_peak_mm * (p.l2_pcv_factor if f == "L2" else 1.0)
-                                 * prng.uniform(0.8, 1.0)) if p.pcv else np.zeros((len(ob.PCV_EL_DEG),
-                                                                                   len(ob.PCV_AZ_DEG)))
-               for f in ("L1", "L2")}
-        crng = _rng(seed, 0, ai, "pco")
-        pco = {f: ((np.asarray(p.pco_nominal_mm[k]) + crng.normal(0, p.pco_scatter_mm, 3)) / 1e3 if p.pco
-                   else np.zeros(3)) for k, f in enumerate(("L1", "L2"))}
-        brng = _rng(seed, pidx, ai, "bias")
-        clk_rng = _rng(seed, pidx, ai, "clock")
-        if p.clock_mode == "steered":
-            clock = ob.ClockModel("steered", bias_s=clk_rng.uniform(-1, 1) * 0.3 * p.clock_steer_amp_s,
-                                  amp_s=p.clock_steer_amp_s * clk_rng.uniform(0.5, 1.0),
-                                  period_s=clk_rng.uniform(900, 3000), phase_rad=clk_rng.uniform(0, 2 * np.pi))
-        else:
-            clock = ob.ClockModel("free", bias_s=clk_rng.uniform(-4e-4, 4e-4),
-                                  drift_s_s=p.clock_free_drift_ppm * 1e-6 * clk_rng.choice([-1, 1])
-                                  * clk_rng.uniform(0.6, 1.0), jump_in_phase=p.clock_jump_in_phase)
-        antennas[aid] = dict(index=ai, pos=pos, offset=offset, arp=pos + offset, bore=bore, R_a_b=R_a_b,
-                             pcv=pcv, pco=pco, clock=clock,
-                             code_bias={f: float(brng.normal(0, p.code_bias_sigma_m)) for f in ("L1", "L2")},
-                             phase_bias={f: float(brng.uniform(0, 1)) for f in ("L1", "L2")})
-
-    # --- per antenna geometry ---
+                      else _rng(seed, pidx, 98, "bias").uniform(0, 1, n_sv) for f in ctx.sigs}
+    antennas = {aid: _antenna_truth(p, seed, pidx, ai, aid) for ai, aid in enumerate(ant_ids)}
     geo = {}
     for ai, aid in enumerate(ant_ids):
         progress(0.05 + 0.4 * ai / len(ant_ids), f"geometry {aid}")
-        A = antennas[aid]
-        k_jump = A["clock"].jumps(np.round(dt_tag))
-        dtr = A["clock"].offset(dt_tag, k_jump)
-        t_true = dt_tag - dtr
-        r_com, R_e_b, _ = platform.state(t_true)
-        r_ant = r_com + np.einsum("nij,j->ni", R_e_b, A["arp"])
-        rho, e, dt_sv, tau, r_s = ob.light_time_geometry(const, off + t_true, r_ant)
-        # Doppler: central difference of rho + c(dt_rx - dt_sv) in receiver time
-        gpm = []
-        for sgn in (1.0, -1.0):
-            T = dt_tag + sgn * _DOPPLER_H_S
-            dtr_h = A["clock"].offset(T, k_jump)
-            th = T - dtr_h
-            rc, Rb, _ = platform.state(th)
-            ra = rc + np.einsum("nij,j->ni", Rb, A["arp"])
-            rho_h, _, dsv_h, _, _ = ob.light_time_geometry(const, off + th, ra, tau0=tau, iters=2)
-            gpm.append(rho_h + C_M_S * (dtr_h[:, None] - dsv_h))
-        range_rate = (gpm[0] - gpm[1]) / (2 * _DOPPLER_H_S)
-        e_body = np.einsum("nji,nsj->nsi", R_e_b, e)
-        e_ant = e_body @ A["R_a_b"].T
-        el = np.degrees(np.arcsin(np.clip(e_ant[..., 2], -1, 1)))
-        az = np.mod(np.degrees(np.arctan2(e_ant[..., 1], e_ant[..., 0])), 360.0)
-        x_r = np.einsum("nij,j->ni", R_e_b, A["R_a_b"][0])
-        y_r = np.einsum("nij,j->ni", R_e_b, A["R_a_b"][1])
-        w = ob.windup_cycles(e, x_r, y_r, x_s, y_s) if p.windup else np.zeros((n_ep, n_sv))
-        blocked = (ob.earth_blocked(r_ant, e, rho, p.earth_block_height_km * 1e3) if p.kind == "spacecraft"
-                   else np.zeros((n_ep, n_sv), bool))   # terrestrial: the local elevation mask decides
-        geo[aid] = dict(k_jump=k_jump, dtr=dtr, t_true=t_true, r_ant=r_ant, rho=rho, e=e, dt_sv=dt_sv, tau=tau,
-                        range_rate=range_rate, el=el, az=az, windup=w, blocked=blocked, e_ant=e_ant)
-
-    # --- common atmosphere (once per epoch at the CoM, master line of sight) ---
-    e_m = geo[p.master]["e"]
-    tod = np.mod((t0.s % 86400) + dt_tag, 86400.0)
-    iono_l1, sin_el_local = ob.ionosphere_l1_m(r_com_nom, e_m, tod, p.kind, p.vtec_tecu)
-    if not p.ionosphere:
-        iono_l1 = np.zeros_like(iono_l1)
-    trop = (ob.troposphere_m(sin_el_local, 2.4) if (p.kind == "terrestrial" and p.troposphere)
-            else np.zeros_like(iono_l1))
-    iono = {"L1": iono_l1, "L2": iono_l1 * GAMMA_L2}
-    atm_rate = {f: np.gradient(trop - iono[f], p.interval_s, axis=0) if n_ep > 1 else np.zeros_like(trop)
-                for f in sigs}
+        geo[aid] = _antenna_geometry(ctx, antennas[aid], sat_axes)
+    atm = _atmosphere(ctx, r_com_nom, geo[p.master]["e"])
 
     # --- per antenna signals, tracking, observables ---
     truth_rows, arc_rows, obs_files = [], [], {}
@@ -233,172 +188,26 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
     for ai, aid in enumerate(ant_ids):
         progress(0.45 + 0.45 * ai / len(ant_ids), f"observables {aid}")
         A, G = antennas[aid], geo[aid]
-        visible = ~G["blocked"]
-        if p.kind == "terrestrial":
-            visible &= sin_el_local >= np.sin(np.radians(p.elevation_mask_deg))
-        cn0_rng = _rng(seed, pidx, ai, "cn0")
-        jitter = ob.gauss_markov(cn0_rng, n_ep, n_sv, p.interval_s, 20.0) * p.cn0_jitter_db
-        cn0 = {}
-        base = (p.cn0_zenith_l1_dbhz + ob.gain_db(G["el"], p.gain_horizon_loss_db, p.gain_backlobe_db_per_deg)
-                - 20 * np.log10(G["rho"] / 2.2e7) + jitter)
-        cn0["L1"] = np.where(visible, base, np.nan)
-        cn0["L2"] = np.where(visible, base + p.l2_cn0_offset_db
-                             + ob.gauss_markov(cn0_rng, n_ep, n_sv, p.interval_s, 20.0) * p.cn0_jitter_db, np.nan)
-        # outages and gaps
-        out_rng = _rng(seed, pidx, ai, "outage")
-        outage = ob.poisson_windows(out_rng, n_ep, p.interval_s, p.outage_rate_per_hour, tuple(p.outage_length_s))
-        for who, s0, dur in p.outage_windows:
-            if who in ("*", aid):
-                outage |= (dt_tag - dt_tag[0] >= s0) & (dt_tag - dt_tag[0] < s0 + dur)
-        gap = ob.poisson_windows(_rng(seed, pidx, ai, "gap"), n_ep, p.interval_s, p.gap_rate_per_hour,
-                                 tuple(p.gap_length_s))
-        cfg = ob.TrackingConfig(n_channels=p.n_channels, acq_l1_dbhz=p.acq_l1_dbhz, trk_l1_dbhz=p.trk_l1_dbhz,
-                                acq_l2_dbhz=p.acq_l2_dbhz, trk_l2_dbhz=p.trk_l2_dbhz,
-                                acq_delay_l1_s=tuple(p.acq_delay_l1_s) if p.acquisition_delays else (0.0, 0.0),
-                                acq_delay_l2_s=tuple(p.acq_delay_l2_s) if p.acquisition_delays else (0.0, 0.0))
-        trk1, trk2 = ob.track(cn0["L1"], cn0["L2"] if "L2" in sigs else None, outage, p.interval_s, cfg,
-                              _rng(seed, pidx, ai, "track"))
-        tracked = {"L1": trk1, "L2": trk2}
-        srng = _rng(seed, pidx, ai, "slip")
-        mrng = _rng(seed, pidx, ai, "mp")
-        nrng = _rng(seed, pidx, ai, "noise")
-        arng = _rng(seed, pidx, ai, "amb")
-        values, llis, ssis, types = [], [], [], []
-        comp = {}
-        ant_sum = {}
-        for f in sigs:
-            lam_f = lam[f]
-            pco_term = -G["e_ant"] @ A["pco"][f]                            # -e . pco  (m)
-            pcv_term = ob.bilinear_pcv_mm(A["pcv"][f], G["az"], G["el"]) / 1e3
-            clock_code = G["dtr"]
-            clock_phase = G["dtr"] if A["clock"].jump_in_phase else G["dtr"] + 1e-3 * G["k_jump"]
-            common = G["rho"] + pco_term - C_M_S * G["dt_sv"] + trop
-            code = common + C_M_S * (clock_code[:, None] + tgd_k[f] * const.tgd[None, :]) + iono[f] \
-                + A["code_bias"][f]
-            phase_m = common + pcv_term + C_M_S * clock_phase[:, None] - iono[f] + lam_f * G["windup"]
-            # stochastic parts
-            if p.multipath:
-                sc = ob.horizon_growth(G["el"], *p.mp_code_m)
-                sp = ob.horizon_growth(G["el"], *p.mp_phase_m)
-                mp_code = sc * ob.gauss_markov(mrng, n_ep, n_sv, p.interval_s, p.mp_tau_s)
-                mp_phase = sp * ob.gauss_markov(mrng, n_ep, n_sv, p.interval_s, p.mp_tau_s)
-            else:
-                mp_code = np.zeros((n_ep, n_sv))
-                mp_phase = np.zeros((n_ep, n_sv))
-            fac = ob.noise_scale(cn0[f], p.noise_ref_cn0_dbhz, p.noise_grows_with_cn0, p.noise_scale_max) \
-                * (p.l2_noise_factor if f == "L2" else 1.0)
-            if p.noise:
-                n_code = nrng.standard_normal((n_ep, n_sv)) * p.noise_code_m * fac
-                n_phase = nrng.standard_normal((n_ep, n_sv)) * p.noise_phase_m * fac
-                n_dop = nrng.standard_normal((n_ep, n_sv)) * p.noise_doppler_hz * fac
-            else:
-                n_code = n_phase = n_dop = np.zeros((n_ep, n_sv))
-            # slips and arcs
-            trk = tracked[f]
-            if p.slip_rate_per_hour > 0:
-                pr = np.clip(p.slip_rate_per_hour / 3600.0 * p.interval_s
-                             * 10.0 ** ((40.0 - np.nan_to_num(cn0[f], nan=40.0)) / 10.0), 0, 0.5)
-                slip = trk & (srng.random((n_ep, n_sv)) < pr)
-                slip_lli = srng.random((n_ep, n_sv)) < p.slip_lli_fraction
-            else:
-                slip = np.zeros_like(trk)
-                slip_lli = np.ones_like(trk)
-            arcs = ob.build_arcs(trk, slip, slip_lli)
-            n_arc = np.zeros(len(arcs.sat), np.int64)
-            last_n = {}
-            code_obs = code + mp_code + n_code
-            phase_wo_n = phase_m + mp_phase + n_phase + lam_f * (A["phase_bias"][f] + sat_phase_bias[f][None, :])
-            for j, (s, a, cause) in enumerate(zip(arcs.sat, arcs.start, arcs.cause)):
-                if cause == "slip" and s in last_n:
-                    jump = int(arng.integers(1, 40)) * int(arng.choice([-1, 1]))
-                    n_arc[j] = last_n[s] + jump
-                else:
-                    n_arc[j] = int(np.round((code_obs[a, s] - phase_wo_n[a, s]) / lam_f)) + int(arng.integers(-5, 6))
-                last_n[s] = n_arc[j]
-            arcs.n_cyc = n_arc.tolist()
-            amb = np.where(arcs.arc_id >= 0, n_arc[np.maximum(arcs.arc_id, 0)] if len(n_arc) else 0, 0)
-            phase_cyc = phase_wo_n / lam_f + amb
-            dop = -(G["range_rate"] + np.gradient(pco_term + pcv_term + lam_f * G["windup"], p.interval_s, axis=0)
-                    + atm_rate[f]) / lam_f + n_dop
-            lli = np.zeros((n_ep, n_sv), np.int64)
-            for s, a, b, fl in zip(arcs.sat, arcs.start, arcs.end, arcs.lli):
-                if fl:   # an arc starting inside a data gap flags its first epoch in the file
-                    k = a
-                    while k <= b and gap[k]:
-                        k += 1
-                    if k <= b:
-                        lli[k, s] = 1
-            cn0_w = np.round(cn0[f], 1)
-            ssi = np.clip(np.floor(np.nan_to_num(cn0_w, nan=0) / 6.0), 1, 9).astype(np.int64)
-            ok = trk
-            sig = "1C" if f == "L1" else "2W"
-            for typ, val, l_, s_ in (("C", code_obs, 0 * lli, ssi), ("L", phase_cyc, lli, ssi),
-                                     ("D", dop, 0 * lli, ssi), ("S", cn0_w, 0 * lli, 0 * ssi)):
-                values.append(np.where(ok, val, np.nan))
-                llis.append(np.where(ok, l_, 0))
-                ssis.append(np.where(ok, s_, 0))
-                types.append(typ + sig)
-            for j in range(len(arcs.sat)):
-                arc_rows.append((aid, const.sats[arcs.sat[j]], f, arcs.start[j], arcs.end[j], arcs.cause[j],
-                                 int(arcs.lli[j]), int(n_arc[j])))
-            comp[f] = dict(pco=pco_term, pcv=pcv_term, mp_code=mp_code, mp_phase=mp_phase, n_code=n_code,
-                           n_phase=n_phase, iono=iono[f])
-            ant_sum[f] = {"n_obs": int(trk[~gap].sum()), "n_arcs": len(arcs.sat),
-                          "n_slips": int(sum(c == "slip" for c in arcs.cause))}
-        vals = np.stack(values, axis=-1)
-        vals[gap] = np.nan
-        lli_a = np.stack(llis, axis=-1)
-        ssi_a = np.stack(ssis, axis=-1)
-        obs_path = set_dir / "obs" / f"{aid}.rnx"
         approx = r_com_nom[0] + R_e_b_nom[0] @ A["pos"]
-        write_obs(obs_path, marker=aid, obs_types=types, epochs=tags, sats=const.sats, values=vals, lli=lli_a,
-                  ssi=ssi_a, interval_s=p.interval_s, approx_xyz_m=approx, antenna_delta_xyz_m=A["pos"],
-                  boresight=A["bore"], receiver="SPACEBORNE SIM OEM4" if p.kind == "spacecraft" else "SIM RX",
-                  antenna_type="SIM PATCH", leap_s=earth.leap_s,
-                  comments=[f"gnssatt simulator scenario {scenario} seed {seed} pass {pidx}",
-                            "time tags in receiver time; see truth/receivers.csv"],
-                  date_text=_date_text(t0))
+        ant_sum, gap, outage, comp, tracked = _antenna_observables(ctx, ai, aid, A, G, atm, sat_phase_bias,
+                                                                   approx, arc_rows)
         obs_files[aid] = f"obs/{aid}.rnx"
         summary["antennas"][aid] = {"signals": ant_sum, "gap_epochs": int(gap.sum()),
                                     "outage_epochs": int(outage.sum()),
                                     "clock_jumps": int(np.count_nonzero(np.diff(G["k_jump"])))}
         truth_rows.append((aid, G, gap))
         if p.truth_components:
-            comp_files[aid] = _write_components(set_dir / "truth" / f"observations_{aid}.csv", tags, const.sats,
-                                                G, comp, tracked, sigs, gap)
+            comp_files[aid] = _write_components(set_dir / "truth" / f"observations_{aid}.csv", ctx.tags,
+                                                const.sats, G, comp, tracked, ctx.sigs, gap)
     progress(0.92, "files (nav, SP3, attitude, truth)")
-
-    # --- nav ---
-    recs = const.records(tags[0], tags[-1])
-    write_rinex_nav_gps(set_dir / "nav" / "brdc.rnx", recs, date_text=_date_text(t0),
-                        iono_alpha=[1.1176e-08, 7.4506e-09, -5.9605e-08, -5.9605e-08],
-                        iono_beta=[9.0112e+04, 1.6384e+04, -1.9661e+05, -6.5536e+04], leap_seconds=earth.leap_s,
-                        comments=[f"GPS constellation from {Path(p.nav_file).name}, gnssatt simulator" if p.nav_file
-                                  else "synthetic GPS constellation, gnssatt simulator"])
-    # --- platform.json ---
-    pj = {"name": p.platform_name, "kind": p.kind,
-          "antennas": {a: {"position_m": [float(v) for v in antennas[a]["pos"]],
-                           "boresight": [float(v) for v in antennas[a]["bore"]]} for a in ant_ids},
-          "master": p.master, "baselines": [[p.master, a] for a in ant_ids if a != p.master],
-          "observation_files": obs_files}
-    (set_dir / "platform.json").write_text(json.dumps(pj, indent=2) + "\n")
-    # --- platform SP3 ---
-    if p.sp3_interval_s > 0:
-        sp3_dt = np.arange(dt_tag[0], dt_tag[-1] + 1e-9, p.sp3_interval_s)
-        r_sp3 = platform.com.r_ecef(sp3_dt)
-        v_sp3 = (platform.com.r_ecef(sp3_dt + 0.5) - platform.com.r_ecef(sp3_dt - 0.5))
-        write_sp3(set_dir / "platform.sp3", t0 + sp3_dt, ["L01"], r_sp3[:, None, :], v_sp3[:, None, :],
-                  comments=[f"{p.platform_name} centre of mass, gnssatt simulator",
-                            f"scenario {scenario} seed {seed} pass {pidx}", "ECEF, EOP zero", "truth orbit"])
-    # --- attitude truth + reference attitude ---
-    _write_attitude(set_dir / "truth" / "attitude.csv", tags, R_e_b_nom, R_e_i_nom, platform.reference_dcm(dt_tag),
-                    geo[p.master], p)
+    _write_platform_files(ctx, antennas, obs_files)
+    _write_attitude(set_dir / "truth" / "attitude.csv", ctx.tags, R_e_b_nom, R_e_i_nom,
+                    platform.reference_dcm(dt_tag), geo[p.master], p)
     _write_reference(set_dir / "reference_attitude.csv", p, platform, t0, dt_tag, _rng(seed, pidx, 0, "ref"))
-    # --- receivers truth ---
-    _write_receivers(set_dir / "truth" / "receivers.csv", tags, truth_rows, antennas)
-    _write_arcs(set_dir / "truth" / "arcs.csv", tags, arc_rows)
-    pcv_files = _write_pcv_maps(set_dir / "truth" / "pcv", p, antennas, sigs)
-    model = _model_json(p, scenario, seed, pidx, t0, antennas, const, sat_phase_bias, sigs, earth, pcv_files)
+    _write_receivers(set_dir / "truth" / "receivers.csv", ctx.tags, truth_rows, antennas)
+    _write_arcs(set_dir / "truth" / "arcs.csv", ctx.tags, arc_rows)
+    pcv_files = _write_pcv_maps(set_dir / "truth" / "pcv", p, antennas, ctx.sigs)
+    model = _model_json(p, scenario, seed, pidx, t0, antennas, const, sat_phase_bias, ctx.sigs, earth, pcv_files)
     (set_dir / "truth" / "model.json").write_text(json.dumps(model, indent=1, sort_keys=True) + "\n")
     files = {"obs": {a: str(set_dir / f) for a, f in obs_files.items()}, "nav": str(set_dir / "nav" / "brdc.rnx"),
              "platform_json": str(set_dir / "platform.json"), "reference_attitude": str(set_dir /
@@ -407,6 +216,302 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
     if p.sp3_interval_s > 0:
         files["sp3"] = str(set_dir / "platform.sp3")
     return {"dir": str(set_dir), "files": files, "summary": summary}
+
+
+def _centre_of_mass(p: SimParams, earth: EarthRotation, span: tuple, t0: GpsTime, pidx: int):
+    """The platform's centre-of-mass trajectory: Kepler + J2, TLE (SGP4) or SP3 orbit, or a terrestrial track."""
+    if p.kind != "spacecraft":
+        return (terrestrial_from_csv(earth, int(t0.s), p.trajectory_csv) if p.trajectory_csv
+                else terrestrial_static(earth, p.lat_deg, p.lon_deg, p.height_m))
+    if p.orbit_source == "kepler-j2":
+        return orbit_kepler_j2(earth, span, perigee_alt_km=p.perigee_alt_km, apogee_alt_km=p.apogee_alt_km,
+                               inclination_deg=p.inclination_deg, raan_deg=p.raan_deg, argp_deg=p.argp_deg,
+                               mean_anomaly_deg=p.mean_anomaly_deg + 360.0 * 0.37 * pidx)
+    if p.orbit_source == "tle":
+        return orbit_tle(earth, span, int(t0.s), earth.leap_s, p.tle_line1, p.tle_line2)
+    if p.orbit_source == "sp3":
+        return orbit_from_sp3_file(earth, span, int(t0.s), p.orbit_sp3_path)
+    raise ValueError(f"orbit_source must be kepler-j2, tle or sp3, not {p.orbit_source!r}")
+
+
+def _antenna_truth(p: SimParams, seed: int, pidx: int, ai: int, aid: str) -> dict:
+    """Static truth of antenna ``aid``: position, offset, frame, PCV grids, PCOs, receiver clock and biases."""
+    spec = p.antennas[aid]
+    pos = np.asarray(spec["position_m"], dtype=np.float64)
+    bore = np.asarray(spec.get("boresight", [0, 0, -1]), dtype=np.float64)
+    offset = np.asarray(p.antenna_offsets_mm.get(aid, [0, 0, 0]), dtype=np.float64) / 1e3
+    R_a_b = ob.antenna_frame(bore)
+    # PCV and PCO belong to the antennas, not to a pass: every pass of a multi-pass run (a calibration
+    # campaign) sees the same hardware, so their random streams do not depend on the pass index.
+    prng = _rng(seed, 0, ai, "pcv")
+    pcv = {f: ob.pcv_grid_mm(prng, p.pcv_peak_to_peak_mm * (p.l2_pcv_factor if f == "L2" else 1.0)
+                             * prng.uniform(0.8, 1.0)) if p.pcv else np.zeros((len(ob.PCV_EL_DEG),
+                                                                               len(ob.PCV_AZ_DEG)))
+           for f in ("L1", "L2")}
+    crng = _rng(seed, 0, ai, "pco")
+    pco = {f: ((np.asarray(p.pco_nominal_mm[k]) + crng.normal(0, p.pco_scatter_mm, 3)) / 1e3 if p.pco
+               else np.zeros(3)) for k, f in enumerate(("L1", "L2"))}
+    brng = _rng(seed, pidx, ai, "bias")
+    clk_rng = _rng(seed, pidx, ai, "clock")
+    if p.clock_mode == "steered":
+        clock = ob.ClockModel("steered", bias_s=clk_rng.uniform(-1, 1) * 0.3 * p.clock_steer_amp_s,
+                              amp_s=p.clock_steer_amp_s * clk_rng.uniform(0.5, 1.0),
+                              period_s=clk_rng.uniform(900, 3000), phase_rad=clk_rng.uniform(0, 2 * np.pi))
+    else:
+        clock = ob.ClockModel("free", bias_s=clk_rng.uniform(-4e-4, 4e-4),
+                              drift_s_s=p.clock_free_drift_ppm * 1e-6 * clk_rng.choice([-1, 1])
+                              * clk_rng.uniform(0.6, 1.0), jump_in_phase=p.clock_jump_in_phase)
+    return dict(index=ai, pos=pos, offset=offset, arp=pos + offset, bore=bore, R_a_b=R_a_b,
+                pcv=pcv, pco=pco, clock=clock,
+                code_bias={f: float(brng.normal(0, p.code_bias_sigma_m)) for f in ("L1", "L2")},
+                phase_bias={f: float(brng.uniform(0, 1)) for f in ("L1", "L2")})
+
+
+def _antenna_geometry(ctx: _SetContext, A: dict, sat_axes: tuple) -> dict:
+    """Per-epoch geometry of one antenna in true time: light-time ranges, lines of sight, range rate (central
+    difference of rho + c(dt_rx - dt_sv) in receiver time), antenna-frame az/el, wind-up and Earth blockage."""
+    p, platform, const, off, dt_tag = ctx.p, ctx.platform, ctx.const, ctx.off, ctx.dt_tag
+    n_ep, n_sv = ctx.n_ep, ctx.n_sv
+    x_s, y_s = sat_axes
+    k_jump = A["clock"].jumps(np.round(dt_tag))
+    dtr = A["clock"].offset(dt_tag, k_jump)
+    t_true = dt_tag - dtr
+    r_com, R_e_b, _ = platform.state(t_true)
+    r_ant = r_com + np.einsum("nij,j->ni", R_e_b, A["arp"])
+    rho, e, dt_sv, tau, r_s = ob.light_time_geometry(const, off + t_true, r_ant)
+    # Doppler: central difference of rho + c(dt_rx - dt_sv) in receiver time
+    gpm = []
+    for sgn in (1.0, -1.0):
+        T = dt_tag + sgn * _DOPPLER_H_S
+        dtr_h = A["clock"].offset(T, k_jump)
+        th = T - dtr_h
+        rc, Rb, _ = platform.state(th)
+        ra = rc + np.einsum("nij,j->ni", Rb, A["arp"])
+        rho_h, _, dsv_h, _, _ = ob.light_time_geometry(const, off + th, ra, tau0=tau, iters=2)
+        gpm.append(rho_h + C_M_S * (dtr_h[:, None] - dsv_h))
+    range_rate = (gpm[0] - gpm[1]) / (2 * _DOPPLER_H_S)
+    e_body = np.einsum("nji,nsj->nsi", R_e_b, e)
+    e_ant = e_body @ A["R_a_b"].T
+    el = np.degrees(np.arcsin(np.clip(e_ant[..., 2], -1, 1)))
+    az = np.mod(np.degrees(np.arctan2(e_ant[..., 1], e_ant[..., 0])), 360.0)
+    x_r = np.einsum("nij,j->ni", R_e_b, A["R_a_b"][0])
+    y_r = np.einsum("nij,j->ni", R_e_b, A["R_a_b"][1])
+    w = ob.windup_cycles(e, x_r, y_r, x_s, y_s) if p.windup else np.zeros((n_ep, n_sv))
+    blocked = (ob.earth_blocked(r_ant, e, rho, p.earth_block_height_km * 1e3) if p.kind == "spacecraft"
+               else np.zeros((n_ep, n_sv), bool))   # terrestrial: the local elevation mask decides
+    return dict(k_jump=k_jump, dtr=dtr, t_true=t_true, r_ant=r_ant, rho=rho, e=e, dt_sv=dt_sv, tau=tau,
+                range_rate=range_rate, el=el, az=az, windup=w, blocked=blocked, e_ant=e_ant)
+
+
+def _atmosphere(ctx: _SetContext, r_com_nom: np.ndarray, e_master: np.ndarray) -> _Atmosphere:
+    """Ionosphere (L1 delay, gamma times on L2) and troposphere once per epoch at the CoM, master line of sight."""
+    p, dt_tag = ctx.p, ctx.dt_tag
+    tod = np.mod((ctx.t0.s % 86400) + dt_tag, 86400.0)
+    iono_l1, sin_el_local = ob.ionosphere_l1_m(r_com_nom, e_master, tod, p.kind, p.vtec_tecu)
+    if not p.ionosphere:
+        iono_l1 = np.zeros_like(iono_l1)
+    trop = (ob.troposphere_m(sin_el_local, 2.4) if (p.kind == "terrestrial" and p.troposphere)
+            else np.zeros_like(iono_l1))
+    iono = {"L1": iono_l1, "L2": iono_l1 * GAMMA_L2}
+    atm_rate = {f: np.gradient(trop - iono[f], p.interval_s, axis=0) if ctx.n_ep > 1 else np.zeros_like(trop)
+                for f in ctx.sigs}
+    return _Atmosphere(iono, trop, atm_rate, sin_el_local)
+
+
+def _tracking(ctx: _SetContext, ai: int, aid: str, G: dict, atm: _Atmosphere) -> tuple:
+    """C/N0 per signal (gain pattern, range loss, Gauss-Markov jitter), outages, data gaps and the receiver's
+    tracking state machine of one antenna: returns (cn0, outage, gap, tracked), per signal (n_ep, n_sv)."""
+    p, dt_tag, n_ep, n_sv = ctx.p, ctx.dt_tag, ctx.n_ep, ctx.n_sv
+    visible = ~G["blocked"]
+    if p.kind == "terrestrial":
+        visible &= atm.sin_el_local >= np.sin(np.radians(p.elevation_mask_deg))
+    cn0_rng = ctx.rng(ai, "cn0")
+    jitter = ob.gauss_markov(cn0_rng, n_ep, n_sv, p.interval_s, 20.0) * p.cn0_jitter_db
+    cn0 = {}
+    base = (p.cn0_zenith_l1_dbhz + ob.gain_db(G["el"], p.gain_horizon_loss_db, p.gain_backlobe_db_per_deg)
+            - 20 * np.log10(G["rho"] / 2.2e7) + jitter)
+    cn0["L1"] = np.where(visible, base, np.nan)
+    cn0["L2"] = np.where(visible, base + p.l2_cn0_offset_db
+                         + ob.gauss_markov(cn0_rng, n_ep, n_sv, p.interval_s, 20.0) * p.cn0_jitter_db, np.nan)
+    # outages and gaps
+    out_rng = ctx.rng(ai, "outage")
+    outage = ob.poisson_windows(out_rng, n_ep, p.interval_s, p.outage_rate_per_hour, tuple(p.outage_length_s))
+    for who, s0, dur in p.outage_windows:
+        if who in ("*", aid):
+            outage |= (dt_tag - dt_tag[0] >= s0) & (dt_tag - dt_tag[0] < s0 + dur)
+    gap = ob.poisson_windows(ctx.rng(ai, "gap"), n_ep, p.interval_s, p.gap_rate_per_hour,
+                             tuple(p.gap_length_s))
+    cfg = ob.TrackingConfig(n_channels=p.n_channels, acq_l1_dbhz=p.acq_l1_dbhz, trk_l1_dbhz=p.trk_l1_dbhz,
+                            acq_l2_dbhz=p.acq_l2_dbhz, trk_l2_dbhz=p.trk_l2_dbhz,
+                            acq_delay_l1_s=tuple(p.acq_delay_l1_s) if p.acquisition_delays else (0.0, 0.0),
+                            acq_delay_l2_s=tuple(p.acq_delay_l2_s) if p.acquisition_delays else (0.0, 0.0))
+    trk1, trk2 = ob.track(cn0["L1"], cn0["L2"] if "L2" in ctx.sigs else None, outage, p.interval_s, cfg,
+                          ctx.rng(ai, "track"))
+    return cn0, outage, gap, {"L1": trk1, "L2": trk2}
+
+
+@dataclass
+class _AntennaStreams:
+    """The random streams of one antenna's observables, shared by its signals in order (L1 then L2)."""
+
+    slip: np.random.Generator
+    mp: np.random.Generator
+    noise: np.random.Generator
+    amb: np.random.Generator
+
+
+def _antenna_observables(ctx: _SetContext, ai: int, aid: str, A: dict, G: dict, atm: _Atmosphere,
+                         sat_phase_bias: dict, approx_xyz_m: np.ndarray, arc_rows: list) -> tuple:
+    """Observables of one antenna (code, phase, Doppler, C/N0 per signal) written to obs/<aid>.rnx; appends the
+    arcs to ``arc_rows``; returns (per-signal summary, gap, outage, truth components, tracked)."""
+    p = ctx.p
+    cn0, outage, gap, tracked = _tracking(ctx, ai, aid, G, atm)
+    streams = _AntennaStreams(ctx.rng(ai, "slip"), ctx.rng(ai, "mp"), ctx.rng(ai, "noise"), ctx.rng(ai, "amb"))
+    values, llis, ssis, types = [], [], [], []
+    comp = {}
+    ant_sum = {}
+    for f in ctx.sigs:
+        obs, comp[f], arcs, n_arc = _signal_observables(ctx, f, A, G, atm, cn0[f], tracked[f], gap,
+                                                        sat_phase_bias[f], streams)
+        trk = tracked[f]
+        sig = "1C" if f == "L1" else "2W"
+        for typ, (val, l_, s_) in zip("CLDS", obs):
+            values.append(np.where(trk, val, np.nan))
+            llis.append(np.where(trk, l_, 0))
+            ssis.append(np.where(trk, s_, 0))
+            types.append(typ + sig)
+        for j in range(len(arcs.sat)):
+            arc_rows.append((aid, ctx.const.sats[arcs.sat[j]], f, arcs.start[j], arcs.end[j], arcs.cause[j],
+                             int(arcs.lli[j]), int(n_arc[j])))
+        ant_sum[f] = {"n_obs": int(trk[~gap].sum()), "n_arcs": len(arcs.sat),
+                      "n_slips": int(sum(c == "slip" for c in arcs.cause))}
+    vals = np.stack(values, axis=-1)
+    vals[gap] = np.nan
+    header = ObsHeader(marker=aid, obs_types=types, interval_s=p.interval_s, approx_xyz_m=approx_xyz_m,
+                       antenna_delta_xyz_m=A["pos"], boresight=A["bore"],
+                       receiver="SPACEBORNE SIM OEM4" if p.kind == "spacecraft" else "SIM RX",
+                       antenna_type="SIM PATCH", leap_s=ctx.earth.leap_s,
+                       comments=[f"gnssatt simulator scenario {ctx.scenario} seed {ctx.seed} pass {ctx.pidx}",
+                                 "time tags in receiver time; see truth/receivers.csv"],
+                       date_text=_date_text(ctx.t0))
+    write_obs(ctx.set_dir / "obs" / f"{aid}.rnx", header, epochs=ctx.tags, sats=ctx.const.sats, values=vals,
+              lli=np.stack(llis, axis=-1), ssi=np.stack(ssis, axis=-1))
+    return ant_sum, gap, outage, comp, tracked
+
+
+def _signal_observables(ctx: _SetContext, f: str, A: dict, G: dict, atm: _Atmosphere, cn0_f: np.ndarray,
+                        trk: np.ndarray, gap: np.ndarray, sat_phase_bias_f: np.ndarray,
+                        streams: _AntennaStreams) -> tuple:
+    """Code (m), phase (cycles), Doppler (Hz) and C/N0 (dB-Hz) of one antenna on signal ``f``, before masking by
+    tracking: returns ((value, lli, ssi) for C, L, D, S; truth components; arcs; integer per arc).
+
+    Implements: the observation equations of docs/simulator.md "Models" (stated in truth/model.json),
+    code = rho + pco + c(dt_rx + k_f T_GD - dt_sv) + T + I_f + bias + mp + noise,
+    phase = rho + pco + pcv + c(dt_rx - dt_sv) + T - I_f + lambda_f (windup + biases + N) + mp + noise.
+    """
+    p, const, n_ep, n_sv = ctx.p, ctx.const, ctx.n_ep, ctx.n_sv
+    trop, iono = atm.trop, atm.iono
+    mrng, nrng, srng, arng = streams.mp, streams.noise, streams.slip, streams.amb
+    lam_f = _LAMBDA_M[f]
+    pco_term = -G["e_ant"] @ A["pco"][f]                            # -e . pco  (m)
+    pcv_term = ob.bilinear_pcv_mm(A["pcv"][f], G["az"], G["el"]) / 1e3
+    clock_code = G["dtr"]
+    clock_phase = G["dtr"] if A["clock"].jump_in_phase else G["dtr"] + 1e-3 * G["k_jump"]
+    common = G["rho"] + pco_term - C_M_S * G["dt_sv"] + trop
+    code = common + C_M_S * (clock_code[:, None] + _TGD_FACTOR[f] * const.tgd[None, :]) + iono[f] \
+        + A["code_bias"][f]
+    phase_m = common + pcv_term + C_M_S * clock_phase[:, None] - iono[f] + lam_f * G["windup"]
+    # stochastic parts
+    if p.multipath:
+        sc = ob.horizon_growth(G["el"], *p.mp_code_m)
+        sp = ob.horizon_growth(G["el"], *p.mp_phase_m)
+        mp_code = sc * ob.gauss_markov(mrng, n_ep, n_sv, p.interval_s, p.mp_tau_s)
+        mp_phase = sp * ob.gauss_markov(mrng, n_ep, n_sv, p.interval_s, p.mp_tau_s)
+    else:
+        mp_code = np.zeros((n_ep, n_sv))
+        mp_phase = np.zeros((n_ep, n_sv))
+    fac = ob.noise_scale(cn0_f, p.noise_ref_cn0_dbhz, p.noise_grows_with_cn0, p.noise_scale_max) \
+        * (p.l2_noise_factor if f == "L2" else 1.0)
+    if p.noise:
+        n_code = nrng.standard_normal((n_ep, n_sv)) * p.noise_code_m * fac
+        n_phase = nrng.standard_normal((n_ep, n_sv)) * p.noise_phase_m * fac
+        n_dop = nrng.standard_normal((n_ep, n_sv)) * p.noise_doppler_hz * fac
+    else:
+        n_code = n_phase = n_dop = np.zeros((n_ep, n_sv))
+    code_obs = code + mp_code + n_code
+    phase_wo_n = phase_m + mp_phase + n_phase + lam_f * (A["phase_bias"][f] + sat_phase_bias_f[None, :])
+    arcs, n_arc, lli = _arcs_and_integers(p, trk, cn0_f, gap, code_obs, phase_wo_n, lam_f, srng, arng)
+    amb = np.where(arcs.arc_id >= 0, n_arc[np.maximum(arcs.arc_id, 0)] if len(n_arc) else 0, 0)
+    phase_cyc = phase_wo_n / lam_f + amb
+    dop = -(G["range_rate"] + np.gradient(pco_term + pcv_term + lam_f * G["windup"], p.interval_s, axis=0)
+            + atm.rate[f]) / lam_f + n_dop
+    cn0_w = np.round(cn0_f, 1)
+    ssi = np.clip(np.floor(np.nan_to_num(cn0_w, nan=0) / 6.0), 1, 9).astype(np.int64)
+    obs = ((code_obs, 0 * lli, ssi), (phase_cyc, lli, ssi), (dop, 0 * lli, ssi), (cn0_w, 0 * lli, 0 * ssi))
+    comp = dict(pco=pco_term, pcv=pcv_term, mp_code=mp_code, mp_phase=mp_phase, n_code=n_code,
+                n_phase=n_phase, iono=iono[f])
+    return obs, comp, arcs, n_arc
+
+
+def _arcs_and_integers(p: SimParams, trk: np.ndarray, cn0_f: np.ndarray, gap: np.ndarray, code_obs: np.ndarray,
+                       phase_wo_n: np.ndarray, lam_f: float, srng, arng) -> tuple:
+    """Cycle slips (rate growing as C/N0 falls), continuous arcs, one integer ambiguity per arc (near the code at
+    the arc's start; a slip jumps it by 1-39 cycles) and the LLI flags: returns (arcs, n_arc, lli)."""
+    n_ep, n_sv = trk.shape
+    if p.slip_rate_per_hour > 0:
+        pr = np.clip(p.slip_rate_per_hour / 3600.0 * p.interval_s
+                     * 10.0 ** ((40.0 - np.nan_to_num(cn0_f, nan=40.0)) / 10.0), 0, 0.5)
+        slip = trk & (srng.random((n_ep, n_sv)) < pr)
+        slip_lli = srng.random((n_ep, n_sv)) < p.slip_lli_fraction
+    else:
+        slip = np.zeros_like(trk)
+        slip_lli = np.ones_like(trk)
+    arcs = ob.build_arcs(trk, slip, slip_lli)
+    n_arc = np.zeros(len(arcs.sat), np.int64)
+    last_n = {}
+    for j, (s, a, cause) in enumerate(zip(arcs.sat, arcs.start, arcs.cause)):
+        if cause == "slip" and s in last_n:
+            jump = int(arng.integers(1, 40)) * int(arng.choice([-1, 1]))
+            n_arc[j] = last_n[s] + jump
+        else:
+            n_arc[j] = int(np.round((code_obs[a, s] - phase_wo_n[a, s]) / lam_f)) + int(arng.integers(-5, 6))
+        last_n[s] = n_arc[j]
+    arcs.n_cyc = n_arc.tolist()
+    lli = np.zeros((n_ep, n_sv), np.int64)
+    for s, a, b, fl in zip(arcs.sat, arcs.start, arcs.end, arcs.lli):
+        if fl:   # an arc starting inside a data gap flags its first epoch in the file
+            k = a
+            while k <= b and gap[k]:
+                k += 1
+            if k <= b:
+                lli[k, s] = 1
+    return arcs, n_arc, lli
+
+
+def _write_platform_files(ctx: _SetContext, antennas: dict, obs_files: dict) -> None:
+    """nav/brdc.rnx (the constellation as broadcast), platform.json and platform.sp3 (CoM truth orbit)."""
+    p, set_dir, t0, tags, dt_tag = ctx.p, ctx.set_dir, ctx.t0, ctx.tags, ctx.dt_tag
+    recs = ctx.const.records(tags[0], tags[-1])
+    write_rinex_nav_gps(set_dir / "nav" / "brdc.rnx", recs, date_text=_date_text(t0),
+                        iono_alpha=[1.1176e-08, 7.4506e-09, -5.9605e-08, -5.9605e-08],
+                        iono_beta=[9.0112e+04, 1.6384e+04, -1.9661e+05, -6.5536e+04], leap_seconds=ctx.earth.leap_s,
+                        comments=[f"GPS constellation from {Path(p.nav_file).name}, gnssatt simulator" if p.nav_file
+                                  else "synthetic GPS constellation, gnssatt simulator"])
+    ant_ids = list(p.antennas)
+    pj = {"name": p.platform_name, "kind": p.kind,
+          "antennas": {a: {"position_m": [float(v) for v in antennas[a]["pos"]],
+                           "boresight": [float(v) for v in antennas[a]["bore"]]} for a in ant_ids},
+          "master": p.master, "baselines": [[p.master, a] for a in ant_ids if a != p.master],
+          "observation_files": obs_files}
+    (set_dir / "platform.json").write_text(json.dumps(pj, indent=2) + "\n")
+    if p.sp3_interval_s > 0:
+        sp3_dt = np.arange(dt_tag[0], dt_tag[-1] + 1e-9, p.sp3_interval_s)
+        r_sp3 = ctx.platform.com.r_ecef(sp3_dt)
+        v_sp3 = (ctx.platform.com.r_ecef(sp3_dt + 0.5) - ctx.platform.com.r_ecef(sp3_dt - 0.5))
+        write_sp3(set_dir / "platform.sp3", t0 + sp3_dt, ["L01"], r_sp3[:, None, :], v_sp3[:, None, :],
+                  comments=[f"{p.platform_name} centre of mass, gnssatt simulator",
+                            f"scenario {ctx.scenario} seed {ctx.seed} pass {ctx.pidx}", "ECEF, EOP zero",
+                            "truth orbit"])
 
 
 def _date_text(t0: GpsTime) -> str:

@@ -7,3 +7,9 @@ Pure numpy/scipy (no web imports).
 Modules: data (a set parsed once, with truth), single_epoch (every epoch solved on its own), study (one set:
 every configuration; many sets: the table and summary), starts (random starts for the simulator).
 """
+from gnssatt._lazy import lazy_exports
+
+#: public entry point (imported on first use): study_set(files, truth_dir=None, options=None) -> dict
+_EXPORTS = {"study_set": "api", "StudyOptions": "study"}
+__all__ = list(_EXPORTS)
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -199,8 +199,25 @@ def epoch_problem(ss, k: int, signals: list[str], opts: SingleEpochOptions,
                 truth_dd.append(None)
     if not blocks:
         return None
-    # --- covariance of the stacked DD rows (phase in metres, code in metres) ---
-    n = off
+    Cp, Cc = _dd_covariance(pobs, k, signals, sig_k, keys, rows, blocks, opts)
+    sol = _float_solution(blocks, rows, phase_dd, code_dd, Cp, Cc, q)
+    if sol is None:
+        return None
+    b_true = None
+    if ss.truth is not None and ss.truth.ok[k]:
+        b_true = ss.body_baselines_m @ ss.truth.R_body_from_ecef[k]       # rows: R^T f_j (ECEF)
+    return EpochProblem(k, sol, rows, truth_dd, b_true, n_sats, usable, method)
+
+
+def _dd_covariance(pobs, k: int, signals: list[str], sig_k: list[int], keys: list, rows: list, blocks: list,
+                   opts: SingleEpochOptions) -> tuple[np.ndarray, np.ndarray]:
+    """Covariances (Cp in cycles^2, Cc in m^2) of the stacked DD rows of epoch k, with the exact correlations of
+    shared antennas and reference satellites (module docstring, "Noise").
+
+    Implements: Cov(DD) = D Cov(SD) D^T, Cov(SD_i(s), SD_j(t)) = delta_st sum over shared antennas of
+    (+1 same role, -1 opposite role) var_ant(s); var_ant from ``_var_factor`` (C/N0 weighting).
+    """
+    n = sum(r.size for r in rows)
     Cp = np.zeros((n, n))
     Cc = np.zeros((n, n))
     fac = {}
@@ -240,7 +257,18 @@ def epoch_problem(ss, k: int, signals: list[str], opts: SingleEpochOptions,
                 Cc[np.ix_(rj_, ri_)] = Cc[np.ix_(ri_, rj_)].T
     lam_rows = np.concatenate([np.full(blk.n_dd, blk.wavelength_m) for blk in blocks])
     Cp = Cp / np.outer(lam_rows, lam_rows)
-    # --- weighted least squares for (a, b) ---
+    return Cp, Cc
+
+
+def _float_solution(blocks: list, rows: list, phase_dd: list, code_dd: list, Cp: np.ndarray, Cc: np.ndarray,
+                    q: int) -> FloatSolution | None:
+    """Weighted least-squares float solution (a, b) of the stacked DD phase (cycles) and code (m) rows, or None
+    when the normal matrix is singular.
+
+    Implements: the float model of the module docstring (Teunissen 1995 sec. 2), x = N^-1 A^T W y with
+    N = A_p^T Wp A_p + A_c^T Wc A_c.
+    """
+    n = sum(r.size for r in rows)
     q_used = q
     A_p = np.zeros((n, n + 3 * q_used))
     A_c = np.zeros((n, n + 3 * q_used))
@@ -265,12 +293,8 @@ def epoch_problem(ss, k: int, signals: list[str], opts: SingleEpochOptions,
         return None
     Qx = 0.5 * (Qx + Qx.T)
     x = Qx @ rhs
-    sol = FloatSolution(a_float_cyc=x[:n], b_float_m=x[n:], Q_a=Qx[:n, :n], Q_b=Qx[n:, n:], Q_ab=Qx[:n, n:],
-                        blocks=tuple(blocks))
-    b_true = None
-    if ss.truth is not None and ss.truth.ok[k]:
-        b_true = ss.body_baselines_m @ ss.truth.R_body_from_ecef[k]       # rows: R^T f_j (ECEF)
-    return EpochProblem(k, sol, rows, truth_dd, b_true, n_sats, usable, method)
+    return FloatSolution(a_float_cyc=x[:n], b_float_m=x[n:], Q_a=Qx[:n, :n], Q_b=Qx[n:, n:], Q_ab=Qx[:n, n:],
+                         blocks=tuple(blocks))
 
 
 def _usable_for(prob: EpochProblem, method: str, opts: SingleEpochOptions) -> np.ndarray:

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from bench.real_sets import UPC, UPC_ENU_M, UPC_PLATFORM, upc_files
-from tests.conftest import real_set
+from tests.conftest import real_set, require_module
 from gnssatt.attitude.process import load_inputs, process
 from gnssatt.attitude.settings import AttitudeSettings
 
@@ -51,7 +51,7 @@ def upc(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def rtklib_upc(tmp_path_factory):
-    pytest.importorskip("pyrtklib", reason="pyrtklib (RTKLIB 2.4.3 b34 bindings) not installed")
+    require_module("pyrtklib", "RTKLIB 2.4.3 b34 bindings")
     from bench.rtklib_runner import options_for, run_postpos
 
     d = real_set(UPC)
@@ -100,6 +100,7 @@ def test_upc_at_rtklib_level_on_the_same_files(upc, rtklib_upc):
 
 @pytest.mark.xfail(reason="length 37.9305 m measured vs the README's 37.946 m (16 mm short); RTKLIB 2.4.3 b34 on the "
                           "same files is as short (37.9288 m over these 10 min, 37.9297 m over the hour), so the "
-                          "reference coordinates are not the phase-centre baseline of these files", strict=False)
+                          "reference coordinates are not the phase-centre baseline of these files (docs/attitude.md, Known "
+                          "limits); strict: a pass means the length or the reference changed, look again", strict=True)
 def test_upc_length_within_3mm_of_the_reference(upc):
     assert abs(upc.summary["baselines"][0]["median_length_m"] - LENGTH_M) < 0.003

@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.conftest import real_set
+from tests.conftest import real_set, require_module
 
-pytest.importorskip("pyrtklib", reason="pyrtklib (RTKLIB 2.4.3 b34 bindings) not installed")
+require_module("pyrtklib", "RTKLIB 2.4.3 b34 bindings")
 
 from bench.rtklib_runner import options_for, options_text, read_pos, run_postpos  # noqa: E402
 

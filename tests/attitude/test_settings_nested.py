@@ -108,9 +108,11 @@ def test_held_out_default_preset_equals_the_former_flat_default():
             == AttitudeConfig.model_validate(former).to_settings())
 
 
-def test_flat_read_is_transitional_and_warns():
+def test_flat_names_are_not_attributes():
+    """Code reads the nested path only: an old flat name is no attribute (it is accepted on input, where
+    `override` and the job config route it through FLAT_TO_NESTED)."""
     s = AttitudeSettings.preset("seed000", table1={"sigma_code_m": 0.4})
-    with pytest.warns(DeprecationWarning, match="table1.sigma_code_m"):
-        assert s.sigma_code_m == 0.4
+    assert s.table1.sigma_code_m == 0.4
     with pytest.raises(AttributeError):
-        s.no_such_setting
+        s.sigma_code_m
+    assert s.override(sigma_code_m=0.5).table1.sigma_code_m == 0.5

@@ -143,7 +143,8 @@ def test_rotation_fit_is_global_on_short_imprecise_baselines():
 def test_compiled_sphere_dual_bound_equals_the_python_one():
     """The C-LAMBDA node bound compiled (numba, scalars) gives the same floats as the plain-Python reference, and
     both stay below the exact constrained minimum (weak duality), on random metrics, centres and lengths."""
-    from gnssatt.estimation.constrained_search import _sphere_dual_bound, _sphere_dual_bound_nb, sphere_fit
+    from gnssatt.estimation.constrained_search import (_metric_eig, _sphere_dual_bound, _sphere_dual_bound_nb,
+                                                       sphere_fit)
 
     rng = np.random.default_rng(7)
     same = 0
@@ -155,8 +156,7 @@ def test_compiled_sphere_dual_bound_equals_the_python_one():
         length = float(rng.uniform(0.05, 2.0))
         wl, Vt = [float(v) for v in w], [[float(v) for v in row] for row in V.T]
         ref = _sphere_dual_bound([float(v) for v in b], wl, Vt, length)
-        got = _sphere_dual_bound_nb(float(b[0]), float(b[1]), float(b[2]), *wl, *[v for row in Vt for v in row],
-                                    length, 3.0)
+        got = _sphere_dual_bound_nb(float(b[0]), float(b[1]), float(b[2]), _metric_eig(w, V), length, 3.0)
         assert got == pytest.approx(ref, rel=1e-12, abs=1e-300)
         same += got == ref
         exact, _ = sphere_fit(b, W, length)

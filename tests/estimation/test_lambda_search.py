@@ -12,6 +12,8 @@ import itertools
 
 import numpy as np
 import pytest
+
+from tests.conftest import require_module
 from hypothesis import given, settings, strategies as st
 
 from gnssatt.estimation.lambda_search import (
@@ -118,7 +120,7 @@ def test_rtklib_t_lambda_known_answers(a, Q, F, s):
 
 
 def test_against_rtklib_lambda_via_pyrtklib():
-    pyrtklib = pytest.importorskip("pyrtklib")
+    pyrtklib = require_module("pyrtklib")
     rtk_lambda = pyrtklib.__dict__["lambda"]
     Arr = pyrtklib.Arr1Ddouble
     rng = np.random.default_rng(11)

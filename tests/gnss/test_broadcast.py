@@ -7,7 +7,7 @@ import types
 import numpy as np
 import pytest
 
-from tests.conftest import real_set
+from tests.conftest import real_set, require_module
 from gnssatt.gnss import constants as K
 from gnssatt.gnss.orbits.broadcast import BroadcastOrbit, eccentricity_relativity_s, kepler_position_ecef, solve_kepler
 from gnssatt.gnss.time import GpsTime
@@ -215,7 +215,7 @@ GPS_UNIX_OFFSET_S = 315964800  # 1980-01-06 in Unix seconds
 
 
 def _rtk_states(path, when_s_after_toe=(0.0, 1800.0, -2400.0)):
-    pr = pytest.importorskip("pyrtklib")
+    pr = require_module("pyrtklib")
     obs, nav, sta = pr.obs_t(), pr.nav_t(), pr.sta_t()
     assert pr.readrnx(str(path), 1, "", obs, nav, sta) == 1
     out = {}

@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import pytest
 
-from tests.conftest import real_set
+from tests.conftest import real_set, require_module
 from tests.gnss.test_rinex_nav_builders import (GLO_VALUES, GPS_VALUES, d19, glonass_record_v3,
                                                  kepler_record_v2, kepler_record_v3, nav_header_v2,
                                                  nav_header_v3, nav_header_v4)
@@ -184,7 +184,7 @@ def test_column_shifted_continuation_lines_are_read_and_reported():
 # --- real files ------------------------------------------------------------------------------------------
 
 def _georinex_load(path):
-    georinex = pytest.importorskip("georinex")
+    georinex = require_module("georinex")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return georinex.load(path)

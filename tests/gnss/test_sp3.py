@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 import pytest
 
-from tests.conftest import real_set
+from tests.conftest import real_set, require_module
 from gnssatt.gnss.io.errors import ParseError
 from gnssatt.gnss.io.sp3 import read_sp3, summarize_sp3
 
@@ -156,7 +156,7 @@ def test_broken_sp3_raise_parse_error_with_line(old, new, line):
 # --- real files ------------------------------------------------------------------------------------------
 
 def test_real_cod_sp3c_against_georinex():
-    georinex = pytest.importorskip("georinex")
+    georinex = require_module("georinex")
     path = real_set("leo_grace_a_2007080") / "cod14193.sp3.gz"
     sp3 = read_sp3(path)
     with warnings.catch_warnings():

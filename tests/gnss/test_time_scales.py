@@ -6,6 +6,7 @@ import datetime as dt
 import erfa
 import numpy as np
 import pytest
+
 from hypothesis import given, settings, strategies as st
 
 from gnssatt.gnss import leap_seconds as L

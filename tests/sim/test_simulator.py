@@ -13,10 +13,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tests.conftest import require_module
 from tests.sim import _independent as ind
 from gnssatt.sim import list_scenarios, simulate_scenario
 
-georinex = pytest.importorskip("georinex")
+
+
+def _georinex():
+    """georinex for the read-back tests only (the others need no third-party reader)."""
+    return require_module("georinex", "the simulator's files are read back with an independent reader")
 
 BENIGN = {"noise": False, "multipath": False, "acquisition_delays": False, "cn0_jitter_db": 0.0,
           "truth_components": True}
@@ -28,7 +33,7 @@ SD_TOL_M = 0.3e-3
 def _load_obs(path):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return georinex.load(path, useindicators=True)
+        return _georinex().load(path, useindicators=True)
 
 
 @pytest.fixture(scope="module")
@@ -168,7 +173,7 @@ def test_georinex_reads_header_lli_and_ssi(benign_set):
     for aid, rel in pj["observation_files"].items():
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            hdr = georinex.rinexheader(set_dir / rel)
+            hdr = _georinex().rinexheader(set_dir / rel)
         assert hdr["MARKER NAME"].strip() == aid
         assert hdr["version"] == 3.04
         ds = _load_obs(set_dir / rel)
@@ -206,7 +211,7 @@ def test_nav_file_round_trips_through_both_readers(benign_set):
     assert nav.leap_seconds == 18
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        g = georinex.load(set_dir / "nav" / "brdc.rnx")
+        g = _georinex().load(set_dir / "nav" / "brdc.rnx")
     for j, r in enumerate(recs[:31]):
         np.testing.assert_allclose(float(g["sqrtA"].sel(sv=r.sat).values[0]), r.sqrt_a_sqrt_m, rtol=1e-12)
         np.testing.assert_allclose(float(g["M0"].sel(sv=r.sat).values[0]), r.m0_rad, rtol=1e-11, atol=1e-14)
@@ -239,7 +244,7 @@ def test_platform_sp3_reads_back(benign_set):
         assert np.linalg.norm(pred - r_ant) < 2e-3
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        g = georinex.load(set_dir / "platform.sp3")
+        g = _georinex().load(set_dir / "platform.sp3")
     np.testing.assert_allclose(g["position"].values[:, 0, :] * 1e3, sp3.position_ecef_m[:, 0, :], atol=1e-3)
 
 

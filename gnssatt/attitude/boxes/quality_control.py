@@ -1,0 +1,179 @@
+"""Fig. 2 box "quality control": single differences of the epoch, editing, cycle-slip detection and the ambiguity
+bookkeeping (new floats from code-carrier differences after a slip).
+
+Implements: seed 000 sec. 2 and Table 2 (elevation masks on the local horizon and, once fixed, in the antenna frame
+(sec. 3.2 compromise); C/N0 masks per signal; triple differences of code (0.5 m) and phase (0.25 cycles) against
+their median; re-initialisation of slipped ambiguities from code-carrier); beyond the paper: the epoch clock
+estimate and its jump test, phase clock jumps, half cycles, differential PCV bins, and the white-noise and C/N0-
+growth estimators of the noise model (docs/attitude.md), all from the same triple differences.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from gnssatt.attitude.fastops import nz as _nz
+from gnssatt.attitude.filter_state import (CLOCK_JUMP_M, DEG, NOISE_EPOCHS, NOISE_MIN_EPOCHS, PCV_ATTITUDE_AGE_S,
+                                           TD_MAX_DT_S, EpochData, FilterRun, cn0_factor)
+from gnssatt.attitude.kernels import cn0_growth_samples
+from gnssatt.attitude.pcv_correction import epoch_correction_m
+from gnssatt.attitude.qc_kernels import epoch_geometry, growth_weights, qc_epoch, td_checks
+from gnssatt.attitude.sd_block import BLOCK_EPOCHS, sd_block
+from gnssatt.gnss.constants import C_M_S
+
+
+def quality_control(run: FilterRun, ep: EpochData) -> None:
+    """The epoch's SDs (ep.sdc, ep.sdp, ...), their editing (ep.use_c, ep.use_p, ep.reason ...), slips and the
+    ambiguity states added or dropped; Table 2 in the order of seed 000 sec. 2."""
+    load_epoch(run, ep)
+    epoch_geometry_and_pcv(run, ep)
+    edit_epoch(run, ep)
+    triple_differences(run, ep)
+    ambiguity_bookkeeping(run, ep)
+
+
+def load_epoch(run: FilterRun, ep: EpochData) -> None:
+    """The epoch's single differences from the current SdBlock (a new block every BLOCK_EPOCHS epochs), with room
+    in the residual records for the block's rows."""
+    k = ep.k
+    blk = run.blk
+    if blk is None or k - blk.k0 >= blk.pa.shape[0]:
+        blk = run.blk = sd_block(run.pobs, run.geom, run.ia, run.ib, k, min(k + BLOCK_EPOCHS, run.n_ep),
+                                 run.s.table2.elevation_mask_local_deg * DEG, run.sig_cn0)
+        run.blk_lw = np.log(cn0_factor(blk.cn0))               # ln of the full C/N0 factor
+        rows = run.res_n + int(blk.avail_c.sum() + blk.avail_p.sum())           # residual rows of the block
+        if rows > run.res_i.shape[1]:
+            # room for this block and, at its rate, the remaining epochs (+10 %): rarely more than one copy
+            cap = max(rows, int(1.1 * rows * run.n_ep / (k + blk.pa.shape[0])) + 64)
+            res_i1, res_f1 = np.empty((6, cap), np.int64), np.empty((4, cap))
+            res_i1[:, :run.res_n], res_f1[:, :run.res_n] = run.res_i[:, :run.res_n], run.res_f[:, :run.res_n]
+            run.res_i, run.res_f = res_i1, res_f1
+    i = ep.i = k - blk.k0
+    ep.pa, ep.u, ep.cfac = blk.pa[i], blk.u[i], blk.cfac[i]                      # (n_bl,) (n_sat, 3) (n_sat,)
+    ep.sdc, ep.sdp, ep.cn0, ep.lli = blk.sdc[i], blk.sdp[i], blk.cn0[i], blk.lli[i]  # (n_bl, n_sat, n_sig)
+    ep.avail_c, ep.avail_p = blk.avail_c[i], blk.avail_p[i]
+    ep.el_loc = run.geom.elevation_local_rad[k]
+
+
+def epoch_geometry_and_pcv(run: FilterRun, ep: EpochData) -> None:
+    """Antenna-frame geometry of the epoch and the differential PCV corrections of fixed baselines.
+
+    Antenna-frame elevation for the noise model: by the current attitude once known, else the initial one; el_ant,
+    az_ant (the antenna-frame mask, sec. 3.2 compromise) only once an attitude exists, else NaN; (n_sat, 3)
+    body-frame lines of sight, the clipped boresight products and the predicted geometry b.u."""
+    R_los = run.R_mask if run.R_mask is not None else run.R_body_from_ecef_0
+    los_b, ep.ub = epoch_geometry(ep.u, R_los if R_los.flags.c_contiguous else np.ascontiguousarray(R_los),
+                                  run.bs_a_T, run.bs_b_T, run.st.x, run.b_idx, run.w_asn)
+    ep.asn = np.arcsin(run.w_asn)                                                 # (2, n_sat, n_bl)
+    ep.az = np.arctan2(los_b[:, 1], los_b[:, 0]) if run.R_mask is not None else run.z_f
+    ep.pcv_m, ep.empty, ep.pcv_on = run.pcv_zero, run.no_pcv, False
+    if run.pcv_tables and run.R_mask is not None and ep.t - run.R_mask_t <= PCV_ATTITUDE_AGE_S:
+        ep.pcv_m, ep.empty = pcv_epoch(run.pcv_tables, los_b, run.R_ant_first, run.n_sig, run.ever_fixed)
+        ep.pcv_on = run.s.calibration.pcv_empty_bins == "exclude"
+
+
+def pcv_epoch(tables, los_b, R_ant_first, n_sig, fixed):
+    """(correction m (n_bl, n_sat, n_sig), no-correction mask) of an epoch: maps apply to fixed baselines only;
+    a fixed baseline's phase without a correction (empty bin) leaves the solution (seed 000 sec. 3.2)."""
+    corr, has = epoch_correction_m(tables, los_b, R_ant_first, n_sig)
+    on = fixed[:, None, None] & has[:, None, :]
+    return np.where(on, np.nan_to_num(corr), 0.0), on & ~np.isfinite(corr)
+
+
+def edit_epoch(run: FilterRun, ep: EpochData) -> None:
+    """Table 2 editing before the triple-difference tests (compiled qc_epoch), its rare events in Python.
+
+    Reasons (8 no SD, 1 local horizon, 2 antenna horizon, 10 empty PCV bin, 3 C/N0, 6 half cycle), the epoch clock
+    estimate from code (first signal): c dt0 = median(SD_code + u.b) / (1 - rdot/c) and its jump test against the
+    prediction from the last estimate and the differential drift (free-running clocks drift by up to ~10 us/s
+    relative to each other, so across an outage the change alone is no jump; no code this epoch: the prediction,
+    the phase clocks absorb the drift), and the triple differences (time differences of SDs with the predicted
+    geometry change, median-referenced)."""
+    k, t, st, lam = ep.k, ep.t, run.st, run.lam
+    ep.consecutive = ep.prev_t is not None and (t - ep.prev_t) <= TD_MAX_DT_S
+    ep.do_td = ep.consecutive and run.prev_b is not None
+    n_jump, n_common = qc_epoch(
+        ep.asn, ep.az, run.R_mask is not None, run.ever_fixed, run.s.table2.elevation_mask_antenna_deg * DEG,
+        run.blk.reason[ep.i], ep.empty, ep.pcv_on, run.blk.low_cn0[ep.i], ep.avail_p, ep.sdc, ep.sdp, ep.cfac, ep.ub,
+        run.prev_ub, ep.do_td, run.prev_sdc, run.prev_sdp, ep.pa, ep.lli, t, run.clk_state, CLOCK_JUMP_M,
+        TD_MAX_DT_S, *run.views[:3], run.w_reason, run.wb, run.wf, run.w_clk, run.w_jump, run.w_mcp)
+    (ep.el_w, ep.el_ant, ep.az_ant, ep.reason, ep.use_c, ep.use_p, ep.slip, ep.td_c_ok, ep.td_p_ok, ep.sdc_c,
+     ep.sdp_c, ep.td_c, ep.td_p, ep.mc, ep.mp) = run.views
+    if n_jump:
+        clk0, clk_pred = run.w_clk
+        for j in np.flatnonzero(run.w_jump):
+            run.events.add(k, "clock_jump", j, detail=f"differential clock changed by "
+                                                      f"{(clk0[j] - clk_pred[j]) / C_M_S * 1e3:.3f} ms more than its "
+                                                      f"drift predicts")
+    if n_common:
+        # a common phase jump without a code jump: a receiver clock jump not applied to phase -> integer shift
+        common = _nz(ep.mp - ep.mc)
+        for j, f in zip(*np.nonzero(np.abs(common) > 1000.0)):
+            n_cyc = np.round(common[j, f] / lam[f])
+            sel = (st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f)
+            st.x[st.n_fixed_part + np.flatnonzero(sel)] += n_cyc
+            ep.mp[j, f] -= n_cyc * lam[f]
+            ep.td_p[j, :, f] -= n_cyc * lam[f]
+            run.events.add(k, "phase_clock_jump", j, sig=run.pobs.signals[f],
+                           detail=f"{n_cyc:.0f} cycles common to all satellites")
+
+
+def noise_weights(run: FilterRun, ep: EpochData):
+    """The C/N0 weights (code, phase) of the white-noise estimator, updating the C/N0-growth exponent gamma.
+
+    Exponent gamma of the C/N0 growth (variance ~ factor^gamma) per observable and signal: slope of ln|TD| against
+    ln(factor) / 2 (E ln|x| = ln sigma + const for Gaussian x), pooled moments over NOISE_EPOCHS; a receiver whose
+    noise does not grow as C/N0 falls gets gamma ~ 0 (gnssatt.attitude.kernels: the samples, then the moments and
+    gamma, in place). Implements: docs/attitude.md noise model (beyond seed 000 Table 1's fixed sigmas)."""
+    if not ep.noise_on:
+        return run.w_glw
+    lw = run.blk_lw[ep.i]
+    if run.cn0_growth:
+        xs, rs, g_off = cn0_growth_samples(ep.td_c, ep.td_p, ep.td_c_ok, ep.td_p_ok, ep.mc, ep.mp, lw, run.lam)
+        growth_weights(True, xs, np.log(rs), g_off, run.mom, run.gam_n, run.gamma, NOISE_EPOCHS, NOISE_MIN_EPOCHS,
+                       0.05, lw, run.w_glw)
+    else:
+        growth_weights(False, run.z_f, run.z_f, run.z_i, run.mom, run.gam_n, run.gamma, NOISE_EPOCHS,
+                       NOISE_MIN_EPOCHS, 0.05, lw, run.w_glw)
+    return np.exp(run.w_glw)                                           # C/N0 weights of code, phase
+
+
+def triple_differences(run: FilterRun, ep: EpochData) -> None:
+    """Table 2 triple-difference tests (code 0.5 m, phase 0.25 cycles) and the white-noise estimate (compiled
+    td_checks); slips reported as events.
+
+    MAD of the normalised TDs -> sigma of a TD = sqrt(2) sigma of one SD (white noise), in place; the TD tests:
+    every phase with a state is checked, used or not (a slip while rejected (C/N0, mask) must not survive into the
+    epochs where it is used again); the bookkeeping masks: restart an arc (new float from code-carrier) on a slip
+    or where no triple difference could check it, drop states of satellites no longer observed or unused for
+    max_gap_s."""
+    k, st, s = ep.k, run.st, run.s
+    ep.noise_on = s.noise.noise_estimation and ep.do_td
+    wfac = noise_weights(run, ep)
+    n_td, n_lli, ep.n_gap, ep.n_drop, ep.n_need = td_checks(
+        ep.do_td, ep.noise_on, wfac, run.est_var_c, run.est_var_p, run.est_n, NOISE_EPOCHS, s.table2.td_code_m,
+        s.table2.td_phase_cyc, run.lam, ep.avail_p, ep.lli, ep.reason, run.wb, run.wf, run.w_mcp, ep.consecutive,
+        run.prev_sdp, st.amb_index, st.amb_last_t, st.n_fixed_part, ep.t, s.ambiguity.max_gap_s, run.w_ev, run.w_bk)
+    # every slip is reported, also on phases not in use; an LLI on the first epoch of an arc is an acquisition
+    for n, evm, how in ((n_td, run.w_ev[0], "triple-difference test"), (n_lli, run.w_ev[1], "loss-of-lock indicator")):
+        if n:
+            for j, sat, f in zip(*np.nonzero(evm)):
+                run.events.add(k, "cycle_slip", j, run.pobs.sats[sat], run.pobs.signals[f],
+                               how + ("" if st.amb_index[j, sat, f] >= 0 else " (phase not in use)"))
+
+
+def ambiguity_bookkeeping(run: FilterRun, ep: EpochData) -> None:
+    """Drop the ambiguity states marked by td_checks and add float states, from the code-carrier difference
+    (SD phase - SD code) / lambda with Table 1's sigma0 (500 cycles), for used phases without one (seed 000 sec. 2:
+    "newly initialized as float values based on code-carrier differences")."""
+    st, k, lam = run.st, ep.k, run.lam
+    if ep.n_gap:
+        run.events.add(k, "arc_restart", detail=f"{ep.n_gap} ambiguities without a triple-difference check (data gap)")
+    need, n_need = run.w_bk[1], ep.n_need
+    if ep.n_drop:
+        st.remove_ambiguities(st.amb_index[run.w_bk[0]], k - 1)
+        need = ep.use_p & (st.amb_index < 0)
+        n_need = int(need.sum())
+    if n_need:
+        jj, ss, ff = np.nonzero(need)
+        vals = (ep.sdp_c[jj, ss, ff] - ep.sdc_c[jj, ss, ff]) / lam[ff]
+        st.add_ambiguities(np.stack([jj, ss, ff], 1), vals, run.s.table1.sigma0_ambiguity_cyc, ep.t)
