@@ -5,6 +5,7 @@ its accuracy against the simulator's truth is printed at the end."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import signal
 import subprocess
@@ -65,39 +66,79 @@ def _start(name: str, args: list[str], data_dir: Path, env: dict) -> int:
     return proc.pid
 
 
+@contextlib.contextmanager
+def step(what: str):
+    """Say what the demo is doing before it starts and how long it took after (issue 16: every step that may take
+    over 5 s says what it is doing)."""
+    print(f"==> {what} ...", flush=True)
+    t0 = time.monotonic()
+    yield
+    print(f"    done in {time.monotonic() - t0:.1f} s", flush=True)
+
+
+class JobProgress:
+    """on_update callback of GnssattClient.wait: a line when the job's state or stage changes, and every
+    `every_s` seconds while it stays, with the progress and the time since submission."""
+
+    def __init__(self, every_s: float = 5.0):
+        self.t0, self.every_s = time.monotonic(), every_s
+        self.last: tuple | None = None
+        self.last_t = 0.0
+
+    def __call__(self, job: dict) -> None:
+        key = (job["state"], job.get("stage") or "")
+        now = time.monotonic()
+        if key == self.last and now - self.last_t < self.every_s:
+            return
+        self.last, self.last_t = key, now
+        what = {"queued": "queued (a worker's first start loads the filter kernels: a cold cache compiles them "
+                          "once, ~60-100 s)"}.get(job["state"], job["state"])
+        stage = f": {key[1]}" if key[1] and key[1] != job["state"] else ""
+        print(f"    {now - self.t0:6.1f} s  {what}{stage}  {float(job.get('progress') or 0.0) * 100:5.1f}%",
+              flush=True)
+
+
+def _wait_ready(url: str, data_dir: Path, timeout_s: float = 60.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        try:
+            if httpx.get(url + "/readyz", timeout=1).status_code == 200:
+                return
+        except httpx.HTTPError:
+            pass
+        time.sleep(0.1)
+    sys.exit(f"the API did not come up in {timeout_s:g} s; see {data_dir / 'logs' / 'api.log'}")
+
+
 def demo(port: int, data_dir: Path, scenario: str, duration_s: float, job_type: str) -> None:
     env = dict(os.environ, GNSSATT_DATA_DIR=str(data_dir))
     url = f"http://127.0.0.1:{port}"
     print(f"data directory: {data_dir}")
-    _start("api", _gnssatt("serve", "--port", str(port)), data_dir, env)
-    _start("worker", _gnssatt("worker"), data_dir, env)
-    for _ in range(300):
-        try:
-            if httpx.get(url + "/readyz", timeout=1).status_code == 200:
-                break
-        except httpx.HTTPError:
-            pass
-        time.sleep(0.1)
-    else:
-        sys.exit(f"the API did not come up; see {data_dir / 'logs' / 'api.log'}")
+    with step(f"starting the API on {url} and a worker (logs: {data_dir / 'logs'})"):
+        _start("api", _gnssatt("serve", "--port", str(port)), data_dir, env)
+        _start("worker", _gnssatt("worker"), data_dir, env)
+        _wait_ready(url, data_dir)
     out = subprocess.run(_gnssatt("admin", "create-key", "--team", "demo"), env=env, capture_output=True,
                          text=True, check=True)
     key = out.stdout.strip().splitlines()[-1]
     sample = data_dir / "demo-set"
-    print(f"simulating a {scenario} observation set ({duration_s:g} s) into {sample} ...")
-    subprocess.run(_gnssatt("simulate", "--scenario", scenario, "--duration-s", str(duration_s),
-                            "--out", str(sample)), env=env, check=True, stdout=subprocess.DEVNULL)
+    with step(f"simulating an observation set, scenario {scenario}, {duration_s:g} s, into {sample}"):
+        subprocess.run(_gnssatt("simulate", "--scenario", scenario, "--duration-s", str(duration_s),
+                                "--out", str(sample)), env=env, check=True, stdout=subprocess.DEVNULL)
     files = sorted(p for p in sample.rglob("*") if p.is_file() and "truth" not in p.relative_to(sample).parts)
     with GnssattClient(url, key) as client:
-        obs_set = client.upload_set(files, name=f"demo {scenario}")
+        with step(f"uploading {len(files)} files over HTTP"):
+            obs_set = client.upload_set(files, name=f"demo {scenario}")
         print(f"uploaded observation set {obs_set['id']} ({len(obs_set['files'])} files)")
-        job = client.submit_job(job_type, [obs_set["id"]], {})
-        print(f"submitted {job_type} job {job['id']}; waiting ...")
-        job = client.wait(job["id"])
+        with step(f"running the {job_type} job (submitted over HTTP, followed until it ends)"):
+            job = client.submit_job(job_type, [obs_set["id"]], {})
+            print(f"    job {job['id']}")
+            job = client.wait(job["id"], on_update=JobProgress())
         if job["state"] != "succeeded":
             sys.exit(f"job {job['id']} {job['state']}: {job.get('error')}")
         print(f"job {job['id']} succeeded after {job['attempts']} attempt(s). Products:")
-        local = client.download_products(job["id"], data_dir / "demo-products" / job["id"])
+        with step("downloading the products"):
+            local = client.download_products(job["id"], data_dir / "demo-products" / job["id"])
         for prod, path in zip(client.products(job["id"]), local):
             print(f"  {prod['url']}\n    -> {path}")
         attitude = data_dir / "demo-products" / job["id"] / "attitude.csv"

@@ -1,0 +1,44 @@
+"""`make demo` as a new user runs it (`python -m client.demo`, what the Makefile target calls): the API and a worker
+started in the background on the embedded default, a simulated set uploaded over real HTTP, the attitude job
+followed to the end, its products downloaded, the accuracy printed; then `--stop` (issue 16: every step that may
+take over 5 s says what it is doing before it starts)."""
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from client.local_service import _free_port
+from tests.conftest import REPO_ROOT
+
+pytestmark = pytest.mark.e2e
+
+STEPS = ("==> starting the API", "==> simulating an observation set, scenario earth-pointing", "==> uploading",
+         "==> running the attitude job", "==> downloading the products")
+
+
+def test_make_demo_runs_the_attitude_job_and_says_what_it_does(tmp_path):
+    data_dir = tmp_path / "var"
+    cmd = [sys.executable, "-m", "client.demo", "--port", str(_free_port()), "--data-dir", str(data_dir),
+           "--duration-s", "120"]
+    try:
+        run = subprocess.run(cmd, cwd=REPO_ROOT, capture_output=True, text=True, timeout=600)
+    finally:
+        stop = subprocess.run([sys.executable, "-m", "client.demo", "--stop", "--data-dir", str(data_dir)],
+                              cwd=REPO_ROOT, capture_output=True, text=True, timeout=60)
+    out = run.stdout
+    assert run.returncode == 0, out + run.stderr
+    lines = out.splitlines()
+    # each long step announced before it starts, in order, and closed with its time
+    at = [next(i for i, ln in enumerate(lines) if ln.startswith(s)) for s in STEPS]
+    assert at == sorted(at), out
+    for i in at:
+        closing = next(ln for ln in lines[i + 1:] if ln.startswith("    done in ") or ln.startswith("==> "))
+        assert closing.startswith("    done in "), f"step {lines[i]!r} has no 'done in' line:\n{out}"
+    # while the job runs, its state / stage lines with the progress
+    running = [ln for ln in lines[at[3] + 1:at[4]] if ln.rstrip().endswith("%")]
+    assert running and any("succeeded" in ln for ln in running), out
+    assert "succeeded after" in out and "Accuracy against the simulator's truth" in out, out
+    assert list((data_dir / "demo-products").glob("*/attitude.csv")), "attitude.csv not downloaded"
+    assert "stopped 2 process(es)" in stop.stdout, stop.stdout + stop.stderr
