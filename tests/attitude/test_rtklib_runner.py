@@ -15,9 +15,7 @@ import pytest
 
 from tests.conftest import real_set, require_module
 
-require_module("pyrtklib", "RTKLIB 2.4.3 b34 bindings")
-
-from bench.rtklib_runner import options_for, options_text, read_pos, run_postpos  # noqa: E402
+from bench.rtklib_runner import options_for, options_text, read_pos, run_postpos
 
 NAGOYA = "static_1m_mosaicx5_nagoya_2024"
 BASE_LLH = ("35.134707705", "136.977577939", "104.853")      # base_position.txt
@@ -28,7 +26,13 @@ def _base_opts(**extra) -> dict:
                                        "ant2-pos3": BASE_LLH[2], **extra})
 
 
+def _needs_rtklib() -> None:
+    """Only the tests that run postpos need the bindings (the .pos reader and the option helpers do not)."""
+    require_module("pyrtklib", "RTKLIB 2.4.3 b34 bindings")
+
+
 def _run(tmp_path, **extra):
+    _needs_rtklib()
     d = real_set(NAGOYA)
     return run_postpos(d / "rover.obs", d / "base.obs", d / "base.nav", _base_opts(**extra), tmp_path / "r.pos")
 
@@ -128,6 +132,7 @@ def test_read_pos_of_the_authors_rtkpost_file():
 @pytest.mark.parametrize("bad, exc", [({"pos1-bogus": "1"}, KeyError), ({"pos1-posmode": "flying"}, ValueError),
                                       ({"pos1-elmask": "abc"}, ValueError)], ids=["unknown", "enum", "number"])
 def test_bad_options_raise_instead_of_silent_defaults(tmp_path, bad, exc):
+    _needs_rtklib()
     d = real_set(NAGOYA)
     with pytest.raises(exc):
         run_postpos(d / "rover.obs", d / "base.obs", d / "base.nav", {**_base_opts(), **bad}, tmp_path / "r.pos")
