@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
+from gnssatt.product_json import product_json
 from worker.errors import JobCancelled, JobInputError, LeaseLost
 from worker.inprocess import run_locally
 
@@ -147,7 +148,7 @@ class JobContext:
             sha, size = self._store_blob(data)
         else:
             if isinstance(data, (dict, list)):
-                data = json.dumps(data, indent=2, sort_keys=False, default=_json_default) + "\n"
+                data = product_json(data)
             raw = data.encode("utf-8") if isinstance(data, str) else bytes(data)
             path.write_bytes(raw)
             if self._store_hashed_blob is not None:
@@ -192,16 +193,3 @@ class JobContext:
         return JobInputError(title, detail, **where)
 
 
-def _json_default(value: Any):
-    try:
-        import numpy as np
-
-        if isinstance(value, np.generic):
-            return value.item()
-        if isinstance(value, np.ndarray):
-            return value.tolist()
-    except ImportError:  # pragma: no cover
-        pass
-    if isinstance(value, Path):
-        return str(value)
-    raise TypeError(f"not JSON serialisable: {type(value).__name__}")

@@ -2,7 +2,6 @@
 solution as the worker pipeline's two calls, the same product bytes as the service writes, and light imports."""
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
 
@@ -46,9 +45,8 @@ def test_solve_is_the_pipelines_two_calls(short_set):
 
 
 def test_write_products_writes_what_the_service_stores(short_set, tmp_path):
-    from worker.context import _json_default          # the service's encoding of JSON products
-
     import gnssatt.attitude as attitude
+    from gnssatt.product_json import product_json     # the service's encoding too (worker.context.write_product)
 
     sol = attitude.solve(short_set.files, settings="seed000")
     written = sol.write_products(tmp_path / "products")
@@ -56,7 +54,7 @@ def test_write_products_writes_what_the_service_stores(short_set, tmp_path):
     assert set(written) == set(expected)
     for name, content in expected.items():
         if isinstance(content, dict):
-            content = json.dumps(content, indent=2, sort_keys=False, default=_json_default) + "\n"
+            content = product_json(content)
         assert written[name].read_bytes() == content.encode(), name
 
 
