@@ -163,8 +163,12 @@ def cmd_run(args) -> None:
     """Run a job here, without a server: the worker's pipeline on local files (worker/local.py)."""
     from gnssatt.gnss.io.errors import ParseError
     from worker.errors import JobInputError
-    from worker.local import local_set, run_job_locally
+    from worker.local import ANSWER_KEY_FOLDER, local_set, run_job_locally
 
+    for d in [*(args.paths or []), *(args.set or [])]:
+        if (Path(d) / ANSWER_KEY_FOLDER).is_dir():
+            print(f"note: {Path(d) / ANSWER_KEY_FOLDER}/ left out (a simulated set's answer key, not an input)",
+                  file=sys.stderr)
     config = json.loads(Path(args.config).read_text()) if args.config else {}
     pcv_maps = {}
     for item in args.pcv_map or []:
@@ -264,8 +268,21 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def parse(argv: list[str] | None = None) -> argparse.Namespace:
+    """The command line; files may stand after the options too (`gnssatt run attitude --out p/ a.rnx b.rnx`):
+    argparse gives a `nargs="*"` positional nothing once an option came first, so such leftovers join `paths`."""
+    parser = build_parser()
+    args, rest = parser.parse_known_args(argv)
+    if rest:
+        if hasattr(args, "paths") and not any(r.startswith("-") for r in rest):
+            args.paths = [*(args.paths or []), *rest]
+        else:
+            parser.error(f"unrecognized arguments: {' '.join(rest)}")
+    return args
+
+
 def main(argv: list[str] | None = None) -> None:
-    args = build_parser().parse_args(argv)
+    args = parse(argv)
     try:
         args.func(args)
     except ApiError as exc:

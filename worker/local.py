@@ -17,17 +17,22 @@ from worker.context import InputFile, InputSet, JobContext
 from worker.errors import JobInputError
 from worker.jobs.registry import get_job_type, job_types
 
-__all__ = ["local_set", "run_job_locally", "stderr_progress"]
+__all__ = ["local_set", "run_job_locally", "stderr_progress", "ANSWER_KEY_FOLDER"]
+
+#: a simulated set's answer key (gnssatt simulate writes truth/ beside obs/ and nav/): not an input of any job, so a
+#: directory given to local_set leaves its top-level truth/ out, as `make demo` leaves it out of the upload
+ANSWER_KEY_FOLDER = "truth"
 
 
 def local_set(paths: list[Path], set_id: str) -> InputSet:
     """An InputSet of local files (a directory stands for every file under it), each identified by its content
     and the set checked and summarised as an upload is (gnssatt.gnss.io.sniff.identify,
-    gnssatt.gnss.io.observation_set.set_summary)."""
+    gnssatt.gnss.io.observation_set.set_summary). A directory's top-level ANSWER_KEY_FOLDER is left out."""
     files: list[InputFile] = []
     for path in paths:
         path = Path(path)
-        members = sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
+        members = sorted(p for p in path.rglob("*") if p.is_file()
+                         and p.relative_to(path).parts[0] != ANSWER_KEY_FOLDER) if path.is_dir() else [path]
         for p in members:
             name = str(p.relative_to(path)) if path.is_dir() else p.name
             kind, summary = identify(p, name)
