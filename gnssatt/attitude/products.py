@@ -9,7 +9,6 @@ QUATERNION_TYPE = FIRST, ATTITUDE_DIR = A2B from GCRF to the body frame); NMEA 0
 from __future__ import annotations
 
 import io
-import json
 from pathlib import Path
 
 import numpy as np
@@ -265,25 +264,10 @@ def product_tables(sol) -> dict[str, dict[str, np.ndarray]]:
     return out
 
 
-def _json_default(value):
-    """numpy scalars and arrays and paths in summary.json, as the worker's JobContext.write_product writes them."""
-    if hasattr(value, "tolist"):
-        return value.tolist()
-    if isinstance(value, Path):
-        return str(value)
-    raise TypeError(f"not JSON serialisable: {type(value).__name__}")
-
-
 def write_products(sol, out_dir: str | Path) -> dict[str, Path]:
     """Write the attitude job's text products of `sol` (all_products) into out_dir
-    (created), JSON as the service writes it; returns product name -> path. Plots and report.html are not made."""
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    written = {}
-    for name, content in all_products(sol).items():
-        if isinstance(content, (dict, list)):
-            content = json.dumps(content, indent=2, sort_keys=False, default=_json_default) + "\n"
-        path = out_dir / name
-        path.write_bytes(content.encode("utf-8") if isinstance(content, str) else bytes(content))
-        written[name] = path
-    return written
+    (created), JSON as the service writes it (gnssatt.product_files); returns product name -> path. Plots and
+    report.html are not made."""
+    from gnssatt.product_files import write_product_files
+
+    return write_product_files(all_products(sol), out_dir)
