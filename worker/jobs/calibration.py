@@ -226,10 +226,10 @@ def run(ctx: JobContext, config) -> None:
 def tasks_csv(records: list[dict], job_start: datetime) -> str:
     """The fan-out log: one row per task (pass, task index in queue order, set, worker, attempts, start and end in
     seconds since the pipeline started, duration), so which worker ran which set when is visible."""
+    from gnssatt.calibration.tasks import STAGE_PASS1, STAGE_PASS2
+
     def rel(t):
         return "" if t is None else f"{(t - job_start).total_seconds():.3f}"
-
-    from gnssatt.calibration.tasks import STAGE_PASS1, STAGE_PASS2
 
     lines = ["pass,task,set,worker,attempts,start_s,end_s,seconds"]
     for r in records:
