@@ -176,7 +176,8 @@ def cmd_run(args) -> None:
         pcv_maps[map_id if sep else Path(map_id).stem] = Path(path if sep else map_id)
     try:
         sets = ([local_set([Path(p) for p in args.paths], "set-1")] if args.paths else [])
-        sets += [local_set([Path(d)], f"set-{len(sets) + 1}") for d in args.set or []]
+        for d in args.set or []:  # numbered after the sets before it (a comprehension would see len(sets) fixed)
+            sets.append(local_set([Path(d)], f"set-{len(sets) + 1}"))
         written = run_job_locally(args.type, sets, config, Path(args.out), pcv_maps=pcv_maps,
                                   progress=None if args.quiet else _stderr_progress())
     except JobInputError as exc:

@@ -97,6 +97,8 @@ def test_local_calibration_of_simulated_sets(tmp_path):
     assert {"baselines.json", "baselines.csv", "residual_statistics.json", "calibration_summary.json",
             "report.html"} <= set(products)
     assert products["calibration_summary.json"]["sets"] == 2
+    # each --set its own set (numbered in order), not the first one twice
+    assert [s["set"] for s in products["calibration_summary.json"]["per_set"]] == ["set-1", "set-2"]
     truth = truth_of(dirs[0])
     baselines = products["baselines.json"]["baselines"]
     assert len(baselines) == 2

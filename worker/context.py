@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
 
-from gnssatt.product_json import product_json
+from gnssatt.product_files import product_json
 from worker.errors import JobCancelled, JobInputError, LeaseLost
 from worker.inprocess import run_locally
 

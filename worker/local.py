@@ -11,36 +11,24 @@ import tempfile
 from pathlib import Path
 from typing import Callable
 
-from gnssatt.gnss.io.observation_set import IdentifiedFile, SetProblem, set_summary
-from gnssatt.gnss.io.sniff import identify
+from gnssatt.gnss.io.observation_set import ANSWER_KEY_FOLDER, ObservationSet, SetProblem, set_summary
 from worker.context import InputFile, InputSet, JobContext
 from worker.errors import JobInputError
 from worker.jobs.registry import get_job_type, job_types
 
 __all__ = ["local_set", "run_job_locally", "stderr_progress", "ANSWER_KEY_FOLDER"]
 
-#: a simulated set's answer key (gnssatt simulate writes truth/ beside obs/ and nav/): not an input of any job, so a
-#: directory given to local_set leaves its top-level truth/ out, as `make demo` leaves it out of the upload
-ANSWER_KEY_FOLDER = "truth"
-
 
 def local_set(paths: list[Path], set_id: str) -> InputSet:
-    """An InputSet of local files (a directory stands for every file under it), each identified by its content
-    and the set checked and summarised as an upload is (gnssatt.gnss.io.sniff.identify,
-    gnssatt.gnss.io.observation_set.set_summary). A directory's top-level ANSWER_KEY_FOLDER is left out."""
-    files: list[InputFile] = []
-    for path in paths:
-        path = Path(path)
-        members = sorted(p for p in path.rglob("*") if p.is_file()
-                         and p.relative_to(path).parts[0] != ANSWER_KEY_FOLDER) if path.is_dir() else [path]
-        for p in members:
-            name = str(p.relative_to(path)) if path.is_dir() else p.name
-            kind, summary = identify(p, name)
-            files.append(InputFile(name, kind, p, summary))
+    """An InputSet of local files (a directory stands for every file under it but its top-level ANSWER_KEY_FOLDER),
+    each identified by its content and the set checked and summarised as an upload is
+    (gnssatt.gnss.io.observation_set.ObservationSet.of_paths, set_summary)."""
+    obs_set = ObservationSet.of_paths(paths, set_id)
     try:
-        summary = set_summary([IdentifiedFile(f.name, f.kind, f.summary, f.path) for f in files])
+        summary = set_summary(obs_set.files)
     except SetProblem as exc:
         raise JobInputError(exc.title, exc.detail, file=exc.file, field=exc.field) from exc
+    files = [InputFile(f.name, f.kind, Path(f.path), f.summary) for f in obs_set.files]
     return InputSet(id=set_id, name=None, files=files, summary=summary)
 
 

@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 
 from gnssatt.attitude.filter import REASONS
-from gnssatt.product_json import product_json
 
 __all__ = ["attitude_csv", "baselines_csv", "residuals_csv", "events_csv", "aem_kvn", "nmea_hdt", "all_products",
            "product_tables", "write_products"]
@@ -267,14 +266,8 @@ def product_tables(sol) -> dict[str, dict[str, np.ndarray]]:
 
 def write_products(sol, out_dir: str | Path) -> dict[str, Path]:
     """Write the attitude job's text products of `sol` (all_products) into out_dir
-    (created), JSON as the service writes it; returns product name -> path. Plots and report.html are not made."""
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    written = {}
-    for name, content in all_products(sol).items():
-        if isinstance(content, (dict, list)):
-            content = product_json(content)
-        path = out_dir / name
-        path.write_bytes(content.encode("utf-8") if isinstance(content, str) else bytes(content))
-        written[name] = path
-    return written
+    (created), JSON as the service writes it (gnssatt.product_files); returns product name -> path. Plots and
+    report.html are not made."""
+    from gnssatt.product_files import write_product_files
+
+    return write_product_files(all_products(sol), out_dir)

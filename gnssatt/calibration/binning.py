@@ -19,7 +19,7 @@ variance of a weighted mean (Cameron & Miller 2015).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -39,6 +39,9 @@ class Grid2D:
     x_edges_deg: tuple
     y_edges_deg: tuple
     x_period_deg: float | None = 360.0
+    #: (x_step_deg, y_step_deg, x_range_deg, y_range_deg) as given to `regular` (None for explicit edges), so a
+    #: summary reports the steps asked for, not differences of the edges rounded to 1e-10 deg; not compared
+    regular_deg: tuple | None = field(default=None, compare=False)
 
     @classmethod
     def regular(cls, x_step_deg: float = DEFAULT_AZIMUTH_STEP_DEG, y_step_deg: float = DEFAULT_ELEVATION_STEP_DEG,
@@ -50,7 +53,8 @@ class Grid2D:
             if n < 1 or abs(lo + n * step - hi) > 1e-9 * max(1.0, abs(hi)):
                 raise ValueError(f"range [{lo:g}, {hi:g}] is not a whole number of {step:g} deg steps")
             return tuple(float(v) for v in np.round(lo + step * np.arange(n + 1), 10))
-        return cls(edges(*x_range_deg, x_step_deg), edges(*y_range_deg, y_step_deg), x_period_deg)
+        return cls(edges(*x_range_deg, x_step_deg), edges(*y_range_deg, y_step_deg), x_period_deg,
+                   (x_step_deg, y_step_deg, tuple(x_range_deg), tuple(y_range_deg)))
 
     @property
     def shape(self) -> tuple[int, int]:

@@ -33,8 +33,11 @@ WINDOW_S = 60.0
 
 @dataclass
 class CampaignOptions:
-    extract: ExtractOptions
-    grid: Grid2D
+    """What a campaign is run with; the defaults are the calibration job's (seed 000 Tables 1-2 extraction,
+    2.5 deg x 1 deg bins over elevations 0-90 deg)."""
+
+    extract: ExtractOptions = field(default_factory=ExtractOptions)
+    grid: Grid2D = field(default_factory=Grid2D.regular)
     min_count: int = 10
     tolerance_mm: float = 0.1
     max_iterations: int = 10

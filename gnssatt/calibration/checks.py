@@ -28,14 +28,18 @@ POSITION_TOLERANCE_M = 1e-6
 
 
 class CampaignError(Exception):
-    """A campaign that cannot be calibrated; `set_label` names the set at fault (and `file` the file)."""
+    """A campaign that cannot be calibrated; `set_label` names the set at fault (and `file` the file).
+    `about_sets` is False when the refusal is about what the sets gave together (no usable epoch), not about
+    the choice of sets."""
 
-    def __init__(self, title: str, detail: str, set_label: str | None = None, file: str | None = None):
+    def __init__(self, title: str, detail: str, set_label: str | None = None, file: str | None = None,
+                 about_sets: bool = True):
         super().__init__(detail)
         self.title = title
         self.detail = detail
         self.set_label = set_label
         self.file = file
+        self.about_sets = about_sets
 
 
 @dataclass

@@ -10,14 +10,43 @@ attitude against the star tracker); the statistics are those of the attitude job
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from gnssatt.calibration.binning import Grid2D
 
+if TYPE_CHECKING:
+    from gnssatt.attitude.settings import AttitudeSettings
+
 ANGLES = ("yaw", "pitch", "roll")
 
-__all__ = ["ANGLES", "map_documents", "filter_errors", "cut_percent", "filter_comparison"]
+#: default processing of the held-out comparison: the attitude filter's lowest-noise documented processing (the
+#: fixed-interval smoother, docs/attitude.md) on every tracked phase (no seed 000 Table 2 C/N0 or antenna-frame
+#: masks: they drop the low antenna elevations where the differential PCV is largest); the calibration job's
+#: default held_out_attitude_config {"preset": HELD_OUT_PRESET} (worker.jobs.calibration.HELD_OUT_ATTITUDE_DEFAULT)
+HELD_OUT_PRESET = "all-phases-smoother"
+
+__all__ = ["ANGLES", "HELD_OUT_PRESET", "HeldOutAttitude", "map_documents", "filter_errors", "cut_percent",
+           "filter_comparison", "held_out_attitude"]
+
+
+@dataclass
+class HeldOutAttitude:
+    """How the held-out set's attitude is computed: the attitude filter's settings
+    (gnssatt.attitude.settings.AttitudeSettings) and their record written into held_out_attitude.json as
+    "attitude_config" (the calibration job writes its held_out_attitude_config there)."""
+
+    settings: "AttitudeSettings"
+    config: dict = field(default_factory=dict)
+
+    @classmethod
+    def preset(cls, name: str = HELD_OUT_PRESET) -> "HeldOutAttitude":
+        """The attitude settings preset `name` (AttitudeSettings.preset), recorded as {"preset": name}."""
+        from gnssatt.attitude.settings import AttitudeSettings
+
+        return cls(AttitudeSettings.preset(name), {"preset": name})
 
 
 def map_documents(grid: Grid2D, maps_m: dict) -> dict:
@@ -84,4 +113,32 @@ def filter_comparison(inputs, settings, calibrated: dict, map_docs: dict) -> dic
     out = {"without_calibration": without, "with_calibration": with_cal}
     if "skipped" not in without and "skipped" not in with_cal:
         out["cut"] = cut_percent(without, with_cal)
+    return out
+
+
+def held_out_attitude(input_set, calibrated: dict, maps_m: dict, grid: Grid2D, held_out: HeldOutAttitude,
+                      epoch_wise: dict | None) -> dict:
+    """held_out_attitude.json: the attitude filter (the attitude job's processing with `held_out.settings`) on the
+    held-out set without and with the calibration (filter_comparison), and the epoch-wise QUEST comparison
+    (gnssatt.calibration.campaign.attitude_comparison, `epoch_wise`) as a secondary block.
+
+    Args:
+        input_set: the held-out set (id, name, files with name, kind, path; gnssatt.gnss.io.observation_set).
+        calibrated: (first, second) -> (3,) body-frame baseline, m.
+        maps_m: (first, second, signal) -> (n_bins,) map on `grid`, m (NaN on empty bins).
+    """
+    from gnssatt.attitude.process import InputProblem, load_inputs
+
+    out = {"set": input_set.name or input_set.id,
+           "method": f"attitude filter ({held_out.settings.mode} mode, the attitude job's processing) against the "
+                     "set's reference attitude, over the fixed epochs: a priori baselines without maps vs calibrated "
+                     "baselines + the calibration's maps (applied as with pcv_map_ids)",
+           "attitude_config": held_out.config}
+    try:
+        inputs = load_inputs([(f.name, f.kind, f.path) for f in input_set.files])
+        out.update(filter_comparison(inputs, held_out.settings, calibrated, map_documents(grid, maps_m)))
+    except InputProblem as exc:
+        out["skipped"] = f"{exc.title}: {exc.detail}"
+    if epoch_wise is not None:
+        out["epoch_wise"] = epoch_wise
     return out

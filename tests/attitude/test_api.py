@@ -46,7 +46,7 @@ def test_solve_is_the_pipelines_two_calls(short_set):
 
 def test_write_products_writes_what_the_service_stores(short_set, tmp_path):
     import gnssatt.attitude as attitude
-    from gnssatt.product_json import product_json     # the service's encoding too (worker.context.write_product)
+    from gnssatt.product_files import product_json     # the service's encoding too (worker.context.write_product)
 
     sol = attitude.solve(short_set.files, settings="seed000")
     written = sol.write_products(tmp_path / "products")

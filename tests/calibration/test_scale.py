@@ -5,8 +5,8 @@ import csv
 import io
 from datetime import datetime, timedelta, timezone
 
-from worker.jobs.calibration import (STAGE_PASS1, STAGE_PASS2, _longest_first, _map_in_order, tasks_csv,
-                                          workers_summary)
+from gnssatt.calibration.tasks import STAGE_PASS1, STAGE_PASS2
+from worker.jobs.calibration import _longest_first, _map_in_order, tasks_csv, workers_summary
 
 
 class _RecordingCtx:

@@ -4,10 +4,17 @@ time span and the files' warnings. Used by the upload path (app/store/sets.py) a
 so a set has the same summary whichever way it came in. No I/O beyond reading the platform file."""
 from __future__ import annotations
 
+import json
+from dataclasses import dataclass
 from pathlib import Path
-from typing import NamedTuple
+from typing import Iterable, NamedTuple
 
 from gnssatt.gnss.io.platform import match_observation_files, parse_platform
+
+
+#: a simulated set's answer key (gnssatt simulate writes truth/ beside obs/ and nav/): not an input of any job, so a
+#: directory given as a set leaves its top-level truth/ out, as `make demo` leaves it out of the upload
+ANSWER_KEY_FOLDER = "truth"
 
 
 class IdentifiedFile(NamedTuple):
@@ -15,6 +22,41 @@ class IdentifiedFile(NamedTuple):
     kind: str
     summary: dict
     path: Path
+
+
+@dataclass(frozen=True)
+class ObservationSet:
+    """One observation set of local files: an id, a name and its identified files (the attributes and methods of
+    the worker's InputSet, worker.context, which the calibration reads of a set)."""
+
+    id: str
+    name: str | None
+    files: list[IdentifiedFile]
+
+    def of_kind(self, kind: str) -> list[IdentifiedFile]:
+        return [f for f in self.files if f.kind == kind]
+
+    def platform(self) -> dict | None:
+        """platform.json as parsed JSON, or None when the set has none."""
+        files = self.of_kind("platform")
+        return json.loads(Path(files[0].path).read_text()) if files else None
+
+    @classmethod
+    def of_paths(cls, paths: Iterable[str | Path], set_id: str, name: str | None = None) -> "ObservationSet":
+        """The set of these files and directories, each file identified by its content (gnssatt.gnss.io.sniff);
+        a directory stands for every file under it (named by its path inside the directory) except its top-level
+        ANSWER_KEY_FOLDER, the simulator's answers. ParseError for a file of no known kind."""
+        from gnssatt.gnss.io.sniff import identify
+
+        files = []
+        for path in map(Path, paths):
+            members = sorted(p for p in path.rglob("*") if p.is_file()
+                             and p.relative_to(path).parts[0] != ANSWER_KEY_FOLDER) if path.is_dir() else [path]
+            for p in members:
+                file_name = p.relative_to(path).as_posix() if path.is_dir() else p.name
+                kind, summary = identify(p, file_name)
+                files.append(IdentifiedFile(file_name, kind, summary, p))
+        return cls(set_id, name, files)
 
 
 class SetProblem(ValueError):

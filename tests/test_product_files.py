@@ -1,4 +1,4 @@
-"""gnssatt.product_json: the one encoder of JSON products (library write_products and the worker's JobContext)."""
+"""gnssatt.product_files: the one encoder of products (library write_products and the worker's JobContext)."""
 from __future__ import annotations
 
 import json
@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gnssatt.product_json import product_json
+from gnssatt.product_files import product_json
 
 
 def test_numpy_values_and_paths_become_json():
