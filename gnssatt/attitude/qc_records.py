@@ -1,0 +1,150 @@
+"""Record layouts of the compiled quality-control kernels: gnssatt.attitude.qc_kernels.qc_epoch, td_checks and
+record_epoch, and gnssatt.attitude.kernels.white_noise_update. Each layout is a `typing.NamedTuple` defined here
+once, one comment per field (unit, shape, frame); the names and the grouping follow the readable records of the
+specification (gnssatt.attitude.reference_qc, reference_noise, reference_records) where they fit.
+
+Shapes: n_bl baselines, n_sat satellites, n_sig signals; "(bl, sat, sig)" is (n_bl, n_sat, n_sig).
+
+How they travel (numba types a plain tuple by a C fingerprint, a namedtuple through Python at ~1 us more per call):
+Python builds a record by keyword and hands the kernel `tuple(record)`; inside, the kernel unpacks it in one line
+in field order (tests/attitude/test_qc_records.py checks every such line against `_fields`). Records of arrays
+that live for the whole run (limits, work arrays, the previous-epoch memory, the noise estimator's state, all
+mutated in place) are built once per run by gnssatt.attitude.filter_state.FilterRun; only SdEpoch, AntennaView,
+EpochStep, AmbiguityBook, OutputEpoch and PostFit are built per epoch. Fields are always of one type (float, bool,
+int, C-contiguous arrays), so each kernel compiles one signature (warm_up).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+__all__ = ["QcLimits", "SdEpoch", "AntennaView", "EpochStep", "EpochMemory", "QcWork", "AmbiguityBook",
+           "TripleDifferences", "WhiteNoise", "OutputEpoch", "PostFit", "ResidualBuffers"]
+
+
+class QcLimits(NamedTuple):
+    """Editing thresholds of seed 000 Table 2 (gnssatt.attitude.settings; reference_qc.QcLimits); run constant."""
+    el_mask_ant_rad: float          # elevation mask in the antenna frame (baselines ever fixed), rad
+    clock_jump_m: float             # epoch clock off its prediction by more: a clock jump, m
+    td_max_dt_s: float              # longest epoch gap of triple differences and of the clock drift, s
+    td_code_m: float                # code TD off its median by more: outlier, m
+    td_phase_cyc: float             # phase TD off its median by more: slip, cycles
+    max_gap_s: float                # an ambiguity unused for longer is dropped, s
+    wavelength_m: np.ndarray        # (n_sig,) carrier wavelengths, m
+
+
+class SdEpoch(NamedTuple):
+    """One epoch's single differences (second antenna minus first) and their flags before the QC: views of the
+    epoch in the SdBlock (reference_qc.SdEpoch); per epoch."""
+    sdc_m: np.ndarray               # (bl, sat, sig) SD code, m
+    sdp_m: np.ndarray               # (bl, sat, sig) SD phase, m
+    avail_p: np.ndarray             # (bl, sat, sig) bool: SD phase (and its code) exists
+    lli: np.ndarray                 # (bl, sat, sig) int8 loss-of-lock bits of either antenna (1 slip, 2 half cycle)
+    low_cn0: np.ndarray             # (bl, sat, sig) bool: C/N0 below the signal's mask
+    pcv_empty: np.ndarray           # (bl, sat, sig) bool: phase in an empty bin of the PCV map
+    reason0: np.ndarray             # (bl, sat, sig) int64 reasons set before (0 usable, 1 local horizon, 8 no SD)
+    clock_factor: np.ndarray        # (n_sat,) 1 - rho_dot / c: the clock partial of each satellite's SD
+    baseline_ok: np.ndarray         # (n_bl,) bool: both antennas of the baseline have data
+
+
+class AntennaView(NamedTuple):
+    """Where each satellite lies for the antennas, and the predicted geometry (reference_qc.AntennaView and the
+    ub_m argument of reference_qc.qc_epoch); per epoch."""
+    asn_rad: np.ndarray             # (2, n_sat, n_bl) elevation above the antenna plane of the baseline's first /
+                                    # second antenna (arcsin of the boresight products; NaN where unknown), rad
+    az_rad: np.ndarray              # (n_sat,) azimuth in the body frame, rad (empty while mask_on is False)
+    mask_on: bool                   # an attitude is known: the antenna-frame mask applies
+    ever_fixed: np.ndarray          # (n_bl,) bool: baselines fixed before (the antenna-frame mask is theirs)
+    pcv_on: bool                    # phases in empty PCV bins are rejected
+    ub_m: np.ndarray                # (n_bl, n_sat) predicted geometry b . u of this epoch (ECEF), m
+
+
+class EpochStep(NamedTuple):
+    """The epoch's time and its link to the previous epoch (reference_qc.PreviousEpoch's flags); per epoch."""
+    t_s: float                      # epoch time, s since the first epoch
+    consecutive: bool               # the previous epoch is at most td_max_dt_s before
+    do_td: bool                     # triple differences are formed (consecutive, and a previous output exists)
+
+
+class EpochMemory(NamedTuple):
+    """What the next epoch's QC needs of this one (reference_qc.PreviousEpoch's arrays and ClockState): written by
+    qc_epoch (clock) and record_epoch (SDs, geometry), in place; run constant."""
+    prev_sdc_m: np.ndarray          # (bl, sat, sig) previous clock-corrected SD code (NaN where none), m
+    prev_sdp_m: np.ndarray          # (bl, sat, sig) previous clock-corrected SD phase (NaN where none), m
+    prev_ub_m: np.ndarray           # (n_bl, n_sat) previous b . u of the output baselines, m
+    clock_state: np.ndarray         # (3, n_bl) last estimated epoch clock (m; NaN before the first), its time (s)
+                                    # and drift (m/s): reference_qc.ClockState.as_array()
+
+
+class QcWork(NamedTuple):
+    """The QC's per-epoch outputs (reference_qc.QcEpoch), in work arrays overwritten every epoch (the filter's
+    per-epoch names are views of their rows); run constant."""
+    el_rad: np.ndarray              # (3, n_bl, n_sat) el_w (lower antenna-frame elevation), el_ant, az_ant (NaN
+                                    # without an attitude), rad
+    reason: np.ndarray              # (bl, sat, sig) int64 reason code (gnssatt.attitude.filter_state.REASONS)
+    flags: np.ndarray               # (5, bl, sat, sig) bool: use_c, use_p, slip, td_c_ok, td_p_ok
+    values_m: np.ndarray            # (4, bl, sat, sig) sdc_c, sdp_c (SDs minus clock_factor x the epoch clock),
+                                    # td_c, td_p (triple differences; NaN where not formed), m
+    clock_m: np.ndarray             # (2, n_bl) epoch clock used, its prediction, m
+    jump: np.ndarray                # (n_bl,) bool: clock jump
+    median_td_m: np.ndarray         # (2, n_bl, n_sig) median over the satellites of td_c, td_p (NaN if none), m
+    slip_events: np.ndarray         # (2, bl, sat, sig) bool: TD slips without LLI, LLI slips to report
+    book_masks: np.ndarray          # (2, bl, sat, sig) bool: ambiguity states to drop, used phases needing a state
+
+
+class AmbiguityBook(NamedTuple):
+    """The ambiguity states' index map and ages (reference_qc.AmbiguityBook); per epoch (states come and go)."""
+    amb_index: np.ndarray           # (bl, sat, sig) int64 state index of each phase's ambiguity, -1 none
+    amb_last_t_s: np.ndarray        # (n_amb,) last time each ambiguity was in an update (row a: state
+                                    # n_fixed_part + a), s
+    n_fixed_part: int               # the first ambiguity's state index
+
+
+class TripleDifferences(NamedTuple):
+    """Epoch-to-epoch differences of the clock-corrected SDs minus the predicted geometry change, which of them
+    enter the medians, and the medians (reference_qc.TripleDifferences; in the filter rows of QcWork)."""
+    code_m: np.ndarray              # (bl, sat, sig) code TD, m
+    phase_m: np.ndarray             # (bl, sat, sig) phase TD, m
+    code_ok: np.ndarray             # (bl, sat, sig) bool: used code with a TD
+    phase_ok: np.ndarray            # (bl, sat, sig) bool: used phase with a TD
+    median_code_m: np.ndarray       # (n_bl, n_sig) median code TD over the satellites (NaN if none), m
+    median_phase_m: np.ndarray      # (n_bl, n_sig) median phase TD, m
+
+
+class WhiteNoise(NamedTuple):
+    """The white-noise estimator (reference_noise.NoiseEstimates' white part, NoiseSettings.memory_epochs): state
+    updated in place; run constant."""
+    var_code_m2: np.ndarray         # (n_sig,) white variance of one SD code at 45 dB-Hz, m^2
+    var_phase_m2: np.ndarray        # (n_sig,) white variance of one SD phase, m^2
+    n_white: np.ndarray             # (n_sig,) float: epochs in those means
+    memory_epochs: float            # exponential memory of the means, epochs
+    enabled: bool                   # the estimator runs (settings noise.noise_estimation)
+
+
+class OutputEpoch(NamedTuple):
+    """The epoch as the residual records and the triple-difference memory need it; per epoch."""
+    k: int                          # epoch index
+    avail_c: np.ndarray             # (bl, sat, sig) bool: SD code exists
+    avail_p: np.ndarray             # (bl, sat, sig) bool: SD phase exists
+    cn0_dbhz: np.ndarray            # (bl, sat, sig) the lower C/N0 of the two antennas, dB-Hz
+    u: np.ndarray                   # (n_sat, 3) lines of sight (ECEF, unit)
+    b_out_m: np.ndarray             # (n_bl, 3) the epoch's output baselines (ECEF), m
+
+
+class PostFit(NamedTuple):
+    """The update's post-fit residuals and the observations of its rows; per epoch (empty without an update)."""
+    post_m: np.ndarray              # (m,) post-fit residual of each row (code rows, then phase rows), m
+    jc: np.ndarray                  # (m_code,) int64 baseline of each code row
+    sc: np.ndarray                  # (m_code,) satellite
+    fc: np.ndarray                  # (m_code,) signal
+    jp: np.ndarray                  # (m_phase,) int64 baseline of each phase row
+    sp: np.ndarray                  # (m_phase,) satellite
+    fp: np.ndarray                  # (m_phase,) signal
+
+
+class ResidualBuffers(NamedTuple):
+    """Rows of residuals.csv appended epoch by epoch (gnssatt.attitude.boxes.output); rebuilt when they grow."""
+    ints: np.ndarray                # (6, cap) int64 epoch, bl, sat, sig, kind (0 code, 1 phase), reason
+    floats: np.ndarray              # (4, cap) el_ant_deg, az_ant_deg, cn0_dbhz, residual_m
+    lookup: np.ndarray              # (2, bl, sat, sig) work: the residual of each code / phase observation, m
