@@ -17,7 +17,7 @@ from gnssatt.attitude.adaptive import ManoeuvreDetector
 from gnssatt.attitude.fastops import clip as _clip, nz as _nz
 from gnssatt.attitude.pcv_correction import pcv_tables_for
 from gnssatt.attitude.qc_kernels import add_states, drop_states
-from gnssatt.attitude.qc_records import EpochMemory, QcLimits, QcWork, ResidualBuffers, WhiteNoise
+from gnssatt.attitude.qc_records import EpochClock, EpochMemory, QcLimits, QcWork, ResidualBuffers, WhiteNoise
 from gnssatt.attitude.settings import AttitudeSettings, cn0_mask_of
 from gnssatt.gnss.constants import C_M_S
 
@@ -287,9 +287,8 @@ class FilterRun:
         self.clk_state = np.stack([np.full(n_bl, np.nan), np.zeros(n_bl), np.zeros(n_bl)])
         self.prev_b = None
         self.prev_ub = np.zeros((n_bl, n_sat))
-        # the same arrays as the QC kernels' record (qc_epoch writes the clock, record_epoch the rest)
         self.qc_memory = tuple(EpochMemory(prev_sdc_m=self.prev_sdc, prev_sdp_m=self.prev_sdp,
-                                           prev_ub_m=self.prev_ub, clock_state=self.clk_state))
+                                           prev_ub_m=self.prev_ub))                  # record_epoch writes them
         self.R_mask = None                                           # attitude for the antenna-frame mask
         self.R_mask_t = -np.inf
         self.blk = None                                              # SdBlock of the current epochs
@@ -313,13 +312,15 @@ class FilterRun:
             td_max_dt_s=TD_MAX_DT_S, td_code_m=float(s.table2.td_code_m), td_phase_cyc=float(s.table2.td_phase_cyc),
             max_gap_s=float(s.ambiguity.max_gap_s), wavelength_m=self.lam))
         work = QcWork(el_rad=np.zeros((3, n_bl, n_sat)), reason=np.zeros(shp, np.int64),
-                      flags=np.zeros((5,) + shp, bool), values_m=np.zeros((4,) + shp), clock_m=np.zeros((2, n_bl)),
-                      jump=np.zeros(n_bl, bool), median_td_m=np.zeros((2, n_bl, n_sig)),
-                      slip_events=np.zeros((2,) + shp, bool), book_masks=np.zeros((2,) + shp, bool))
+                      masks=np.zeros((9,) + shp, bool), values_m=np.zeros((4,) + shp),
+                      median_td_m=np.zeros((2, n_bl, n_sig)))
         self.qc_work = tuple(work)
-        self.w_clk, self.w_jump, self.w_ev, self.w_bk = work.clock_m, work.jump, work.slip_events, work.book_masks
+        self.w_ev, self.w_bk = work.masks[5:7], work.masks[7:9]     # slips to report; states to drop / to add
+        clock = EpochClock(clock_state=self.clk_state, clock_m=np.zeros((2, n_bl)), jump=np.zeros(n_bl, bool))
+        self.qc_clock = tuple(clock)                                   # qc_epoch writes it
+        self.w_clk, self.w_jump = clock.clock_m, clock.jump
         # the per-epoch names (EpochData el_w .. mp) are views of these arrays, made once
-        self.views = (*work.el_rad, work.reason, *work.flags, *work.values_m, *work.median_td_m)
+        self.views = (*work.el_rad, work.reason, *work.masks[:5], *work.values_m, *work.median_td_m)
         self.w_asn = np.zeros((2, n_sat, n_bl))
         self.w_glw = np.zeros((2,) + shp)
         self.no_pcv = np.zeros(shp, bool)

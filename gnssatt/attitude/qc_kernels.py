@@ -22,8 +22,10 @@ import numpy as np
 from numba import njit
 
 from gnssatt.attitude.kernels import POW2, cn0_growth_update, white_noise_update
-from gnssatt.attitude.qc_records import (AmbiguityBook, AntennaView, EpochMemory, EpochStep, OutputEpoch, PostFit,
-                                         QcLimits, QcWork, ResidualBuffers, SdEpoch, WhiteNoise)
+from gnssatt.attitude.qc_records import (AmbiguityBook, AntennaView, EpochClock, EpochMemory, EpochStep, OutputEpoch,
+                                         PostFit, QcLimits, QcWork, ResidualBuffers, SdEpoch, SdFlags, WhiteNoise,
+                                         ambiguity_book, antenna_view, epoch_step, output_epoch, post_fit, sd_epoch,
+                                         sd_flags)
 from gnssatt.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 
 __all__ = ["reset_white_clocks", "propagate_dynamic", "propagate_kinematic", "clip_pair", "epoch_geometry", "qc_epoch",
@@ -120,31 +122,34 @@ def epoch_geometry(u, R, bs_a_T, bs_b_T, x, b_idx, asn_in):
 
 
 @njit(cache=True, nogil=True)
-def qc_epoch(sd: SdEpoch, view: AntennaView, step: EpochStep, memory: EpochMemory, limits: QcLimits, work: QcWork):
-    """One epoch of the filter's editing before the noise estimation, into work (QcWork) in place; returns (n clock
-    jumps, n common phase jumps above 1000 m).
+def qc_epoch(sd: SdEpoch, flags: SdFlags, view: AntennaView, step: EpochStep, memory: EpochMemory,
+             clock: EpochClock, limits: QcLimits, work: QcWork):
+    """One epoch of the filter's editing before the noise estimation, into work (QcWork) and clock (EpochClock) in
+    place; returns (n clock jumps, n common phase jumps above 1000 m).
 
     work.el_rad = el_w (n_bl, n_sat) antenna-frame elevation = fmin of view.asn_rad[0], [1], el_ant / az_ant =
     el_w / az when view.mask_on (an attitude exists) else NaN; work.reason from sd.reason0: 2 below the antenna
     mask on ever-fixed baselines (mask_on), 10 an empty PCV bin (pcv_on), 3 low C/N0, then 6 half cycle (after
-    use_c); work.flags = use_c, use_p, slip (LLI bit 1), td_c_ok, td_p_ok; work.values_m = sdc_c, sdp_c (minus
+    use_c); work.masks[0:5] = use_c, use_p, slip (LLI bit 1), td_c_ok, td_p_ok; work.values_m = sdc_c, sdp_c (minus
     clock_factor x the epoch clock), td_c, td_p (triple differences with the predicted geometry change ub -
-    memory.prev_ub_m when step.do_td, else NaN); work.clock_m = clock estimate (median of (SD code 1 + u.b) /
-    clock_factor over used satellites, else the prediction), prediction; work.jump; work.median_td_m = medians of
-    td_c, td_p; memory.clock_state = last estimated clock, its time, its drift, updated in place.
+    memory.prev_ub_m when step.do_td, else NaN); work.median_td_m = medians of td_c, td_p; clock.clock_m = clock
+    estimate (median of (SD code 1 + u.b) / clock_factor over used satellites, else the prediction), prediction;
+    clock.jump; clock.clock_state = last estimated clock, its time, its drift, updated.
 
     Specification: gnssatt.attitude.reference_qc.qc_epoch up to the TD tests (antenna_frame_elevations,
     edit_observations, epoch_clock, triple_differences; seed 000 Table 2).
     """
-    sdc_m, sdp_m, avail_p, lli, low_cn0, pcv_empty, reason0, clock_factor, baseline_ok = sd
+    sdc_m, sdp_m, low_cn0, pcv_empty, reason0, clock_factor, baseline_ok = sd
+    avail_c, avail_p, lli = flags
     asn_rad, az_rad, mask_on, ever_fixed, pcv_on, ub_m = view
     t_s, consecutive, do_td = step
-    prev_sdc_m, prev_sdp_m, prev_ub_m, clock_state = memory
+    prev_sdc_m, prev_sdp_m, prev_ub_m = memory
+    clock_state, clock_m, jump = clock
     el_mask_ant_rad, clock_jump_m, td_max_dt_s, td_code_m, td_phase_cyc, max_gap_s, wavelength_m = limits
-    el_rad, reason, flags, values_m, clock_m, jump, median_td_m, slip_events, book_masks = work
+    el_rad, reason, masks, values_m, median_td_m = work
     el_w, el_ant, az_ant = el_rad[0], el_rad[1], el_rad[2]
     n_bl, n_sat, n_sig = sdc_m.shape
-    use_c, use_p, slip, td_c_ok, td_p_ok = flags[0], flags[1], flags[2], flags[3], flags[4]
+    use_c, use_p, slip, td_c_ok, td_p_ok = masks[0], masks[1], masks[2], masks[3], masks[4]
     sdc_c, sdp_c, td_c, td_p = values_m[0], values_m[1], values_m[2], values_m[3]
     for j in range(n_bl):
         for s in range(n_sat):
@@ -275,7 +280,7 @@ def growth_weights(update, xs, log_rs, off, mom, gam_n, gamma, noise_epochs, min
 
 
 @njit(cache=True, nogil=True)
-def td_checks(sd: SdEpoch, step: EpochStep, wfac, noise: WhiteNoise, book: AmbiguityBook, memory: EpochMemory,
+def td_checks(flags: SdFlags, step: EpochStep, wfac, noise: WhiteNoise, book: AmbiguityBook, memory: EpochMemory,
               limits: QcLimits, work: QcWork):
     """The filter's white-noise update (gnssatt.attitude.kernels.white_noise_update with the C/N0 weights wfac
     (2, bl, sat, sig) of code and phase, when step.do_td), triple-difference tests and ambiguity-bookkeeping masks
@@ -283,22 +288,23 @@ def td_checks(sd: SdEpoch, step: EpochStep, wfac, noise: WhiteNoise, book: Ambig
     n to drop, n to add).
 
     In place in work: reason 4 and use_c off where the code TD is off its median by more than td_code_m; slip where
-    a phase TD (every available phase) is off by more than td_phase_cyc cycles; slip_events[0] = such slips without
-    LLI, slip_events[1] = LLI slips of phases with a state or a previous epoch (memory.prev_sdp_m finite,
-    consecutive); book_masks[0] = states to drop (restart on a slip or where no TD could check, satellite gone,
-    unused for max_gap_s), book_masks[1] = phases needing a state (valid only when nothing is dropped).
+    a phase TD (every available phase) is off by more than td_phase_cyc cycles; masks[5] = such slips without LLI,
+    masks[6] = LLI slips of phases with a state or a previous epoch (memory.prev_sdp_m finite, consecutive);
+    masks[7] = states to drop (restart on a slip or where no TD could check, satellite gone, unused for
+    max_gap_s), masks[8] = phases needing a state (valid only when nothing is dropped).
 
     Specification: gnssatt.attitude.reference_qc.triple_difference_tests and ambiguity_bookkeeping (seed 000
     Table 2, sec. 2), gnssatt.attitude.reference_noise.update_white_noise.
     """
-    sdc_m, sdp_m, avail_p, lli, low_cn0, pcv_empty, reason0, clock_factor, baseline_ok = sd
+    avail_c, avail_p, lli = flags
     t_s, consecutive, do_td = step
     amb_index, amb_last_t_s, n_fixed_part = book
-    prev_sdc_m, prev_sdp_m, prev_ub_m, clock_state = memory
+    prev_sdc_m, prev_sdp_m, prev_ub_m = memory
     el_mask_ant_rad, clock_jump_m, td_max_dt_s, td_code_m, td_phase_cyc, max_gap_s, wavelength_m = limits
-    el_rad, reason, flags, values_m, clock_m, jump, median_td_m, slip_events, book_masks = work
+    el_rad, reason, masks, values_m, median_td_m = work
+    ev_td, ev_lli, to_drop, to_add = masks[5], masks[6], masks[7], masks[8]
     n_bl, n_sat, n_sig = reason.shape
-    use_c, use_p, slip, td_c_ok, td_p_ok = flags[0], flags[1], flags[2], flags[3], flags[4]
+    use_c, use_p, slip, td_c_ok, td_p_ok = masks[0], masks[1], masks[2], masks[3], masks[4]
     td_c, td_p = values_m[2], values_m[3]
     mc, mp = median_td_m[0], median_td_m[1]
     if do_td:
@@ -331,13 +337,13 @@ def td_checks(sd: SdEpoch, step: EpochStep, wfac, noise: WhiteNoise, book: Ambig
                     if np.isfinite(tp) and ap and np.abs(tp - m_p) > lim_p:
                         slip[j, s, f] = True
                         e_td = not l1
-                slip_events[0, j, s, f] = e_td
+                ev_td[j, s, f] = e_td
                 n_td += e_td
                 ai = amb_index[j, s, f]
                 have = ai >= 0
                 cont = consecutive and np.isfinite(prev_sdp_m[j, s, f])
                 e_l = l1 and ap and (have or cont)
-                slip_events[1, j, s, f] = e_l
+                ev_lli[j, s, f] = e_l
                 n_lli += e_l
                 td_possible = do_td and np.isfinite(td_p[j, s, f])
                 sl = slip[j, s, f]
@@ -347,17 +353,17 @@ def td_checks(sd: SdEpoch, step: EpochStep, wfac, noise: WhiteNoise, book: Ambig
                         n_gap += 1
                     last_t = amb_last_t_s[ai - n_fixed_part]
                     drop = (ap and (sl or not td_possible)) or not ap or (not use_p[j, s, f] and last_t < t_gap)
-                book_masks[0, j, s, f] = drop
+                to_drop[j, s, f] = drop
                 n_drop += drop
                 need = use_p[j, s, f] and not have
-                book_masks[1, j, s, f] = need
+                to_add[j, s, f] = need
                 n_need += need
     return n_td, n_lli, n_gap, n_drop, n_need
 
 
 @njit(cache=True, nogil=True)
-def record_epoch(epoch: OutputEpoch, fit: PostFit, work: QcWork, memory: EpochMemory, buffers: ResidualBuffers,
-                 pos):
+def record_epoch(flags: SdFlags, epoch: OutputEpoch, fit: PostFit, work: QcWork, memory: EpochMemory,
+                 buffers: ResidualBuffers, pos):
     """The residual rows of epoch.k written from row pos of buffers.ints (6, cap) = epoch, bl, sat, sig, kind,
     reason and buffers.floats (4, cap) = el_ant_deg, az_ant_deg (of az mod 2 pi), cn0_dbhz, residual_m: its code
     rows (kind 0, every available code in (bl, sat, sig) order, residual post_m[r] of code row r (jc, sc, fc),
@@ -370,13 +376,14 @@ def record_epoch(epoch: OutputEpoch, fit: PostFit, work: QcWork, memory: EpochMe
     Specification: gnssatt.attitude.reference_records.epoch_residual_rows, residual_table (row order) and
     triple_difference_memory (seed 000 Fig. 2 "output").
     """
-    k, avail_c, avail_p, cn0_dbhz, u, b_out_m = epoch
+    avail_c, avail_p, lli = flags
+    k, cn0_dbhz, u, b_out_m = epoch
     post_m, jc, sc, fc, jp, sp, fp = fit
-    el_rad, reason, flags, values_m, clock_m, jump, median_td_m, slip_events, book_masks = work
-    prev_sdc_m, prev_sdp_m, prev_ub_m, clock_state = memory
+    el_rad, reason, masks, values_m, median_td_m = work
+    prev_sdc_m, prev_sdp_m, prev_ub_m = memory
     ints, floats, lookup = buffers
     el_ant, az_ant = el_rad[1], el_rad[2]
-    use_c, use_p = flags[0], flags[1]
+    use_c, use_p = masks[0], masks[1]
     sdc_c, sdp_c = values_m[0], values_m[1]
     n_bl, n_sat, n_sig = avail_c.shape
     lookup[:] = np.nan
@@ -530,23 +537,23 @@ def warm_up() -> None:
     i3, lli = np.zeros(sh, np.int64), np.zeros(sh, np.int8)
     limits = tuple(QcLimits(el_mask_ant_rad=0.0, clock_jump_m=1.0, td_max_dt_s=3.0, td_code_m=1.0, td_phase_cyc=0.5,
                             max_gap_s=10.0, wavelength_m=np.ones(n_sig)))
-    work = tuple(QcWork(el_rad=np.zeros((3, n_bl, n_sat)), reason=i3.copy(), flags=np.zeros((5,) + sh, np.bool_),
-                        values_m=np.zeros((4,) + sh), clock_m=np.zeros((2, n_bl)), jump=np.zeros(n_bl, np.bool_),
-                        median_td_m=np.zeros((2, n_bl, n_sig)), slip_events=np.zeros((2,) + sh, np.bool_),
-                        book_masks=np.zeros((2,) + sh, np.bool_)))
-    memory = tuple(EpochMemory(prev_sdc_m=f3.copy(), prev_sdp_m=f3.copy(), prev_ub_m=f2.copy(),
-                               clock_state=np.zeros((3, n_bl))))
-    sd = tuple(SdEpoch(sdc_m=f3, sdp_m=f3, avail_p=b3, lli=lli, low_cn0=b3, pcv_empty=b3, reason0=i3,
-                       clock_factor=np.ones(n_sat), baseline_ok=np.ones(n_bl, np.bool_)))
+    work = tuple(QcWork(el_rad=np.zeros((3, n_bl, n_sat)), reason=i3.copy(), masks=np.zeros((9,) + sh, np.bool_),
+                        values_m=np.zeros((4,) + sh), median_td_m=np.zeros((2, n_bl, n_sig))))
+    memory = tuple(EpochMemory(prev_sdc_m=f3.copy(), prev_sdp_m=f3.copy(), prev_ub_m=f2.copy()))
+    clock = tuple(EpochClock(clock_state=np.zeros((3, n_bl)), clock_m=np.zeros((2, n_bl)),
+                             jump=np.zeros(n_bl, np.bool_)))
+    sd = sd_epoch(sdc_m=f3, sdp_m=f3, low_cn0=b3, pcv_empty=b3, reason0=i3, clock_factor=np.ones(n_sat),
+                  baseline_ok=np.ones(n_bl, np.bool_))
+    flags = sd_flags(avail_c=b3, avail_p=b3, lli=lli)
     noise = tuple(WhiteNoise(var_code_m2=np.ones(n_sig), var_phase_m2=np.ones(n_sig), n_white=np.zeros(n_sig),
                              memory_epochs=300.0, enabled=True))
-    book = tuple(AmbiguityBook(amb_index=i3 - 1, amb_last_t_s=np.zeros(0), n_fixed_part=8))
+    book = ambiguity_book(amb_index=i3 - 1, amb_last_t_s=np.zeros(0), n_fixed_part=8)
     for do in (False, True):
-        view = tuple(AntennaView(asn_rad=asn, az_rad=np.zeros(n_sat), mask_on=do, ever_fixed=np.zeros(n_bl, np.bool_),
-                                 pcv_on=do, ub_m=f2))
-        step = tuple(EpochStep(t_s=1.0, consecutive=do, do_td=do))
-        qc_epoch(sd, view, step, memory, limits, work)
-        td_checks(sd, step, np.ones((2,) + sh), noise, book, memory, limits, work)
+        view = antenna_view(asn_rad=asn, az_rad=np.zeros(n_sat), mask_on=do, ever_fixed=np.zeros(n_bl, np.bool_),
+                            pcv_on=do, ub_m=f2)
+        step = epoch_step(t_s=1.0, consecutive=do, do_td=do)
+        qc_epoch(sd, flags, view, step, memory, clock, limits, work)
+        td_checks(flags, step, np.ones((2,) + sh), noise, book, memory, limits, work)
     z = np.zeros(0)
     for do in (False, True):
         growth_weights(do, z, z, np.zeros(2 * n_sig + 1, np.int64), np.zeros((2, n_sig, 4)), np.zeros((2, n_sig)),
@@ -562,7 +569,7 @@ def warm_up() -> None:
     drop_states(st[0], st[1], keep, 14, st[2], st[3], st[4], st[5], amb_index)
     buffers = tuple(ResidualBuffers(ints=np.zeros((6, 8), np.int64), floats=np.zeros((4, 8)),
                                     lookup=np.zeros((2,) + sh)))
-    epoch = tuple(OutputEpoch(k=0, avail_c=b3, avail_p=b3, cn0_dbhz=f3, u=u, b_out_m=np.zeros((n_bl, 3))))
+    epoch = output_epoch(k=0, cn0_dbhz=f3, u=u, b_out_m=np.zeros((n_bl, 3)))
     for idx in (np.zeros(1, np.int64), np.nonzero(np.ones((2, 2)))[0]):      # contiguous, strided
-        fit = tuple(PostFit(post_m=z, jc=idx, sc=idx, fc=idx, jp=idx, sp=idx, fp=idx))
-        record_epoch(epoch, fit, work, memory, buffers, 0)
+        fit = post_fit(post_m=z, jc=idx, sc=idx, fc=idx, jp=idx, sp=idx, fp=idx)
+        record_epoch(flags, epoch, fit, work, memory, buffers, 0)

@@ -5,22 +5,28 @@ specification (gnssatt.attitude.reference_qc, reference_noise, reference_records
 
 Shapes: n_bl baselines, n_sat satellites, n_sig signals; "(bl, sat, sig)" is (n_bl, n_sat, n_sig).
 
-How they travel (numba types a plain tuple by a C fingerprint, a namedtuple through Python at ~1 us more per call):
-Python builds a record by keyword and hands the kernel `tuple(record)`; inside, the kernel unpacks it in one line
-in field order (tests/attitude/test_qc_records.py checks every such line against `_fields`). Records of arrays
-that live for the whole run (limits, work arrays, the previous-epoch memory, the noise estimator's state, all
-mutated in place) are built once per run by gnssatt.attitude.filter_state.FilterRun; only SdEpoch, AntennaView,
-EpochStep, AmbiguityBook, OutputEpoch and PostFit are built per epoch. Fields are always of one type (float, bool,
-int, C-contiguous arrays), so each kernel compiles one signature (warm_up).
+How they travel (bench/design/qc_record_calls.py measured the choices): a record goes to a kernel as a plain tuple
+in field order (numba types a plain tuple by a C fingerprint, a namedtuple through Python at ~1 us more per call)
+and the kernel unpacks it in one line in field order (tests/attitude/test_qc_records.py checks every such line
+against `_fields`). Records of arrays that live for the whole run (limits, work arrays, the previous-epoch memory,
+the epoch clock, the noise estimator's state, all mutated in place) are built once per run, by keyword, by
+gnssatt.attitude.filter_state.FilterRun (`tuple(QcLimits(...))`). The per-epoch ones (SdEpoch, SdFlags,
+AntennaView, EpochStep, AmbiguityBook, OutputEpoch, PostFit) are built by keyword too, through the keyword-only
+builders below (`sd_epoch(sdc_m=..., ...)` returns the plain tuple in ~0.2 us; `tuple(SdEpoch(...))` takes ~0.7).
+Each kernel takes only records whose fields it mostly uses: every field is one more argument to type and unbox
+(~70 ns). Each field always has one numba type (float, bool, int; arrays C-contiguous, np.nonzero's index arrays
+as numpy gives them), so each kernel compiles the few signatures its warm_up covers.
 """
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Callable, NamedTuple
 
 import numpy as np
 
-__all__ = ["QcLimits", "SdEpoch", "AntennaView", "EpochStep", "EpochMemory", "QcWork", "AmbiguityBook",
-           "TripleDifferences", "WhiteNoise", "OutputEpoch", "PostFit", "ResidualBuffers"]
+__all__ = ["QcLimits", "SdEpoch", "SdFlags", "AntennaView", "EpochStep", "EpochMemory", "EpochClock", "QcWork",
+           "AmbiguityBook", "TripleDifferences", "WhiteNoise", "OutputEpoch", "PostFit", "ResidualBuffers",
+           "plain_tuple_builder", "sd_epoch", "sd_flags", "antenna_view", "epoch_step", "ambiguity_book",
+           "output_epoch", "post_fit"]
 
 
 class QcLimits(NamedTuple):
@@ -35,17 +41,23 @@ class QcLimits(NamedTuple):
 
 
 class SdEpoch(NamedTuple):
-    """One epoch's single differences (second antenna minus first) and their flags before the QC: views of the
-    epoch in the SdBlock (reference_qc.SdEpoch); per epoch."""
+    """One epoch's single differences (second antenna minus first) and their editing before the QC: views of the
+    epoch in the SdBlock (reference_qc.SdEpoch but its avail_p and lli, which are in SdFlags); per epoch."""
     sdc_m: np.ndarray               # (bl, sat, sig) SD code, m
     sdp_m: np.ndarray               # (bl, sat, sig) SD phase, m
-    avail_p: np.ndarray             # (bl, sat, sig) bool: SD phase (and its code) exists
-    lli: np.ndarray                 # (bl, sat, sig) int8 loss-of-lock bits of either antenna (1 slip, 2 half cycle)
     low_cn0: np.ndarray             # (bl, sat, sig) bool: C/N0 below the signal's mask
     pcv_empty: np.ndarray           # (bl, sat, sig) bool: phase in an empty bin of the PCV map
     reason0: np.ndarray             # (bl, sat, sig) int64 reasons set before (0 usable, 1 local horizon, 8 no SD)
     clock_factor: np.ndarray        # (n_sat,) 1 - rho_dot / c: the clock partial of each satellite's SD
     baseline_ok: np.ndarray         # (n_bl,) bool: both antennas of the baseline have data
+
+
+class SdFlags(NamedTuple):
+    """Which single differences of the epoch exist and their loss-of-lock bits (reference_qc.SdEpoch.avail_p / lli,
+    reference_records.EpochFlags.avail_c / avail_p): SdBlock views read by all three QC kernels; per epoch."""
+    avail_c: np.ndarray             # (bl, sat, sig) bool: SD code exists (both antennas, geometry)
+    avail_p: np.ndarray             # (bl, sat, sig) bool: SD phase exists too
+    lli: np.ndarray                 # (bl, sat, sig) loss-of-lock bits of either antenna (1 slip, 2 half cycle)
 
 
 class AntennaView(NamedTuple):
@@ -68,13 +80,20 @@ class EpochStep(NamedTuple):
 
 
 class EpochMemory(NamedTuple):
-    """What the next epoch's QC needs of this one (reference_qc.PreviousEpoch's arrays and ClockState): written by
-    qc_epoch (clock) and record_epoch (SDs, geometry), in place; run constant."""
+    """The previous epoch as the triple differences need it (reference_qc.PreviousEpoch's arrays): written by
+    record_epoch in place; run constant."""
     prev_sdc_m: np.ndarray          # (bl, sat, sig) previous clock-corrected SD code (NaN where none), m
     prev_sdp_m: np.ndarray          # (bl, sat, sig) previous clock-corrected SD phase (NaN where none), m
     prev_ub_m: np.ndarray           # (n_bl, n_sat) previous b . u of the output baselines, m
+
+
+class EpochClock(NamedTuple):
+    """The epoch clock of each baseline (reference_qc.ClockState carried from epoch to epoch, EpochClock of this
+    epoch): written by qc_epoch in place; run constant."""
     clock_state: np.ndarray         # (3, n_bl) last estimated epoch clock (m; NaN before the first), its time (s)
                                     # and drift (m/s): reference_qc.ClockState.as_array()
+    clock_m: np.ndarray             # (2, n_bl) this epoch's clock used, its prediction, m
+    jump: np.ndarray                # (n_bl,) bool: clock jump
 
 
 class QcWork(NamedTuple):
@@ -83,14 +102,12 @@ class QcWork(NamedTuple):
     el_rad: np.ndarray              # (3, n_bl, n_sat) el_w (lower antenna-frame elevation), el_ant, az_ant (NaN
                                     # without an attitude), rad
     reason: np.ndarray              # (bl, sat, sig) int64 reason code (gnssatt.attitude.filter_state.REASONS)
-    flags: np.ndarray               # (5, bl, sat, sig) bool: use_c, use_p, slip, td_c_ok, td_p_ok
+    masks: np.ndarray               # (9, bl, sat, sig) bool: use_c, use_p, slip, td_c_ok, td_p_ok (qc_epoch), TD
+                                    # slips without LLI, LLI slips to report, states to drop, used phases needing
+                                    # a state (td_checks)
     values_m: np.ndarray            # (4, bl, sat, sig) sdc_c, sdp_c (SDs minus clock_factor x the epoch clock),
                                     # td_c, td_p (triple differences; NaN where not formed), m
-    clock_m: np.ndarray             # (2, n_bl) epoch clock used, its prediction, m
-    jump: np.ndarray                # (n_bl,) bool: clock jump
     median_td_m: np.ndarray         # (2, n_bl, n_sig) median over the satellites of td_c, td_p (NaN if none), m
-    slip_events: np.ndarray         # (2, bl, sat, sig) bool: TD slips without LLI, LLI slips to report
-    book_masks: np.ndarray          # (2, bl, sat, sig) bool: ambiguity states to drop, used phases needing a state
 
 
 class AmbiguityBook(NamedTuple):
@@ -123,10 +140,8 @@ class WhiteNoise(NamedTuple):
 
 
 class OutputEpoch(NamedTuple):
-    """The epoch as the residual records and the triple-difference memory need it; per epoch."""
+    """The epoch as the residual records and the triple-difference memory need it, besides its SdFlags; per epoch."""
     k: int                          # epoch index
-    avail_c: np.ndarray             # (bl, sat, sig) bool: SD code exists
-    avail_p: np.ndarray             # (bl, sat, sig) bool: SD phase exists
     cn0_dbhz: np.ndarray            # (bl, sat, sig) the lower C/N0 of the two antennas, dB-Hz
     u: np.ndarray                   # (n_sat, 3) lines of sight (ECEF, unit)
     b_out_m: np.ndarray             # (n_bl, 3) the epoch's output baselines (ECEF), m
@@ -148,3 +163,26 @@ class ResidualBuffers(NamedTuple):
     ints: np.ndarray                # (6, cap) int64 epoch, bl, sat, sig, kind (0 code, 1 phase), reason
     floats: np.ndarray              # (4, cap) el_ant_deg, az_ant_deg, cn0_dbhz, residual_m
     lookup: np.ndarray              # (2, bl, sat, sig) work: the residual of each code / phase observation, m
+
+
+def plain_tuple_builder(record: type) -> Callable[..., tuple]:
+    """A function taking `record`'s fields by keyword only (all of them, no others) and returning them as a plain
+    tuple in field order: what tuple(record(...)) gives, in a third of the time (no namedtuple in between).
+    Generated from record._fields as collections.namedtuple generates its __new__."""
+    fields = record._fields
+    name = "".join("_" + c.lower() if c.isupper() else c for c in record.__name__).lstrip("_")
+    namespace: dict = {}
+    exec(f"def {name}(*, {', '.join(fields)}):\n    return ({', '.join(fields)},)\n", namespace)
+    fn = namespace[name]
+    fn.__module__ = __name__
+    fn.__doc__ = f"The plain tuple of a {record.__name__} ({', '.join(fields)}), fields by keyword."
+    return fn
+
+
+sd_epoch = plain_tuple_builder(SdEpoch)
+sd_flags = plain_tuple_builder(SdFlags)
+antenna_view = plain_tuple_builder(AntennaView)
+epoch_step = plain_tuple_builder(EpochStep)
+ambiguity_book = plain_tuple_builder(AmbiguityBook)
+output_epoch = plain_tuple_builder(OutputEpoch)
+post_fit = plain_tuple_builder(PostFit)

@@ -157,41 +157,45 @@ def _qc_limits(limits: QcLimits) -> tuple:
 
 
 def _sd_epoch(sd: SdEpoch) -> tuple:
-    return tuple(QR.SdEpoch(sdc_m=sd.sdc_m, sdp_m=sd.sdp_m, avail_p=sd.avail_p, lli=sd.lli, low_cn0=sd.low_cn0,
-                            pcv_empty=sd.pcv_empty, reason0=sd.reason0, clock_factor=sd.clock_factor,
-                            baseline_ok=sd.baseline_ok))
+    return QR.sd_epoch(sdc_m=sd.sdc_m, sdp_m=sd.sdp_m, low_cn0=sd.low_cn0, pcv_empty=sd.pcv_empty, reason0=sd.reason0,
+                       clock_factor=sd.clock_factor, baseline_ok=sd.baseline_ok)
+
+
+def _sd_flags(sd: SdEpoch) -> tuple:
+    """The SdFlags of a reference SdEpoch (avail_c: qc_epoch and td_checks do not read it)."""
+    return QR.sd_flags(avail_c=sd.avail_p, avail_p=sd.avail_p, lli=sd.lli)
 
 
 def _epoch_step(prev: PreviousEpoch, t_s: float) -> tuple:
-    return tuple(QR.EpochStep(t_s=float(t_s), consecutive=bool(prev.consecutive), do_td=bool(prev.do_td)))
+    return QR.epoch_step(t_s=float(t_s), consecutive=bool(prev.consecutive), do_td=bool(prev.do_td))
 
 
 def _qc_work(sh: tuple) -> QR.QcWork:
     n_bl, n_sat, n_sig = sh
     return QR.QcWork(el_rad=np.zeros((3, n_bl, n_sat)), reason=np.zeros(sh, np.int64),
-                     flags=np.zeros((5,) + sh, bool), values_m=np.zeros((4,) + sh), clock_m=np.zeros((2, n_bl)),
-                     jump=np.zeros(n_bl, bool), median_td_m=np.zeros((2, n_bl, n_sig)),
-                     slip_events=np.zeros((2,) + sh, bool), book_masks=np.zeros((2,) + sh, bool))
+                     masks=np.zeros((9,) + sh, bool), values_m=np.zeros((4,) + sh),
+                     median_td_m=np.zeros((2, n_bl, n_sig)))
 
 
 def call_qc_epoch(sd: SdEpoch, view: AntennaView, ub_m, prev: PreviousEpoch, clock: ClockState, t_s: float,
                   limits: QcLimits) -> dict:
     """qc_epoch's outputs by name (the names of reference_qc.QcEpoch / TripleDifferences / EpochClock), with the
     clock state after the epoch as a ClockState; _work, _memory: the kernel records for call_td_checks."""
+    n_bl = sd.sdc_m.shape[0]
     work = _qc_work(sd.sdc_m.shape)
-    memory = QR.EpochMemory(prev_sdc_m=prev.sdc_m, prev_sdp_m=prev.sdp_m, prev_ub_m=prev.ub_m,
-                            clock_state=clock.as_array())
-    kview = QR.AntennaView(asn_rad=np.ascontiguousarray(np.stack([view.asn_a_rad, view.asn_b_rad])),
-                           az_rad=view.az_rad, mask_on=bool(view.mask_on), ever_fixed=view.ever_fixed,
-                           pcv_on=bool(view.pcv_on), ub_m=ub_m)
-    n_jump, n_common = QK.qc_epoch(_sd_epoch(sd), tuple(kview), _epoch_step(prev, t_s), tuple(memory),
-                                   _qc_limits(limits), tuple(work))
-    el, wb, wf, mcp = work.el_rad, work.flags, work.values_m, work.median_td_m
+    memory = QR.EpochMemory(prev_sdc_m=prev.sdc_m, prev_sdp_m=prev.sdp_m, prev_ub_m=prev.ub_m)
+    kclock = QR.EpochClock(clock_state=clock.as_array(), clock_m=np.zeros((2, n_bl)), jump=np.zeros(n_bl, bool))
+    kview = QR.antenna_view(asn_rad=np.ascontiguousarray(np.stack([view.asn_a_rad, view.asn_b_rad])),
+                            az_rad=view.az_rad, mask_on=bool(view.mask_on), ever_fixed=view.ever_fixed,
+                            pcv_on=bool(view.pcv_on), ub_m=ub_m)
+    n_jump, n_common = QK.qc_epoch(_sd_epoch(sd), _sd_flags(sd), kview, _epoch_step(prev, t_s), tuple(memory),
+                                   tuple(kclock), _qc_limits(limits), tuple(work))
+    el, wb, wf, mcp = work.el_rad, work.masks, work.values_m, work.median_td_m
     td = TripleDifferences(wf[2], wf[3], wb[3], wb[4], mcp[0], mcp[1])
     return dict(el_w_rad=el[0], el_ant_rad=el[1], az_ant_rad=el[2], reason=work.reason, use_c=wb[0], use_p=wb[1],
-                slip=wb[2], sdc_c_m=wf[0], sdp_c_m=wf[1], td=td, clock_m=work.clock_m[0],
-                predicted_m=work.clock_m[1], jump=work.jump, n_jump=n_jump, n_common_jumps=n_common,
-                clock_state=ClockState(*memory.clock_state), _work=work, _memory=memory)
+                slip=wb[2], sdc_c_m=wf[0], sdp_c_m=wf[1], td=td, clock_m=kclock.clock_m[0],
+                predicted_m=kclock.clock_m[1], jump=kclock.jump, n_jump=n_jump, n_common_jumps=n_common,
+                clock_state=ClockState(*kclock.clock_state), _work=work, _memory=memory)
 
 
 def call_growth_weights(update: bool, td: TripleDifferences, ln_factor, wavelength_m, est: NoiseEstimates,
@@ -214,13 +218,13 @@ def call_td_checks(qc: dict, weights, est: NoiseEstimates, settings: NoiseSettin
     """td_checks after call_qc_epoch (qc's reason / use_c / slip updated in place, est too when noise_on):
     ev_td, ev_lli, drop, need and the counts."""
     work = qc["_work"]
-    kbook = QR.AmbiguityBook(amb_index=book.amb_index, amb_last_t_s=book.amb_last_t_s,
-                             n_fixed_part=int(book.n_fixed_part))
+    kbook = QR.ambiguity_book(amb_index=book.amb_index, amb_last_t_s=book.amb_last_t_s,
+                              n_fixed_part=int(book.n_fixed_part))
     n_td, n_lli, n_gap, n_drop, n_need = QK.td_checks(
-        _sd_epoch(sd), _epoch_step(prev, t_s), np.ascontiguousarray(weights), _white_noise(est, settings, noise_on),
-        tuple(kbook), tuple(qc["_memory"]), _qc_limits(limits), tuple(work))
-    ev, bk = work.slip_events, work.book_masks
-    return dict(ev_td=ev[0], ev_lli=ev[1], drop=bk[0], need=bk[1], n_td=n_td, n_lli=n_lli, n_gap=n_gap,
+        _sd_flags(sd), _epoch_step(prev, t_s), np.ascontiguousarray(weights), _white_noise(est, settings, noise_on),
+        kbook, tuple(qc["_memory"]), _qc_limits(limits), tuple(work))
+    m = work.masks
+    return dict(ev_td=m[5], ev_lli=m[6], drop=m[7], need=m[8], n_td=n_td, n_lli=n_lli, n_gap=n_gap,
                 n_drop=n_drop, n_need=n_need)
 
 
@@ -230,15 +234,14 @@ def call_record_epoch(k: int, flags: EpochFlags, el_ant_rad, az_ant_rad, cn0_dbh
     b = buffers
     work = _qc_work(flags.avail_c.shape)            # the QC's outputs the records read
     work.el_rad[1], work.el_rad[2], work.reason[:] = el_ant_rad, az_ant_rad, flags.reason
-    work.flags[0], work.flags[1] = flags.use_c, flags.use_p
+    work.masks[0], work.masks[1] = flags.use_c, flags.use_p
     work.values_m[0], work.values_m[1] = sdc_c_m, sdp_c_m
-    epoch = QR.OutputEpoch(k=int(k), avail_c=flags.avail_c, avail_p=flags.avail_p, cn0_dbhz=cn0_dbhz, u=u,
-                           b_out_m=b_out_m)
-    fit = QR.PostFit(post_m=post_m, jc=rows.jc, sc=rows.sc, fc=rows.fc, jp=rows.jp, sp=rows.sp, fp=rows.fp)
-    memory = QR.EpochMemory(prev_sdc_m=b["prev_sdc"], prev_sdp_m=b["prev_sdp"], prev_ub_m=b["prev_ub"],
-                            clock_state=np.zeros((3, flags.avail_c.shape[0])))
+    kflags = QR.sd_flags(avail_c=flags.avail_c, avail_p=flags.avail_p, lli=np.zeros(flags.avail_c.shape, np.int8))
+    epoch = QR.output_epoch(k=int(k), cn0_dbhz=cn0_dbhz, u=u, b_out_m=b_out_m)
+    fit = QR.post_fit(post_m=post_m, jc=rows.jc, sc=rows.sc, fc=rows.fc, jp=rows.jp, sp=rows.sp, fp=rows.fp)
+    memory = QR.EpochMemory(prev_sdc_m=b["prev_sdc"], prev_sdp_m=b["prev_sdp"], prev_ub_m=b["prev_ub"])
     kbuf = QR.ResidualBuffers(ints=b["ibuf"], floats=b["fbuf"], lookup=b["lookup"])
-    b["pos"] = QK.record_epoch(tuple(epoch), tuple(fit), tuple(work), tuple(memory), tuple(kbuf), int(b["pos"]))
+    b["pos"] = QK.record_epoch(kflags, epoch, fit, tuple(work), tuple(memory), tuple(kbuf), int(b["pos"]))
 
 
 def call_take_square(P, idx):

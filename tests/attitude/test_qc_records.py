@@ -1,8 +1,10 @@
 """The compiled kernels' record layouts (issue 15, item 4): every record a kernel takes is a typing.NamedTuple of
-a gnssatt/attitude/*_records.py module (not the readable reference_*), passed as a plain tuple and unpacked inside the kernel in one line. Numba
-unpacks a tuple by position, so a line that names the fields in another order (or misses one) would silently
-read the wrong arrays: these tests parse the kernel sources and compare each unpacking with the record's
-`_fields`. A kernel parameter is a record when its annotation names one (`def qc_epoch(sd: SdEpoch, ...)`)."""
+a gnssatt/attitude/*_records.py module (not the readable reference_*), passed as a plain tuple and unpacked
+inside the kernel in one line. Numba unpacks a tuple by position, so a line that names the fields in another
+order (or misses one) would silently read the wrong arrays: these tests parse the kernel sources and compare each
+unpacking with the record's `_fields`. A kernel parameter is a record when its annotation names one
+(`def qc_epoch(sd: SdEpoch, ...)`). The keyword builders of the per-epoch records are checked against the
+NamedTuples, and every field must carry its comment."""
 from __future__ import annotations
 
 import ast
@@ -77,8 +79,9 @@ def mismatches(source: str, layouts: dict) -> list[str]:
 
 def test_the_record_modules_are_found():
     layouts = _layouts()
-    assert {"SdEpoch", "AntennaView", "EpochStep", "EpochMemory", "QcLimits", "QcWork", "AmbiguityBook",
-            "TripleDifferences", "WhiteNoise", "OutputEpoch", "PostFit", "ResidualBuffers"} <= set(layouts)
+    assert {"SdEpoch", "SdFlags", "AntennaView", "EpochStep", "EpochMemory", "EpochClock", "QcLimits", "QcWork",
+            "AmbiguityBook", "TripleDifferences", "WhiteNoise", "OutputEpoch", "PostFit",
+            "ResidualBuffers"} <= set(layouts)
 
 
 def test_every_record_unpacking_names_the_fields_in_order():
@@ -98,12 +101,35 @@ def test_the_qc_kernels_take_records_and_unpack_them():
         rows += record_unpackings((ATTITUDE / name).read_text(encoding="utf-8"), layouts)
     got = {(fn, rec) for fn, _, rec, names, _ in rows if names is not None}
     passed_on = {(fn, rec) for fn, _, rec, names, _ in rows if names is None}
-    assert got == {("qc_epoch", r) for r in ("SdEpoch", "AntennaView", "EpochStep", "EpochMemory", "QcLimits",
-                                             "QcWork")} \
-        | {("td_checks", r) for r in ("SdEpoch", "EpochStep", "AmbiguityBook", "EpochMemory", "QcLimits", "QcWork")} \
-        | {("record_epoch", r) for r in ("OutputEpoch", "PostFit", "QcWork", "EpochMemory", "ResidualBuffers")} \
+    assert got == {("qc_epoch", r) for r in ("SdEpoch", "SdFlags", "AntennaView", "EpochStep", "EpochMemory",
+                                             "EpochClock", "QcLimits", "QcWork")} \
+        | {("td_checks", r) for r in ("SdFlags", "EpochStep", "AmbiguityBook", "EpochMemory", "QcLimits", "QcWork")} \
+        | {("record_epoch", r) for r in ("SdFlags", "OutputEpoch", "PostFit", "QcWork", "EpochMemory",
+                                         "ResidualBuffers")} \
         | {("white_noise_update", r) for r in ("TripleDifferences", "WhiteNoise")}
     assert passed_on == {("td_checks", "WhiteNoise")}
+
+
+def test_the_keyword_builders_give_the_records_tuples():
+    """qc_records' per-epoch builders (fields by keyword) return exactly tuple(Record(...)), and refuse a missing
+    or unknown field."""
+    import pytest
+
+    from gnssatt.attitude import qc_records as QR
+
+    builders = {QR.SdEpoch: QR.sd_epoch, QR.SdFlags: QR.sd_flags, QR.AntennaView: QR.antenna_view,
+                QR.EpochStep: QR.epoch_step, QR.AmbiguityBook: QR.ambiguity_book, QR.OutputEpoch: QR.output_epoch,
+                QR.PostFit: QR.post_fit}
+    for record, build in builders.items():
+        values = {f: object() for f in record._fields}            # distinct sentinels: an order mix-up shows
+        got = build(**values)
+        assert type(got) is tuple and got == tuple(record(**values)), record.__name__
+        with pytest.raises(TypeError):
+            build(**dict(list(values.items())[1:]))
+        with pytest.raises(TypeError):
+            build(**values, not_a_field=1)
+        with pytest.raises(TypeError):
+            build(*values.values())
 
 
 def test_a_wrong_unpacking_is_caught():

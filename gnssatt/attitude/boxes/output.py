@@ -12,7 +12,7 @@ import numpy as np
 
 from gnssatt.attitude.filter_state import EpochData, FilterResult, FilterRun
 from gnssatt.attitude.qc_kernels import record_epoch
-from gnssatt.attitude.qc_records import OutputEpoch, PostFit
+from gnssatt.attitude.qc_records import output_epoch, post_fit
 from gnssatt.attitude.update_kernels import store_outputs
 
 
@@ -31,10 +31,9 @@ def output(run: FilterRun, ep: EpochData) -> None:
         run.R_mask_t = ep.t
     # residual records (used and rejected): the epoch's code rows, then its phase rows; and the memory for the
     # triple differences (clock-corrected SDs where available)
-    epoch = tuple(OutputEpoch(k=k, avail_c=ep.avail_c, avail_p=ep.avail_p, cn0_dbhz=ep.cn0, u=ep.u,
-                              b_out_m=run.out_b[k]))
-    fit = tuple(PostFit(post_m=ep.post, jc=ep.jc, sc=ep.sc, fc=ep.fc, jp=ep.jp, sp=ep.sp, fp=ep.fp))
-    run.res_n = record_epoch(epoch, fit, run.qc_work, run.qc_memory, run.res_buffers, run.res_n)
+    epoch = output_epoch(k=k, cn0_dbhz=ep.cn0, u=ep.u, b_out_m=run.out_b[k])
+    fit = post_fit(post_m=ep.post, jc=ep.jc, sc=ep.sc, fc=ep.fc, jp=ep.jp, sp=ep.sp, fp=ep.fp)
+    run.res_n = record_epoch(ep.flags, epoch, fit, run.qc_work, run.qc_memory, run.res_buffers, run.res_n)
     run.prev_t = ep.t
     run.prev_b = run.out_b[k]
 

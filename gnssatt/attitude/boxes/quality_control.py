@@ -17,7 +17,7 @@ from gnssatt.attitude.filter_state import (DEG, NOISE_EPOCHS, NOISE_MIN_EPOCHS, 
 from gnssatt.attitude.kernels import cn0_growth_samples
 from gnssatt.attitude.pcv_correction import epoch_correction_m
 from gnssatt.attitude.qc_kernels import epoch_geometry, growth_weights, qc_epoch, td_checks
-from gnssatt.attitude.qc_records import AmbiguityBook, AntennaView, EpochStep, SdEpoch
+from gnssatt.attitude.qc_records import ambiguity_book, antenna_view, epoch_step, sd_epoch, sd_flags
 from gnssatt.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from gnssatt.gnss.constants import C_M_S
 
@@ -88,17 +88,18 @@ def edit_epoch(run: FilterRun, ep: EpochData) -> None:
     prediction from the last estimate and the differential drift (free-running clocks drift by up to ~10 us/s
     relative to each other, so across an outage the change alone is no jump; no code this epoch: the prediction,
     the phase clocks absorb the drift), and the triple differences (time differences of SDs with the predicted
-    geometry change, median-referenced). ep.sd, ep.step: the epoch's kernel records (gnssatt.attitude.qc_records
-    SdEpoch, EpochStep), td_checks takes them too."""
+    geometry change, median-referenced). ep.flags, ep.step: the epoch's kernel records (gnssatt.attitude.qc_records
+    SdFlags, EpochStep), td_checks and record_epoch take them too."""
     k, t, st, lam = ep.k, ep.t, run.st, run.lam
-    ep.consecutive = bool(ep.prev_t is not None and (t - ep.prev_t) <= TD_MAX_DT_S)
+    ep.consecutive = ep.prev_t is not None and (t - ep.prev_t) <= TD_MAX_DT_S       # bool or np.bool_: one type
     ep.do_td = ep.consecutive and run.prev_b is not None
-    ep.sd = tuple(SdEpoch(sdc_m=ep.sdc, sdp_m=ep.sdp, avail_p=ep.avail_p, lli=ep.lli, low_cn0=run.blk.low_cn0[ep.i],
-                          pcv_empty=ep.empty, reason0=run.blk.reason[ep.i], clock_factor=ep.cfac, baseline_ok=ep.pa))
-    ep.step = tuple(EpochStep(t_s=float(t), consecutive=ep.consecutive, do_td=ep.do_td))
-    view = tuple(AntennaView(asn_rad=ep.asn, az_rad=ep.az, mask_on=run.R_mask is not None, ever_fixed=run.ever_fixed,
-                             pcv_on=ep.pcv_on, ub_m=ep.ub))
-    n_jump, n_common = qc_epoch(ep.sd, view, ep.step, run.qc_memory, run.qc_limits, run.qc_work)
+    ep.flags = sd_flags(avail_c=ep.avail_c, avail_p=ep.avail_p, lli=ep.lli)
+    ep.step = epoch_step(t_s=t, consecutive=ep.consecutive, do_td=ep.do_td)
+    sd = sd_epoch(sdc_m=ep.sdc, sdp_m=ep.sdp, low_cn0=run.blk.low_cn0[ep.i], pcv_empty=ep.empty,
+                  reason0=run.blk.reason[ep.i], clock_factor=ep.cfac, baseline_ok=ep.pa)
+    view = antenna_view(asn_rad=ep.asn, az_rad=ep.az, mask_on=run.R_mask is not None, ever_fixed=run.ever_fixed,
+                        pcv_on=ep.pcv_on, ub_m=ep.ub)
+    n_jump, n_common = qc_epoch(sd, ep.flags, view, ep.step, run.qc_memory, run.qc_clock, run.qc_limits, run.qc_work)
     (ep.el_w, ep.el_ant, ep.az_ant, ep.reason, ep.use_c, ep.use_p, ep.slip, ep.td_c_ok, ep.td_p_ok, ep.sdc_c,
      ep.sdp_c, ep.td_c, ep.td_p, ep.mc, ep.mp) = run.views
     if n_jump:
@@ -152,8 +153,8 @@ def triple_differences(run: FilterRun, ep: EpochData) -> None:
     k, st, s = ep.k, run.st, run.s
     ep.noise_on = s.noise.noise_estimation and ep.do_td
     wfac = noise_weights(run, ep)
-    book = tuple(AmbiguityBook(amb_index=st.amb_index, amb_last_t_s=st.amb_last_t, n_fixed_part=st.n_fixed_part))
-    n_td, n_lli, ep.n_gap, ep.n_drop, ep.n_need = td_checks(ep.sd, ep.step, wfac, run.white_noise, book,
+    book = ambiguity_book(amb_index=st.amb_index, amb_last_t_s=st.amb_last_t, n_fixed_part=st.n_fixed_part)
+    n_td, n_lli, ep.n_gap, ep.n_drop, ep.n_need = td_checks(ep.flags, ep.step, wfac, run.white_noise, book,
                                                             run.qc_memory, run.qc_limits, run.qc_work)
     # every slip is reported, also on phases not in use; an LLI on the first epoch of an arc is an acquisition
     for n, evm, how in ((n_td, run.w_ev[0], "triple-difference test"), (n_lli, run.w_ev[1], "loss-of-lock indicator")):
