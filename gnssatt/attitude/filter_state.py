@@ -292,6 +292,7 @@ class FilterRun:
         self.R_mask = None                                           # attitude for the antenna-frame mask
         self.R_mask_t = -np.inf
         self.blk = None                                              # SdBlock of the current epochs
+        self.sd_qc = self.sd_flags = None                            # the QC kernels' records of it (qc_records)
         self.blk_lw = None
         # differential PCV maps per (baseline, signal), applied to fixed baselines (gnssatt.attitude.pcv_correction)
         s = self.s

@@ -23,9 +23,8 @@ from numba import njit
 
 from gnssatt.attitude.kernels import POW2, cn0_growth_update, white_noise_update
 from gnssatt.attitude.qc_records import (AmbiguityBook, AntennaView, EpochClock, EpochMemory, EpochStep, OutputEpoch,
-                                         PostFit, QcLimits, QcWork, ResidualBuffers, SdEpoch, SdFlags, WhiteNoise,
-                                         ambiguity_book, antenna_view, epoch_step, output_epoch, post_fit, sd_epoch,
-                                         sd_flags)
+                                         PostFit, QcLimits, QcWork, ResidualBuffers, SdBlockFlags, SdBlockQc,
+                                         WhiteNoise, ambiguity_book, antenna_view, epoch_step, output_epoch, post_fit)
 from gnssatt.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 
 __all__ = ["reset_white_clocks", "propagate_dynamic", "propagate_kinematic", "clip_pair", "epoch_geometry", "qc_epoch",
@@ -122,31 +121,33 @@ def epoch_geometry(u, R, bs_a_T, bs_b_T, x, b_idx, asn_in):
 
 
 @njit(cache=True, nogil=True)
-def qc_epoch(sd: SdEpoch, flags: SdFlags, view: AntennaView, step: EpochStep, memory: EpochMemory,
+def qc_epoch(sd: SdBlockQc, flags: SdBlockFlags, view: AntennaView, step: EpochStep, memory: EpochMemory,
              clock: EpochClock, limits: QcLimits, work: QcWork):
-    """One epoch of the filter's editing before the noise estimation, into work (QcWork) and clock (EpochClock) in
-    place; returns (n clock jumps, n common phase jumps above 1000 m).
+    """One epoch (row step.i of the SdBlock records sd, flags) of the filter's editing before the noise estimation,
+    into work (QcWork) and clock (EpochClock) in place; returns (n clock jumps, n common phase jumps above 1000 m).
 
     work.el_rad = el_w (n_bl, n_sat) antenna-frame elevation = fmin of view.asn_rad[0], [1], el_ant / az_ant =
     el_w / az when view.mask_on (an attitude exists) else NaN; work.reason from sd.reason0: 2 below the antenna
-    mask on ever-fixed baselines (mask_on), 10 an empty PCV bin (pcv_on), 3 low C/N0, then 6 half cycle (after
-    use_c); work.masks[0:5] = use_c, use_p, slip (LLI bit 1), td_c_ok, td_p_ok; work.values_m = sdc_c, sdp_c (minus
-    clock_factor x the epoch clock), td_c, td_p (triple differences with the predicted geometry change ub -
-    memory.prev_ub_m when step.do_td, else NaN); work.median_td_m = medians of td_c, td_p; clock.clock_m = clock
-    estimate (median of (SD code 1 + u.b) / clock_factor over used satellites, else the prediction), prediction;
-    clock.jump; clock.clock_state = last estimated clock, its time, its drift, updated.
+    mask on ever-fixed baselines (mask_on), 10 an empty PCV bin (pcv_on, pcv_empty), 3 low C/N0, then 6 half cycle
+    (after use_c); work.masks[0:5] = use_c, use_p, slip (LLI bit 1), td_c_ok, td_p_ok; work.values_m = sdc_c,
+    sdp_c (minus clock_factor x the epoch clock), td_c, td_p (triple differences with the predicted geometry change
+    ub - memory.prev_ub_m when step.do_td, else NaN); work.median_td_m = medians of td_c, td_p; clock.clock_m =
+    clock estimate (median of (SD code 1 + u.b) / clock_factor over used satellites, else the prediction),
+    prediction; clock.jump; clock.clock_state = last estimated clock, its time, its drift, updated.
 
     Specification: gnssatt.attitude.reference_qc.qc_epoch up to the TD tests (antenna_frame_elevations,
     edit_observations, epoch_clock, triple_differences; seed 000 Table 2).
     """
-    sdc_m, sdp_m, low_cn0, pcv_empty, reason0, clock_factor, baseline_ok = sd
+    sdc_m, sdp_m, low_cn0, reason0, clock_factor, baseline_ok = sd
     avail_c, avail_p, lli = flags
-    asn_rad, az_rad, mask_on, ever_fixed, pcv_on, ub_m = view
-    t_s, consecutive, do_td = step
+    asn_rad, az_rad, mask_on, ever_fixed, pcv_on, pcv_empty, ub_m = view
+    i, t_s, consecutive, do_td = step
     prev_sdc_m, prev_sdp_m, prev_ub_m = memory
     clock_state, clock_m, jump = clock
     el_mask_ant_rad, clock_jump_m, td_max_dt_s, td_code_m, td_phase_cyc, max_gap_s, wavelength_m = limits
     el_rad, reason, masks, values_m, median_td_m = work
+    sdc_m, sdp_m, low_cn0, reason0, avail_p, lli = sdc_m[i], sdp_m[i], low_cn0[i], reason0[i], avail_p[i], lli[i]
+    clock_factor, baseline_ok = clock_factor[i], baseline_ok[i]                      # the epoch's rows
     el_w, el_ant, az_ant = el_rad[0], el_rad[1], el_rad[2]
     n_bl, n_sat, n_sig = sdc_m.shape
     use_c, use_p, slip, td_c_ok, td_p_ok = masks[0], masks[1], masks[2], masks[3], masks[4]
@@ -280,12 +281,12 @@ def growth_weights(update, xs, log_rs, off, mom, gam_n, gamma, noise_epochs, min
 
 
 @njit(cache=True, nogil=True)
-def td_checks(flags: SdFlags, step: EpochStep, wfac, noise: WhiteNoise, book: AmbiguityBook, memory: EpochMemory,
-              limits: QcLimits, work: QcWork):
+def td_checks(flags: SdBlockFlags, step: EpochStep, wfac, noise: WhiteNoise, book: AmbiguityBook,
+              memory: EpochMemory, limits: QcLimits, work: QcWork):
     """The filter's white-noise update (gnssatt.attitude.kernels.white_noise_update with the C/N0 weights wfac
     (2, bl, sat, sig) of code and phase, when step.do_td), triple-difference tests and ambiguity-bookkeeping masks
-    of one epoch, after qc_epoch (and any phase clock jump correction); returns (n TD slips, n LLI slips, n gaps,
-    n to drop, n to add).
+    of one epoch (row step.i of flags), after qc_epoch (and any phase clock jump correction); returns (n TD slips,
+    n LLI slips, n gaps, n to drop, n to add).
 
     In place in work: reason 4 and use_c off where the code TD is off its median by more than td_code_m; slip where
     a phase TD (every available phase) is off by more than td_phase_cyc cycles; masks[5] = such slips without LLI,
@@ -297,12 +298,13 @@ def td_checks(flags: SdFlags, step: EpochStep, wfac, noise: WhiteNoise, book: Am
     Table 2, sec. 2), gnssatt.attitude.reference_noise.update_white_noise.
     """
     avail_c, avail_p, lli = flags
-    t_s, consecutive, do_td = step
+    i, t_s, consecutive, do_td = step
     amb_index, amb_last_t_s, n_fixed_part = book
     prev_sdc_m, prev_sdp_m, prev_ub_m = memory
     el_mask_ant_rad, clock_jump_m, td_max_dt_s, td_code_m, td_phase_cyc, max_gap_s, wavelength_m = limits
     el_rad, reason, masks, values_m, median_td_m = work
     ev_td, ev_lli, to_drop, to_add = masks[5], masks[6], masks[7], masks[8]
+    avail_p, lli = avail_p[i], lli[i]                                                # the epoch's rows
     n_bl, n_sat, n_sig = reason.shape
     use_c, use_p, slip, td_c_ok, td_p_ok = masks[0], masks[1], masks[2], masks[3], masks[4]
     td_c, td_p = values_m[2], values_m[3]
@@ -362,22 +364,23 @@ def td_checks(flags: SdFlags, step: EpochStep, wfac, noise: WhiteNoise, book: Am
 
 
 @njit(cache=True, nogil=True)
-def record_epoch(flags: SdFlags, epoch: OutputEpoch, fit: PostFit, work: QcWork, memory: EpochMemory,
+def record_epoch(flags: SdBlockFlags, epoch: OutputEpoch, fit: PostFit, work: QcWork, memory: EpochMemory,
                  buffers: ResidualBuffers, pos):
-    """The residual rows of epoch.k written from row pos of buffers.ints (6, cap) = epoch, bl, sat, sig, kind,
-    reason and buffers.floats (4, cap) = el_ant_deg, az_ant_deg (of az mod 2 pi), cn0_dbhz, residual_m: its code
-    rows (kind 0, every available code in (bl, sat, sig) order, residual post_m[r] of code row r (jc, sc, fc),
-    post_m[jc.size + r] of phase row r (jp, sp, fp) when the update had rows, else NaN, reason 0 if used), then
-    its phase rows (kind 1, where a phase exists; reason 0 if used, else the code's or 5 (td_phase)); and the
-    memory of the triple differences memory.prev_sdc_m / prev_sdp_m = sdc_c / sdp_c where available, else NaN,
-    memory.prev_ub_m = b_out_m u^T (the epoch's output baselines, np.dot as the former @). Returns the next free
-    row.
+    """The residual rows of epoch.k (row epoch.i of flags) written from row pos of buffers.ints (6, cap) = epoch,
+    bl, sat, sig, kind, reason and buffers.floats (4, cap) = el_ant_deg, az_ant_deg (of az mod 2 pi), cn0_dbhz,
+    residual_m: its code rows (kind 0, every available code in (bl, sat, sig) order, residual post_m[r] of code row
+    r (jc, sc, fc), post_m[jc.size + r] of phase row r (jp, sp, fp) when the update had rows, else NaN, reason 0 if
+    used), then its phase rows (kind 1, where a phase exists; reason 0 if used, else the code's or 5 (td_phase));
+    and the memory of the triple differences memory.prev_sdc_m / prev_sdp_m = sdc_c / sdp_c where available, else
+    NaN, memory.prev_ub_m = b_out_m u^T (the epoch's output baselines, np.dot as the former @). Returns the next
+    free row.
 
     Specification: gnssatt.attitude.reference_records.epoch_residual_rows, residual_table (row order) and
     triple_difference_memory (seed 000 Fig. 2 "output").
     """
     avail_c, avail_p, lli = flags
-    k, cn0_dbhz, u, b_out_m = epoch
+    k, i, cn0_dbhz, u, b_out_m = epoch
+    avail_c, avail_p = avail_c[i], avail_p[i]                                        # the epoch's rows
     post_m, jc, sc, fc, jp, sp, fp = fit
     el_rad, reason, masks, values_m, median_td_m = work
     prev_sdc_m, prev_sdp_m, prev_ub_m = memory
@@ -542,16 +545,17 @@ def warm_up() -> None:
     memory = tuple(EpochMemory(prev_sdc_m=f3.copy(), prev_sdp_m=f3.copy(), prev_ub_m=f2.copy()))
     clock = tuple(EpochClock(clock_state=np.zeros((3, n_bl)), clock_m=np.zeros((2, n_bl)),
                              jump=np.zeros(n_bl, np.bool_)))
-    sd = sd_epoch(sdc_m=f3, sdp_m=f3, low_cn0=b3, pcv_empty=b3, reason0=i3, clock_factor=np.ones(n_sat),
-                  baseline_ok=np.ones(n_bl, np.bool_))
-    flags = sd_flags(avail_c=b3, avail_p=b3, lli=lli)
+    f4, b4 = np.zeros((2,) + sh), np.zeros((2,) + sh, np.bool_)                 # SdBlock arrays of 2 epochs
+    sd = tuple(SdBlockQc(sdc_m=f4, sdp_m=f4, low_cn0=b4, reason0=np.zeros((2,) + sh, np.int64),
+                         clock_factor=np.ones((2, n_sat)), baseline_ok=np.ones((2, n_bl), np.bool_)))
+    flags = tuple(SdBlockFlags(avail_c=b4, avail_p=b4, lli=np.zeros((2,) + sh, np.int8)))
     noise = tuple(WhiteNoise(var_code_m2=np.ones(n_sig), var_phase_m2=np.ones(n_sig), n_white=np.zeros(n_sig),
                              memory_epochs=300.0, enabled=True))
     book = ambiguity_book(amb_index=i3 - 1, amb_last_t_s=np.zeros(0), n_fixed_part=8)
     for do in (False, True):
         view = antenna_view(asn_rad=asn, az_rad=np.zeros(n_sat), mask_on=do, ever_fixed=np.zeros(n_bl, np.bool_),
-                            pcv_on=do, ub_m=f2)
-        step = epoch_step(t_s=1.0, consecutive=do, do_td=do)
+                            pcv_on=do, pcv_empty=b3, ub_m=f2)
+        step = epoch_step(i=1, t_s=1.0, consecutive=do, do_td=do)
         qc_epoch(sd, flags, view, step, memory, clock, limits, work)
         td_checks(flags, step, np.ones((2,) + sh), noise, book, memory, limits, work)
     z = np.zeros(0)
@@ -569,7 +573,7 @@ def warm_up() -> None:
     drop_states(st[0], st[1], keep, 14, st[2], st[3], st[4], st[5], amb_index)
     buffers = tuple(ResidualBuffers(ints=np.zeros((6, 8), np.int64), floats=np.zeros((4, 8)),
                                     lookup=np.zeros((2,) + sh)))
-    epoch = output_epoch(k=0, cn0_dbhz=f3, u=u, b_out_m=np.zeros((n_bl, 3)))
+    epoch = output_epoch(k=0, i=1, cn0_dbhz=f3, u=u, b_out_m=np.zeros((n_bl, 3)))
     for idx in (np.zeros(1, np.int64), np.nonzero(np.ones((2, 2)))[0]):      # contiguous, strided
         fit = post_fit(post_m=z, jc=idx, sc=idx, fc=idx, jp=idx, sp=idx, fp=idx)
         record_epoch(flags, epoch, fit, work, memory, buffers, 0)

@@ -3,16 +3,19 @@ record_epoch, and gnssatt.attitude.kernels.white_noise_update. Each layout is a 
 once, one comment per field (unit, shape, frame); the names and the grouping follow the readable records of the
 specification (gnssatt.attitude.reference_qc, reference_noise, reference_records) where they fit.
 
-Shapes: n_bl baselines, n_sat satellites, n_sig signals; "(bl, sat, sig)" is (n_bl, n_sat, n_sig).
+Shapes: n_bl baselines, n_sat satellites, n_sig signals, n_blk epochs of an SdBlock; "(bl, sat, sig)" is
+(n_bl, n_sat, n_sig), "(blk, bl, sat, sig)" (n_blk, n_bl, n_sat, n_sig).
 
 How they travel (bench/design/qc_record_calls.py measured the choices): a record goes to a kernel as a plain tuple
 in field order (numba types a plain tuple by a C fingerprint, a namedtuple through Python at ~1 us more per call)
 and the kernel unpacks it in one line in field order (tests/attitude/test_qc_records.py checks every such line
 against `_fields`). Records of arrays that live for the whole run (limits, work arrays, the previous-epoch memory,
 the epoch clock, the noise estimator's state, all mutated in place) are built once per run, by keyword, by
-gnssatt.attitude.filter_state.FilterRun (`tuple(QcLimits(...))`). The per-epoch ones (SdEpoch, SdFlags,
-AntennaView, EpochStep, AmbiguityBook, OutputEpoch, PostFit) are built by keyword too, through the keyword-only
-builders below (`sd_epoch(sdc_m=..., ...)` returns the plain tuple in ~0.2 us; `tuple(SdEpoch(...))` takes ~0.7).
+gnssatt.attitude.filter_state.FilterRun (`tuple(QcLimits(...))`), the single differences once per SdBlock
+(SdBlockQc, SdBlockFlags: the kernels take the epoch's row EpochStep.i themselves, ~0.14 us per view saved). The
+per-epoch ones (AntennaView, EpochStep, AmbiguityBook, OutputEpoch, PostFit) are built by keyword too, through the
+keyword-only builders below (`epoch_step(i=..., ...)` returns the plain tuple in ~0.1-0.2 us;
+`tuple(EpochStep(...))` takes ~0.5-0.7).
 Each kernel takes only records whose fields it mostly uses: every field is one more argument to type and unbox
 (~70 ns). Each field always has one numba type (float, bool, int; arrays C-contiguous, np.nonzero's index arrays
 as numpy gives them), so each kernel compiles the few signatures its warm_up covers.
@@ -23,10 +26,9 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-__all__ = ["QcLimits", "SdEpoch", "SdFlags", "AntennaView", "EpochStep", "EpochMemory", "EpochClock", "QcWork",
-           "AmbiguityBook", "TripleDifferences", "WhiteNoise", "OutputEpoch", "PostFit", "ResidualBuffers",
-           "plain_tuple_builder", "sd_epoch", "sd_flags", "antenna_view", "epoch_step", "ambiguity_book",
-           "output_epoch", "post_fit"]
+__all__ = ["QcLimits", "SdBlockQc", "SdBlockFlags", "AntennaView", "EpochStep", "EpochMemory", "EpochClock",
+           "QcWork", "AmbiguityBook", "TripleDifferences", "WhiteNoise", "OutputEpoch", "PostFit", "ResidualBuffers",
+           "plain_tuple_builder", "antenna_view", "epoch_step", "ambiguity_book", "output_epoch", "post_fit"]
 
 
 class QcLimits(NamedTuple):
@@ -40,24 +42,26 @@ class QcLimits(NamedTuple):
     wavelength_m: np.ndarray        # (n_sig,) carrier wavelengths, m
 
 
-class SdEpoch(NamedTuple):
-    """One epoch's single differences (second antenna minus first) and their editing before the QC: views of the
-    epoch in the SdBlock (reference_qc.SdEpoch but its avail_p and lli, which are in SdFlags); per epoch."""
-    sdc_m: np.ndarray               # (bl, sat, sig) SD code, m
-    sdp_m: np.ndarray               # (bl, sat, sig) SD phase, m
-    low_cn0: np.ndarray             # (bl, sat, sig) bool: C/N0 below the signal's mask
-    pcv_empty: np.ndarray           # (bl, sat, sig) bool: phase in an empty bin of the PCV map
-    reason0: np.ndarray             # (bl, sat, sig) int64 reasons set before (0 usable, 1 local horizon, 8 no SD)
-    clock_factor: np.ndarray        # (n_sat,) 1 - rho_dot / c: the clock partial of each satellite's SD
-    baseline_ok: np.ndarray         # (n_bl,) bool: both antennas of the baseline have data
+class SdBlockQc(NamedTuple):
+    """The single differences (second antenna minus first) and their editing before the QC, over the epochs of the
+    current SdBlock (gnssatt.attitude.sd_block; an epoch is row EpochStep.i = k - k0): reference_qc.SdEpoch of
+    each epoch but avail_p, lli (SdBlockFlags) and pcv_empty (AntennaView); read by qc_epoch; once per block."""
+    sdc_m: np.ndarray               # (blk, bl, sat, sig) SD code, m
+    sdp_m: np.ndarray               # (blk, bl, sat, sig) SD phase, m
+    low_cn0: np.ndarray             # (blk, bl, sat, sig) bool: C/N0 below the signal's mask
+    reason0: np.ndarray             # (blk, bl, sat, sig) int64 reasons set before (0 usable, 1 local horizon, 8 no
+                                    # SD)
+    clock_factor: np.ndarray        # (n_blk, n_sat) 1 - rho_dot / c: the clock partial of each satellite's SD
+    baseline_ok: np.ndarray         # (n_blk, n_bl) bool: both antennas of the baseline have data
 
 
-class SdFlags(NamedTuple):
-    """Which single differences of the epoch exist and their loss-of-lock bits (reference_qc.SdEpoch.avail_p / lli,
-    reference_records.EpochFlags.avail_c / avail_p): SdBlock views read by all three QC kernels; per epoch."""
-    avail_c: np.ndarray             # (bl, sat, sig) bool: SD code exists (both antennas, geometry)
-    avail_p: np.ndarray             # (bl, sat, sig) bool: SD phase exists too
-    lli: np.ndarray                 # (bl, sat, sig) loss-of-lock bits of either antenna (1 slip, 2 half cycle)
+class SdBlockFlags(NamedTuple):
+    """Which single differences exist and their loss-of-lock bits, over the epochs of the current SdBlock
+    (reference_qc.SdEpoch.avail_p / lli, reference_records.EpochFlags.avail_c / avail_p): read by the three QC
+    kernels; once per block."""
+    avail_c: np.ndarray             # (blk, bl, sat, sig) bool: SD code exists (both antennas, geometry)
+    avail_p: np.ndarray             # (blk, bl, sat, sig) bool: SD phase exists too
+    lli: np.ndarray                 # (blk, bl, sat, sig) loss-of-lock bits of either antenna (1 slip, 2 half cycle)
 
 
 class AntennaView(NamedTuple):
@@ -69,11 +73,14 @@ class AntennaView(NamedTuple):
     mask_on: bool                   # an attitude is known: the antenna-frame mask applies
     ever_fixed: np.ndarray          # (n_bl,) bool: baselines fixed before (the antenna-frame mask is theirs)
     pcv_on: bool                    # phases in empty PCV bins are rejected
+    pcv_empty: np.ndarray           # (bl, sat, sig) bool: phase in an empty bin of the PCV map
     ub_m: np.ndarray                # (n_bl, n_sat) predicted geometry b . u of this epoch (ECEF), m
 
 
 class EpochStep(NamedTuple):
-    """The epoch's time and its link to the previous epoch (reference_qc.PreviousEpoch's flags); per epoch."""
+    """The epoch's row in the SdBlock records, its time and its link to the previous epoch (reference_qc.PreviousEpoch's
+    flags); per epoch."""
+    i: int                          # row of the epoch in SdBlockQc / SdBlockFlags (k - k0)
     t_s: float                      # epoch time, s since the first epoch
     consecutive: bool               # the previous epoch is at most td_max_dt_s before
     do_td: bool                     # triple differences are formed (consecutive, and a previous output exists)
@@ -140,8 +147,10 @@ class WhiteNoise(NamedTuple):
 
 
 class OutputEpoch(NamedTuple):
-    """The epoch as the residual records and the triple-difference memory need it, besides its SdFlags; per epoch."""
+    """The epoch as the residual records and the triple-difference memory need it, besides its SdBlockFlags row;
+    per epoch."""
     k: int                          # epoch index
+    i: int                          # row of the epoch in SdBlockFlags (k - k0)
     cn0_dbhz: np.ndarray            # (bl, sat, sig) the lower C/N0 of the two antennas, dB-Hz
     u: np.ndarray                   # (n_sat, 3) lines of sight (ECEF, unit)
     b_out_m: np.ndarray             # (n_bl, 3) the epoch's output baselines (ECEF), m
@@ -179,8 +188,6 @@ def plain_tuple_builder(record: type) -> Callable[..., tuple]:
     return fn
 
 
-sd_epoch = plain_tuple_builder(SdEpoch)
-sd_flags = plain_tuple_builder(SdFlags)
 antenna_view = plain_tuple_builder(AntennaView)
 epoch_step = plain_tuple_builder(EpochStep)
 ambiguity_book = plain_tuple_builder(AmbiguityBook)

@@ -156,18 +156,23 @@ def _qc_limits(limits: QcLimits) -> tuple:
                              wavelength_m=limits.wavelength_m))
 
 
-def _sd_epoch(sd: SdEpoch) -> tuple:
-    return QR.sd_epoch(sdc_m=sd.sdc_m, sdp_m=sd.sdp_m, low_cn0=sd.low_cn0, pcv_empty=sd.pcv_empty, reason0=sd.reason0,
-                       clock_factor=sd.clock_factor, baseline_ok=sd.baseline_ok)
+def _block(a) -> np.ndarray:
+    """An epoch's array as the one row of an SdBlock's (the kernels read row i = 0)."""
+    return np.ascontiguousarray(a)[None]
 
 
-def _sd_flags(sd: SdEpoch) -> tuple:
-    """The SdFlags of a reference SdEpoch (avail_c: qc_epoch and td_checks do not read it)."""
-    return QR.sd_flags(avail_c=sd.avail_p, avail_p=sd.avail_p, lli=sd.lli)
+def _sd_block_qc(sd: SdEpoch) -> tuple:
+    return tuple(QR.SdBlockQc(sdc_m=_block(sd.sdc_m), sdp_m=_block(sd.sdp_m), low_cn0=_block(sd.low_cn0),
+                              reason0=_block(sd.reason0), clock_factor=_block(sd.clock_factor),
+                              baseline_ok=_block(sd.baseline_ok)))
+
+
+def _sd_block_flags(avail_c, avail_p, lli) -> tuple:
+    return tuple(QR.SdBlockFlags(avail_c=_block(avail_c), avail_p=_block(avail_p), lli=_block(lli)))
 
 
 def _epoch_step(prev: PreviousEpoch, t_s: float) -> tuple:
-    return QR.epoch_step(t_s=float(t_s), consecutive=bool(prev.consecutive), do_td=bool(prev.do_td))
+    return QR.epoch_step(i=0, t_s=float(t_s), consecutive=bool(prev.consecutive), do_td=bool(prev.do_td))
 
 
 def _qc_work(sh: tuple) -> QR.QcWork:
@@ -187,8 +192,9 @@ def call_qc_epoch(sd: SdEpoch, view: AntennaView, ub_m, prev: PreviousEpoch, clo
     kclock = QR.EpochClock(clock_state=clock.as_array(), clock_m=np.zeros((2, n_bl)), jump=np.zeros(n_bl, bool))
     kview = QR.antenna_view(asn_rad=np.ascontiguousarray(np.stack([view.asn_a_rad, view.asn_b_rad])),
                             az_rad=view.az_rad, mask_on=bool(view.mask_on), ever_fixed=view.ever_fixed,
-                            pcv_on=bool(view.pcv_on), ub_m=ub_m)
-    n_jump, n_common = QK.qc_epoch(_sd_epoch(sd), _sd_flags(sd), kview, _epoch_step(prev, t_s), tuple(memory),
+                            pcv_on=bool(view.pcv_on), pcv_empty=sd.pcv_empty, ub_m=ub_m)
+    flags = _sd_block_flags(sd.avail_p, sd.avail_p, sd.lli)           # (avail_c: not read by qc_epoch)
+    n_jump, n_common = QK.qc_epoch(_sd_block_qc(sd), flags, kview, _epoch_step(prev, t_s), tuple(memory),
                                    tuple(kclock), _qc_limits(limits), tuple(work))
     el, wb, wf, mcp = work.el_rad, work.masks, work.values_m, work.median_td_m
     td = TripleDifferences(wf[2], wf[3], wb[3], wb[4], mcp[0], mcp[1])
@@ -221,8 +227,8 @@ def call_td_checks(qc: dict, weights, est: NoiseEstimates, settings: NoiseSettin
     kbook = QR.ambiguity_book(amb_index=book.amb_index, amb_last_t_s=book.amb_last_t_s,
                               n_fixed_part=int(book.n_fixed_part))
     n_td, n_lli, n_gap, n_drop, n_need = QK.td_checks(
-        _sd_flags(sd), _epoch_step(prev, t_s), np.ascontiguousarray(weights), _white_noise(est, settings, noise_on),
-        kbook, tuple(qc["_memory"]), _qc_limits(limits), tuple(work))
+        _sd_block_flags(sd.avail_p, sd.avail_p, sd.lli), _epoch_step(prev, t_s), np.ascontiguousarray(weights),
+        _white_noise(est, settings, noise_on), kbook, tuple(qc["_memory"]), _qc_limits(limits), tuple(work))
     m = work.masks
     return dict(ev_td=m[5], ev_lli=m[6], drop=m[7], need=m[8], n_td=n_td, n_lli=n_lli, n_gap=n_gap,
                 n_drop=n_drop, n_need=n_need)
@@ -236,8 +242,8 @@ def call_record_epoch(k: int, flags: EpochFlags, el_ant_rad, az_ant_rad, cn0_dbh
     work.el_rad[1], work.el_rad[2], work.reason[:] = el_ant_rad, az_ant_rad, flags.reason
     work.masks[0], work.masks[1] = flags.use_c, flags.use_p
     work.values_m[0], work.values_m[1] = sdc_c_m, sdp_c_m
-    kflags = QR.sd_flags(avail_c=flags.avail_c, avail_p=flags.avail_p, lli=np.zeros(flags.avail_c.shape, np.int8))
-    epoch = QR.output_epoch(k=int(k), cn0_dbhz=cn0_dbhz, u=u, b_out_m=b_out_m)
+    kflags = _sd_block_flags(flags.avail_c, flags.avail_p, np.zeros(flags.avail_c.shape, np.int8))
+    epoch = QR.output_epoch(k=int(k), i=0, cn0_dbhz=cn0_dbhz, u=u, b_out_m=b_out_m)
     fit = QR.post_fit(post_m=post_m, jc=rows.jc, sc=rows.sc, fc=rows.fc, jp=rows.jp, sp=rows.sp, fp=rows.fp)
     memory = QR.EpochMemory(prev_sdc_m=b["prev_sdc"], prev_sdp_m=b["prev_sdp"], prev_ub_m=b["prev_ub"])
     kbuf = QR.ResidualBuffers(ints=b["ibuf"], floats=b["fbuf"], lookup=b["lookup"])

@@ -79,7 +79,7 @@ def mismatches(source: str, layouts: dict) -> list[str]:
 
 def test_the_record_modules_are_found():
     layouts = _layouts()
-    assert {"SdEpoch", "SdFlags", "AntennaView", "EpochStep", "EpochMemory", "EpochClock", "QcLimits", "QcWork",
+    assert {"SdBlockQc", "SdBlockFlags", "AntennaView", "EpochStep", "EpochMemory", "EpochClock", "QcLimits", "QcWork",
             "AmbiguityBook", "TripleDifferences", "WhiteNoise", "OutputEpoch", "PostFit",
             "ResidualBuffers"} <= set(layouts)
 
@@ -101,10 +101,11 @@ def test_the_qc_kernels_take_records_and_unpack_them():
         rows += record_unpackings((ATTITUDE / name).read_text(encoding="utf-8"), layouts)
     got = {(fn, rec) for fn, _, rec, names, _ in rows if names is not None}
     passed_on = {(fn, rec) for fn, _, rec, names, _ in rows if names is None}
-    assert got == {("qc_epoch", r) for r in ("SdEpoch", "SdFlags", "AntennaView", "EpochStep", "EpochMemory",
+    assert got == {("qc_epoch", r) for r in ("SdBlockQc", "SdBlockFlags", "AntennaView", "EpochStep", "EpochMemory",
                                              "EpochClock", "QcLimits", "QcWork")} \
-        | {("td_checks", r) for r in ("SdFlags", "EpochStep", "AmbiguityBook", "EpochMemory", "QcLimits", "QcWork")} \
-        | {("record_epoch", r) for r in ("SdFlags", "OutputEpoch", "PostFit", "QcWork", "EpochMemory",
+        | {("td_checks", r) for r in ("SdBlockFlags", "EpochStep", "AmbiguityBook", "EpochMemory", "QcLimits",
+                                      "QcWork")} \
+        | {("record_epoch", r) for r in ("SdBlockFlags", "OutputEpoch", "PostFit", "QcWork", "EpochMemory",
                                          "ResidualBuffers")} \
         | {("white_noise_update", r) for r in ("TripleDifferences", "WhiteNoise")}
     assert passed_on == {("td_checks", "WhiteNoise")}
@@ -117,9 +118,8 @@ def test_the_keyword_builders_give_the_records_tuples():
 
     from gnssatt.attitude import qc_records as QR
 
-    builders = {QR.SdEpoch: QR.sd_epoch, QR.SdFlags: QR.sd_flags, QR.AntennaView: QR.antenna_view,
-                QR.EpochStep: QR.epoch_step, QR.AmbiguityBook: QR.ambiguity_book, QR.OutputEpoch: QR.output_epoch,
-                QR.PostFit: QR.post_fit}
+    builders = {QR.AntennaView: QR.antenna_view, QR.EpochStep: QR.epoch_step, QR.AmbiguityBook: QR.ambiguity_book,
+                QR.OutputEpoch: QR.output_epoch, QR.PostFit: QR.post_fit}
     for record, build in builders.items():
         values = {f: object() for f in record._fields}            # distinct sentinels: an order mix-up shows
         got = build(**values)

@@ -31,9 +31,9 @@ def output(run: FilterRun, ep: EpochData) -> None:
         run.R_mask_t = ep.t
     # residual records (used and rejected): the epoch's code rows, then its phase rows; and the memory for the
     # triple differences (clock-corrected SDs where available)
-    epoch = output_epoch(k=k, cn0_dbhz=ep.cn0, u=ep.u, b_out_m=run.out_b[k])
+    epoch = output_epoch(k=k, i=ep.i, cn0_dbhz=ep.cn0, u=ep.u, b_out_m=run.out_b[k])
     fit = post_fit(post_m=ep.post, jc=ep.jc, sc=ep.sc, fc=ep.fc, jp=ep.jp, sp=ep.sp, fp=ep.fp)
-    run.res_n = record_epoch(ep.flags, epoch, fit, run.qc_work, run.qc_memory, run.res_buffers, run.res_n)
+    run.res_n = record_epoch(run.sd_flags, epoch, fit, run.qc_work, run.qc_memory, run.res_buffers, run.res_n)
     run.prev_t = ep.t
     run.prev_b = run.out_b[k]
 

@@ -17,14 +17,14 @@ from gnssatt.attitude.filter_state import (DEG, NOISE_EPOCHS, NOISE_MIN_EPOCHS, 
 from gnssatt.attitude.kernels import cn0_growth_samples
 from gnssatt.attitude.pcv_correction import epoch_correction_m
 from gnssatt.attitude.qc_kernels import epoch_geometry, growth_weights, qc_epoch, td_checks
-from gnssatt.attitude.qc_records import ambiguity_book, antenna_view, epoch_step, sd_epoch, sd_flags
+from gnssatt.attitude.qc_records import SdBlockFlags, SdBlockQc, ambiguity_book, antenna_view, epoch_step
 from gnssatt.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from gnssatt.gnss.constants import C_M_S
 
 
 def quality_control(run: FilterRun, ep: EpochData) -> None:
-    """The epoch's SDs (ep.sdc, ep.sdp, ...), their editing (ep.use_c, ep.use_p, ep.reason ...), slips and the
-    ambiguity states added or dropped; Table 2 in the order of seed 000 sec. 2."""
+    """The epoch's SDs (from the SdBlock, run.blk), their editing (ep.use_c, ep.use_p, ep.reason ...), slips and
+    the ambiguity states added or dropped; Table 2 in the order of seed 000 sec. 2."""
     load_epoch(run, ep)
     epoch_geometry_and_pcv(run, ep)
     edit_epoch(run, ep)
@@ -33,8 +33,9 @@ def quality_control(run: FilterRun, ep: EpochData) -> None:
 
 
 def load_epoch(run: FilterRun, ep: EpochData) -> None:
-    """The epoch's single differences from the current SdBlock (a new block every BLOCK_EPOCHS epochs), with room
-    in the residual records for the block's rows."""
+    """The epoch's single differences from the current SdBlock (a new block every BLOCK_EPOCHS epochs, with room
+    in the residual records for its rows and the QC kernels' records of it, run.sd_qc and run.sd_flags: the kernels
+    read the epoch's row ep.i themselves); views of the epoch's row for the other boxes."""
     k = ep.k
     blk = run.blk
     if blk is None or k - blk.k0 >= blk.pa.shape[0]:
@@ -48,10 +49,12 @@ def load_epoch(run: FilterRun, ep: EpochData) -> None:
             res_i1, res_f1 = np.empty((6, cap), np.int64), np.empty((4, cap))
             res_i1[:, :run.res_n], res_f1[:, :run.res_n] = run.res_i[:, :run.res_n], run.res_f[:, :run.res_n]
             run.set_residual_buffers(res_i1, res_f1)
+        run.sd_qc = tuple(SdBlockQc(sdc_m=blk.sdc, sdp_m=blk.sdp, low_cn0=blk.low_cn0, reason0=blk.reason,
+                                    clock_factor=blk.cfac, baseline_ok=blk.pa))
+        run.sd_flags = tuple(SdBlockFlags(avail_c=blk.avail_c, avail_p=blk.avail_p, lli=blk.lli))
     i = ep.i = k - blk.k0
-    ep.pa, ep.u, ep.cfac = blk.pa[i], blk.u[i], blk.cfac[i]                      # (n_bl,) (n_sat, 3) (n_sat,)
-    ep.sdc, ep.sdp, ep.cn0, ep.lli = blk.sdc[i], blk.sdp[i], blk.cn0[i], blk.lli[i]  # (n_bl, n_sat, n_sig)
-    ep.avail_c, ep.avail_p = blk.avail_c[i], blk.avail_p[i]
+    # (n_bl,) (n_sat, 3) (n_sat,) (n_bl, n_sat, n_sig): what the other boxes read of the epoch
+    ep.pa, ep.u, ep.cfac, ep.cn0 = blk.pa[i], blk.u[i], blk.cfac[i], blk.cn0[i]
     ep.el_loc = run.geom.elevation_local_rad[k]
 
 
@@ -88,18 +91,16 @@ def edit_epoch(run: FilterRun, ep: EpochData) -> None:
     prediction from the last estimate and the differential drift (free-running clocks drift by up to ~10 us/s
     relative to each other, so across an outage the change alone is no jump; no code this epoch: the prediction,
     the phase clocks absorb the drift), and the triple differences (time differences of SDs with the predicted
-    geometry change, median-referenced). ep.flags, ep.step: the epoch's kernel records (gnssatt.attitude.qc_records
-    SdFlags, EpochStep), td_checks and record_epoch take them too."""
+    geometry change, median-referenced). ep.step: the epoch's EpochStep (gnssatt.attitude.qc_records), td_checks
+    takes it too."""
     k, t, st, lam = ep.k, ep.t, run.st, run.lam
     ep.consecutive = ep.prev_t is not None and (t - ep.prev_t) <= TD_MAX_DT_S       # bool or np.bool_: one type
     ep.do_td = ep.consecutive and run.prev_b is not None
-    ep.flags = sd_flags(avail_c=ep.avail_c, avail_p=ep.avail_p, lli=ep.lli)
-    ep.step = epoch_step(t_s=t, consecutive=ep.consecutive, do_td=ep.do_td)
-    sd = sd_epoch(sdc_m=ep.sdc, sdp_m=ep.sdp, low_cn0=run.blk.low_cn0[ep.i], pcv_empty=ep.empty,
-                  reason0=run.blk.reason[ep.i], clock_factor=ep.cfac, baseline_ok=ep.pa)
+    ep.step = epoch_step(i=ep.i, t_s=t, consecutive=ep.consecutive, do_td=ep.do_td)
     view = antenna_view(asn_rad=ep.asn, az_rad=ep.az, mask_on=run.R_mask is not None, ever_fixed=run.ever_fixed,
-                        pcv_on=ep.pcv_on, ub_m=ep.ub)
-    n_jump, n_common = qc_epoch(sd, ep.flags, view, ep.step, run.qc_memory, run.qc_clock, run.qc_limits, run.qc_work)
+                        pcv_on=ep.pcv_on, pcv_empty=ep.empty, ub_m=ep.ub)
+    n_jump, n_common = qc_epoch(run.sd_qc, run.sd_flags, view, ep.step, run.qc_memory, run.qc_clock, run.qc_limits,
+                                run.qc_work)
     (ep.el_w, ep.el_ant, ep.az_ant, ep.reason, ep.use_c, ep.use_p, ep.slip, ep.td_c_ok, ep.td_p_ok, ep.sdc_c,
      ep.sdp_c, ep.td_c, ep.td_p, ep.mc, ep.mp) = run.views
     if n_jump:
@@ -154,7 +155,7 @@ def triple_differences(run: FilterRun, ep: EpochData) -> None:
     ep.noise_on = s.noise.noise_estimation and ep.do_td
     wfac = noise_weights(run, ep)
     book = ambiguity_book(amb_index=st.amb_index, amb_last_t_s=st.amb_last_t, n_fixed_part=st.n_fixed_part)
-    n_td, n_lli, ep.n_gap, ep.n_drop, ep.n_need = td_checks(ep.flags, ep.step, wfac, run.white_noise, book,
+    n_td, n_lli, ep.n_gap, ep.n_drop, ep.n_need = td_checks(run.sd_flags, ep.step, wfac, run.white_noise, book,
                                                             run.qc_memory, run.qc_limits, run.qc_work)
     # every slip is reported, also on phases not in use; an LLI on the first epoch of an arc is an acquisition
     for n, evm, how in ((n_td, run.w_ev[0], "triple-difference test"), (n_lli, run.w_ev[1], "loss-of-lock indicator")):
