@@ -304,7 +304,7 @@ class FilterRun:
 
     def _init_work(self):
         """Per-epoch work arrays of the compiled QC (gnssatt.attitude.qc_kernels), overwritten every epoch, and the
-        QC kernels' run-constant records (gnssatt.attitude.qc_records: limits, work)."""
+        QC kernels' run-constant records of them (gnssatt.attitude.qc_records: limits, work, epoch clock)."""
         n_bl, n_sat, n_sig = self.n_bl, self.n_sat, self.n_sig
         shp = (n_bl, n_sat, n_sig)
         s = self.s
