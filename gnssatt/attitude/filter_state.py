@@ -17,6 +17,7 @@ from gnssatt.attitude.adaptive import ManoeuvreDetector
 from gnssatt.attitude.fastops import clip as _clip, nz as _nz
 from gnssatt.attitude.pcv_correction import pcv_tables_for
 from gnssatt.attitude.qc_kernels import add_states, drop_states
+from gnssatt.attitude.qc_records import EpochClock, EpochMemory, QcLimits, QcWork, ResidualBuffers, WhiteNoise
 from gnssatt.attitude.settings import AttitudeSettings, cn0_mask_of
 from gnssatt.gnss.constants import C_M_S
 
@@ -239,6 +240,9 @@ class FilterRun:
         self.est_var_c = np.full(n_sig, s.table1.sigma_code_m ** 2)
         self.est_var_p = np.full(n_sig, s.table1.sigma_phase_m ** 2)
         self.est_n = np.zeros(n_sig)
+        self.white_noise = tuple(WhiteNoise(var_code_m2=self.est_var_c, var_phase_m2=self.est_var_p,
+                                            n_white=self.est_n, memory_epochs=NOISE_EPOCHS,
+                                            enabled=bool(s.noise.noise_estimation)))     # td_checks updates it
 
     def _init_outputs(self):
         """Per-epoch output buffers, the residual records and (dynamic, smoother) the smoother's records."""
@@ -261,7 +265,9 @@ class FilterRun:
             self.sm_dt = np.zeros(n_ep)       # propagation interval into the epoch (s)
         # residual records, rows appended per epoch by record_epoch: ints epoch, bl, sat, sig, kind, reason and
         # floats el_ant_deg, az_ant_deg, cn0_dbhz, residual_m (capacity grown per SdBlock)
-        self.res_i, self.res_f, self.res_n = np.zeros((6, 0), np.int64), np.zeros((4, 0)), 0
+        self.w_lookup = np.zeros((2, n_bl, self.n_sat, self.n_sig))
+        self.set_residual_buffers(np.zeros((6, 0), np.int64), np.zeros((4, 0)))
+        self.res_n = 0
         # fix status
         self.first_fix = np.full(n_bl, -1)
         self.first_data = np.full(n_bl, -1)
@@ -281,9 +287,12 @@ class FilterRun:
         self.clk_state = np.stack([np.full(n_bl, np.nan), np.zeros(n_bl), np.zeros(n_bl)])
         self.prev_b = None
         self.prev_ub = np.zeros((n_bl, n_sat))
+        self.qc_memory = tuple(EpochMemory(prev_sdc_m=self.prev_sdc, prev_sdp_m=self.prev_sdp,
+                                           prev_ub_m=self.prev_ub))                  # record_epoch writes them
         self.R_mask = None                                           # attitude for the antenna-frame mask
         self.R_mask_t = -np.inf
         self.blk = None                                              # SdBlock of the current epochs
+        self.sd_qc = self.sd_flags = None                            # the QC kernels' records of it (qc_records)
         self.blk_lw = None
         # differential PCV maps per (baseline, signal), applied to fixed baselines (gnssatt.attitude.pcv_correction)
         s = self.s
@@ -294,23 +303,27 @@ class FilterRun:
             self.R_ant_first = R_antenna_from_body(self.boresight_body[self.ia])             # (n_bl, 3, 3)
 
     def _init_work(self):
-        """Per-epoch work arrays of the compiled QC (gnssatt.attitude.qc_kernels), overwritten every epoch."""
+        """Per-epoch work arrays of the compiled QC (gnssatt.attitude.qc_kernels), overwritten every epoch, and the
+        QC kernels' run-constant records of them (gnssatt.attitude.qc_records: limits, work, epoch clock)."""
         n_bl, n_sat, n_sig = self.n_bl, self.n_sat, self.n_sig
         shp = (n_bl, n_sat, n_sig)
-        self.wb = np.zeros((5,) + shp, bool)            # use_c, use_p, slip, td_c_ok, td_p_ok
-        self.wf = np.zeros((4,) + shp)                  # sdc_c, sdp_c, td_c, td_p
-        self.w_reason = np.zeros(shp, np.int64)
-        self.w_el = np.zeros((3, n_bl, n_sat))          # el_w, el_ant, az_ant
-        self.w_clk = np.zeros((2, n_bl))                # epoch clock estimate, its prediction
-        self.w_jump = np.zeros(n_bl, bool)
-        self.w_mcp = np.zeros((2, n_bl, n_sig))         # medians of the code / phase triple differences
+        s = self.s
+        self.qc_limits = tuple(QcLimits(
+            el_mask_ant_rad=float(s.table2.elevation_mask_antenna_deg * DEG), clock_jump_m=CLOCK_JUMP_M,
+            td_max_dt_s=TD_MAX_DT_S, td_code_m=float(s.table2.td_code_m), td_phase_cyc=float(s.table2.td_phase_cyc),
+            max_gap_s=float(s.ambiguity.max_gap_s), wavelength_m=self.lam))
+        work = QcWork(el_rad=np.zeros((3, n_bl, n_sat)), reason=np.zeros(shp, np.int64),
+                      masks=np.zeros((9,) + shp, bool), values_m=np.zeros((4,) + shp),
+                      median_td_m=np.zeros((2, n_bl, n_sig)))
+        self.qc_work = tuple(work)
+        self.w_ev, self.w_bk = work.masks[5:7], work.masks[7:9]     # slips to report; states to drop / to add
+        clock = EpochClock(clock_state=self.clk_state, clock_m=np.zeros((2, n_bl)), jump=np.zeros(n_bl, bool))
+        self.qc_clock = tuple(clock)                                   # qc_epoch writes it
+        self.w_clk, self.w_jump = clock.clock_m, clock.jump
+        # the per-epoch names (EpochData el_w .. mp) are views of these arrays, made once
+        self.views = (*work.el_rad, work.reason, *work.masks[:5], *work.values_m, *work.median_td_m)
         self.w_asn = np.zeros((2, n_sat, n_bl))
         self.w_glw = np.zeros((2,) + shp)
-        self.w_ev = np.zeros((2,) + shp, bool)          # TD slips without LLI, LLI slips to report
-        self.w_bk = np.zeros((2,) + shp, bool)          # states to drop, phases needing a state
-        self.w_lookup = np.zeros((2,) + shp)
-        # the per-epoch names are views of these arrays, made once
-        self.views = (*self.w_el, self.w_reason, *self.wb, *self.wf, *self.w_mcp)
         self.no_pcv = np.zeros(shp, bool)
         self.pcv_zero = np.zeros(shp)
         bs = self.boresight_body
@@ -320,6 +333,11 @@ class FilterRun:
         self.w_idx3 = np.arange(3)
         self.sub_w_b = np.concatenate([self.w_idx3, self.all_b_idx])   # omega and baselines (smoother's sub-state)
         self.ix_sub = np.ix_(self.sub_w_b, self.sub_w_b)
+
+    def set_residual_buffers(self, ints: np.ndarray, floats: np.ndarray) -> None:
+        """The residual records' buffers (res_i (6, cap), res_f (4, cap)) and record_epoch's record of them."""
+        self.res_i, self.res_f = ints, floats
+        self.res_buffers = tuple(ResidualBuffers(ints=ints, floats=floats, lookup=self.w_lookup))
 
     def mark_segment_start(self, k: int) -> None:
         """The smoother's segment restarts at epoch k (a reset of omega or of a baseline's covariance)."""

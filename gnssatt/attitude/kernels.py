@@ -19,6 +19,8 @@ import math
 import numpy as np
 from numba import njit
 
+from gnssatt.attitude.qc_records import TripleDifferences, WhiteNoise
+
 __all__ = ["POW2", "np_sum", "count_pairs_masked", "masked_median_axis1", "measurement_rows", "cn0_growth_samples", "cn0_growth_update", "white_noise_update",
            "warm_up"]
 
@@ -207,38 +209,46 @@ def cn0_growth_update(xs, ys, off, mom, gam_n, gamma, noise_epochs, min_epochs, 
 
 
 @njit(cache=True, nogil=True)
-def white_noise_update(td_c, td_p, ok_c, ok_p, mc, mp, wfac_c, wfac_p, est_var_c, est_var_p, est_n,
-                       noise_epochs, pow2):
-    """In place: the per-signal white-noise variance of one SD from the median-referenced TDs normalised by
-    sqrt(C/N0 factor^gamma) (MAD / 0.6745 = sigma of a TD = sqrt(2) sigma of an SD), exponentially weighted over
-    noise_epochs, for signals with >= 3 code and >= 3 phase TDs: run_filter's white-noise estimator. pow2: POW2."""
-    n_bl, n_sat, n_sig = td_c.shape
+def white_noise_update(td: TripleDifferences, weights, est: WhiteNoise, pow2):
+    """In place on est (when est.enabled): the per-signal white-noise variance of one SD from the median-referenced
+    TDs td normalised by sqrt(C/N0 factor^gamma) (weights (2, bl, sat, sig) of code, phase; MAD / 0.6745 = sigma
+    of a TD = sqrt(2) sigma of an SD), exponentially weighted over est.memory_epochs, for signals with >= 3 code
+    and >= 3 phase TDs. pow2: POW2.
+
+    Specification: gnssatt.attitude.reference_noise.update_white_noise (docs/attitude.md noise model).
+    """
+    code_m, phase_m, code_ok, phase_ok, median_code_m, median_phase_m = td
+    var_code_m2, var_phase_m2, n_white, memory_epochs, enabled = est
+    if not enabled:
+        return
+    wfac_c, wfac_p = weights[0], weights[1]
+    n_bl, n_sat, n_sig = code_m.shape
     bc = np.empty(n_bl * n_sat)
     bp = np.empty(n_bl * n_sat)
     for f in range(n_sig):
         nc = 0
         npp = 0
         for j in range(n_bl):
-            m_c = mc[j, f]
+            m_c = median_code_m[j, f]
             if np.isnan(m_c):
                 m_c = 0.0
-            m_p = mp[j, f]
+            m_p = median_phase_m[j, f]
             if np.isnan(m_p):
                 m_p = 0.0
             for s in range(n_sat):
-                if ok_c[j, s, f]:
-                    bc[nc] = np.abs((td_c[j, s, f] - m_c) / np.sqrt(wfac_c[j, s, f]))
+                if code_ok[j, s, f]:
+                    bc[nc] = np.abs((code_m[j, s, f] - m_c) / np.sqrt(wfac_c[j, s, f]))
                     nc += 1
-                if ok_p[j, s, f]:
-                    bp[npp] = np.abs((td_p[j, s, f] - m_p) / np.sqrt(wfac_p[j, s, f]))
+                if phase_ok[j, s, f]:
+                    bp[npp] = np.abs((phase_m[j, s, f] - m_p) / np.sqrt(wfac_p[j, s, f]))
                     npp += 1
         if npp >= 3 and nc >= 3:
-            a = 1.0 / min(est_n[f] + 1.0, noise_epochs)
+            a = 1.0 / min(n_white[f] + 1.0, memory_epochs)
             vp = math.pow(_median_sorted(np.sort(bp[:npp]), npp) / 0.6745, pow2) / 2.0
             vc = math.pow(_median_sorted(np.sort(bc[:nc]), nc) / 0.6745, pow2) / 2.0
-            est_var_p[f] += a * (vp - est_var_p[f])
-            est_var_c[f] += a * (vc - est_var_c[f])
-            est_n[f] += 1
+            var_phase_m2[f] += a * (vp - var_phase_m2[f])
+            var_code_m2[f] += a * (vc - var_code_m2[f])
+            n_white[f] += 1
 
 
 @njit(cache=True, nogil=True)
@@ -303,5 +313,6 @@ def warm_up() -> None:
                      idx2, np.zeros((1, 3, 2), np.int64), np.ones(2), td, td, td)
     xs, rs, off = cn0_growth_samples(td, td, ok, ok, m, m, td, np.ones(2))
     cn0_growth_update(xs, rs, off, np.zeros((2, 2, 4)), np.zeros((2, 2)), np.ones((2, 2)), 300.0, 10, 0.05, POW2)
-    white_noise_update(td, td, ok, ok, m, m, np.ones_like(td), np.ones_like(td), np.ones(2), np.ones(2),
-                       np.zeros(2), 300.0, POW2)
+    est = WhiteNoise(var_code_m2=np.ones(2), var_phase_m2=np.ones(2), n_white=np.zeros(2), memory_epochs=300.0,
+                     enabled=True)
+    white_noise_update((td, td, ok, ok, m, m), np.ones((2,) + td.shape), tuple(est), POW2)

@@ -1,18 +1,20 @@
-"""Compiled (numba) kernels of the first half of the attitude filter's epoch (gnssatt.attitude.filter.run_filter):
-propagation with the white-noise clock reset, the single-difference quality control (antenna-frame mask, C/N0,
-epoch clock estimate and its jump test, half cycles, triple differences and their tests), the ambiguity
-bookkeeping masks, and the residual records.
+"""Compiled (numba) kernels of the first half of the attitude filter's epoch (seed 000 Fig. 2 "propagate" and
+"quality control", gnssatt.attitude.boxes): propagation with the white-noise clock reset, the single-difference
+quality control (antenna-frame mask, C/N0, epoch clock estimate and its jump test, half cycles, triple differences
+and their tests), the ambiguity bookkeeping masks and states, and the residual records.
 
-The filter did this with ~100 numpy calls per epoch on arrays of a few dozen elements; each kernel here does a
-stretch of it in one call and gives the same bits: the same element-wise IEEE operations in the same order,
-medians as gnssatt.attitude.kernels.masked_median_axis1 (of an insertion sort of the few values, no allocation).
+Each kernel does in one call what ~100 numpy calls on arrays of a few dozen elements would, medians as
+gnssatt.attitude.kernels.masked_median_axis1 (of an insertion sort of the few values, no allocation).
 Transcendental functions (arcsin, arctan2, log, exp, power) stay in numpy, whose SIMD loops differ from the C
-library's in the last bit. Rare events (clock jumps, phase
-clock jumps, slips, gaps, states to add or drop) come back as masks and counts, so the filter only loops in
-Python when one happened. tests/attitude/test_qc_kernels.py compares every kernel with the numpy code it replaced.
+library's in the last bit. Rare events (clock jumps, phase clock jumps, slips, gaps, states to add or drop) come
+back as masks and counts, so the filter only loops in Python when one happened. qc_epoch, td_checks and
+record_epoch take a few records (gnssatt.attitude.qc_records) as plain tuples.
 
-Implements: nothing new (seed 000 Table 2 editing, sec. 2 propagation; docs/attitude.md noise model); each kernel
-names the filter code it replaces.
+Specification: the readable numpy of gnssatt.attitude.reference_qc (qc_epoch and td_checks follow its qc_epoch:
+seed 000 Table 2 editing and slip detection, sec. 2 one ambiguity per arc), reference_propagate (propagation,
+sec. 2 eq. 2), reference_states (states added and dropped), reference_records (record_epoch) and reference_noise
+(the white-noise estimator of docs/attitude.md); each kernel names its part. tests/attitude/test_qc_kernels.py
+checks every kernel against it with tolerances in physical units.
 """
 from __future__ import annotations
 
@@ -20,6 +22,9 @@ import numpy as np
 from numba import njit
 
 from gnssatt.attitude.kernels import POW2, cn0_growth_update, white_noise_update
+from gnssatt.attitude.qc_records import (AmbiguityBook, AntennaView, EpochClock, EpochMemory, EpochStep, OutputEpoch,
+                                         PostFit, QcLimits, QcWork, ResidualBuffers, SdBlockFlags, SdBlockQc,
+                                         WhiteNoise, ambiguity_book, antenna_view, epoch_step, output_epoch, post_fit)
 from gnssatt.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
 
 __all__ = ["reset_white_clocks", "propagate_dynamic", "propagate_kinematic", "clip_pair", "epoch_geometry", "qc_epoch",
@@ -116,28 +121,41 @@ def epoch_geometry(u, R, bs_a_T, bs_b_T, x, b_idx, asn_in):
 
 
 @njit(cache=True, nogil=True)
-def qc_epoch(asn, az, mask_on, ever_fixed, el_mask_ant_rad, reason0, pcv_empty, pcv_on, low_cn0, avail_p,
-             sdc, sdp, cfac, ub, prev_ub, do_td, prev_sdc, prev_sdp, pa, lli, t, clk_state, clock_jump_m,
-             td_max_dt_s, el_w, el_ant, az_ant, reason, wb, wf, clk_out, jump, mcp):
-    """One epoch of run_filter's editing before the noise estimation; returns (n clock jumps, n common phase jumps
-    above 1000 m). Outputs written in place:
+def qc_epoch(sd: SdBlockQc, flags: SdBlockFlags, view: AntennaView, step: EpochStep, memory: EpochMemory,
+             clock: EpochClock, limits: QcLimits, work: QcWork):
+    """One epoch (row step.i of the SdBlock records sd, flags) of the filter's editing before the noise estimation,
+    into work (QcWork) and clock (EpochClock) in place; returns (n clock jumps, n common phase jumps above 1000 m).
 
-    el_w (n_bl, n_sat) antenna-frame elevation = fmin of asn[0], asn[1] ((2, n_sat, n_bl) arcsin of the clipped
-    boresight products of antennas a, b), el_ant / az_ant = el_w / az[s] when mask_on (an attitude exists) else NaN;
-    reason (n_bl, n_sat, n_sig) from reason0: 2 below the antenna mask on ever-fixed baselines (mask_on), 10 an
-    empty PCV bin (pcv_on), 3 low C/N0, then 6 half cycle (after use_c); wb = use_c, use_p, slip (LLI bit 1), td_c_ok,
-    td_p_ok; wf = sdc_c, sdp_c (minus cfac x the epoch clock), td_c, td_p (triple differences with the predicted
-    geometry change ub - prev_ub when do_td, else NaN); clk_out = clock estimate (median of (SD code 1 + u.b) /
-    cfac over used satellites, else the prediction), prediction; jump (n_bl,) bool; mcp = medians of td_c, td_p;
-    clk_state (3, n_bl) = last estimated clock, its time, its drift, updated in place.
+    work.el_rad = el_w (n_bl, n_sat) antenna-frame elevation = fmin of view.asn_rad[0], [1], el_ant / az_ant =
+    el_w / az when view.mask_on (an attitude exists) else NaN; work.reason from sd.reason0: 2 below the antenna
+    mask on ever-fixed baselines (mask_on), 10 an empty PCV bin (pcv_on, pcv_empty), 3 low C/N0, then 6 half cycle
+    (after use_c); work.masks[0:5] = use_c, use_p, slip (LLI bit 1), td_c_ok, td_p_ok; work.values_m = sdc_c,
+    sdp_c (minus clock_factor x the epoch clock), td_c, td_p (triple differences with the predicted geometry change
+    ub - memory.prev_ub_m when step.do_td, else NaN); work.median_td_m = medians of td_c, td_p; clock.clock_m =
+    clock estimate (median of (SD code 1 + u.b) / clock_factor over used satellites, else the prediction),
+    prediction; clock.jump; clock.clock_state = last estimated clock, its time, its drift, updated.
+
+    Specification: gnssatt.attitude.reference_qc.qc_epoch up to the TD tests (antenna_frame_elevations,
+    edit_observations, epoch_clock, triple_differences; seed 000 Table 2).
     """
-    n_bl, n_sat, n_sig = sdc.shape
-    use_c, use_p, slip, td_c_ok, td_p_ok = wb[0], wb[1], wb[2], wb[3], wb[4]
-    sdc_c, sdp_c, td_c, td_p = wf[0], wf[1], wf[2], wf[3]
+    sdc_m, sdp_m, low_cn0, reason0, clock_factor, baseline_ok = sd
+    avail_c, avail_p, lli = flags
+    asn_rad, az_rad, mask_on, ever_fixed, pcv_on, pcv_empty, ub_m = view
+    i, t_s, consecutive, do_td = step
+    prev_sdc_m, prev_sdp_m, prev_ub_m = memory
+    clock_state, clock_m, jump = clock
+    el_mask_ant_rad, clock_jump_m, td_max_dt_s, td_code_m, td_phase_cyc, max_gap_s, wavelength_m = limits
+    el_rad, reason, masks, values_m, median_td_m = work
+    sdc_m, sdp_m, low_cn0, reason0, avail_p, lli = sdc_m[i], sdp_m[i], low_cn0[i], reason0[i], avail_p[i], lli[i]
+    clock_factor, baseline_ok = clock_factor[i], baseline_ok[i]                      # the epoch's rows
+    el_w, el_ant, az_ant = el_rad[0], el_rad[1], el_rad[2]
+    n_bl, n_sat, n_sig = sdc_m.shape
+    use_c, use_p, slip, td_c_ok, td_p_ok = masks[0], masks[1], masks[2], masks[3], masks[4]
+    sdc_c, sdp_c, td_c, td_p = values_m[0], values_m[1], values_m[2], values_m[3]
     for j in range(n_bl):
         for s in range(n_sat):
-            a = asn[0, s, j]
-            b = asn[1, s, j]
+            a = asn_rad[0, s, j]
+            b = asn_rad[1, s, j]
             if np.isnan(a):
                 e = b
             elif np.isnan(b):
@@ -147,7 +165,7 @@ def qc_epoch(asn, az, mask_on, ever_fixed, el_mask_ant_rad, reason0, pcv_empty, 
             el_w[j, s] = e
             if mask_on:
                 el_ant[j, s] = e
-                az_ant[j, s] = az[s]
+                az_ant[j, s] = az_rad[s]
             else:
                 el_ant[j, s] = np.nan
                 az_ant[j, s] = np.nan
@@ -179,44 +197,44 @@ def qc_epoch(asn, az, mask_on, ever_fixed, el_mask_ant_rad, reason0, pcv_empty, 
         n = 0
         for s in range(n_sat):
             if use_c[j, s, 0]:
-                v = (sdc[j, s, 0] + ub[j, s]) / cfac[s]
+                v = (sdc_m[j, s, 0] + ub_m[j, s]) / clock_factor[s]
                 if not np.isnan(v):
                     buf[n] = v
                     n += 1
         raw = _median_of(buf, n) if n else np.nan
         have0 = np.isfinite(raw)
-        pc, pt, rate = clk_state[0, j], clk_state[1, j], clk_state[2, j]
-        pred = pc + rate * (t - pt)
+        pc, pt, rate = clock_state[0, j], clock_state[1, j], clock_state[2, j]
+        pred = pc + rate * (t_s - pt)
         if have0:
             c0 = raw
         elif np.isnan(pred):
             c0 = 0.0
         else:
             c0 = pred
-        jmp = have0 and np.isfinite(pred) and np.abs(c0 - pred) > clock_jump_m and pa[j]
-        upd = have0 and pa[j]
-        dtc = t - pt
+        jmp = have0 and np.isfinite(pred) and np.abs(c0 - pred) > clock_jump_m and baseline_ok[j]
+        upd = have0 and baseline_ok[j]
+        dtc = t_s - pt
         if upd and not jmp and np.isfinite(pc) and dtc > 0 and dtc <= td_max_dt_s:
-            clk_state[2, j] = rate + 0.1 * ((c0 - pc) / dtc - rate)
+            clock_state[2, j] = rate + 0.1 * ((c0 - pc) / dtc - rate)
         if upd:
-            clk_state[0, j] = c0
-            clk_state[1, j] = t
-        clk_out[0, j] = c0
-        clk_out[1, j] = pred
+            clock_state[0, j] = c0
+            clock_state[1, j] = t_s
+        clock_m[0, j] = c0
+        clock_m[1, j] = pred
         jump[j] = jmp
         if jmp:
             n_jump += 1
         for s in range(n_sat):
-            corr = cfac[s] * c0
-            dgeo = -(ub[j, s] - prev_ub[j, s]) if do_td else 0.0
+            corr = clock_factor[s] * c0
+            dgeo = -(ub_m[j, s] - prev_ub_m[j, s]) if do_td else 0.0
             for f in range(n_sig):
-                vc = sdc[j, s, f] - corr
-                vp = sdp[j, s, f] - corr
+                vc = sdc_m[j, s, f] - corr
+                vp = sdp_m[j, s, f] - corr
                 sdc_c[j, s, f] = vc
                 sdp_c[j, s, f] = vp
                 if do_td:
-                    tc = vc - prev_sdc[j, s, f] - dgeo
-                    tp = vp - prev_sdp[j, s, f] - dgeo
+                    tc = vc - prev_sdc_m[j, s, f] - dgeo
+                    tp = vp - prev_sdp_m[j, s, f] - dgeo
                     td_c[j, s, f] = tc
                     td_p[j, s, f] = tp
                     td_c_ok[j, s, f] = np.isfinite(tc) and use_c[j, s, f]
@@ -239,12 +257,12 @@ def qc_epoch(asn, az, mask_on, ever_fixed, el_mask_ant_rad, reason0, pcv_empty, 
                         if ok[j, s, f]:
                             buf[n] = td[j, s, f]
                             n += 1
-                    mcp[q, j, f] = _median_of(buf, n) if n else np.nan
-                d = mcp[1, j, f] - mcp[0, j, f]
+                    median_td_m[q, j, f] = _median_of(buf, n) if n else np.nan
+                d = median_td_m[1, j, f] - median_td_m[0, j, f]
                 if not np.isnan(d) and np.abs(d) > 1000.0:
                     n_common += 1
     else:
-        mcp[:] = np.nan
+        median_td_m[:] = np.nan
     return n_jump, n_common
 
 
@@ -263,32 +281,42 @@ def growth_weights(update, xs, log_rs, off, mom, gam_n, gamma, noise_epochs, min
 
 
 @njit(cache=True, nogil=True)
-def td_checks(do_td, noise_on, wfac, est_var_c, est_var_p, est_n, noise_epochs, td_code_m, td_phase_cyc, lam,
-              avail_p, lli, reason, wb, wf, mcp, consecutive, prev_sdp, amb_index, amb_last_t, n_fixed_part, t,
-              max_gap_s, ev, bk):
-    """run_filter's white-noise update (noise_on, gnssatt.attitude.kernels.white_noise_update with weights wfac
-    (2, ...)), triple-difference tests and ambiguity-bookkeeping masks of one epoch, after qc_epoch (and any phase
-    clock jump correction); returns (n TD slips, n LLI slips, n gaps, n to drop, n to add).
+def td_checks(flags: SdBlockFlags, step: EpochStep, wfac, noise: WhiteNoise, book: AmbiguityBook,
+              memory: EpochMemory, limits: QcLimits, work: QcWork):
+    """The filter's white-noise update (gnssatt.attitude.kernels.white_noise_update with the C/N0 weights wfac
+    (2, bl, sat, sig) of code and phase, when step.do_td), triple-difference tests and ambiguity-bookkeeping masks
+    of one epoch (row step.i of flags), after qc_epoch (and any phase clock jump correction); returns (n TD slips,
+    n LLI slips, n gaps, n to drop, n to add).
 
-    In place: reason 4 and use_c off where the code TD is off its median by more than td_code_m; slip where a phase
-    TD (every available phase) is off by more than td_phase_cyc cycles; ev[0] = such slips without LLI, ev[1] = LLI
-    slips of phases with a state or a previous epoch (prev_sdp finite, consecutive); bk[0] = states to drop
-    (restart on a slip or where no TD could check, satellite gone, unused for max_gap_s), bk[1] = phases needing a
-    state (valid only when nothing is dropped).
+    In place in work: reason 4 and use_c off where the code TD is off its median by more than td_code_m; slip where
+    a phase TD (every available phase) is off by more than td_phase_cyc cycles; masks[5] = such slips without LLI,
+    masks[6] = LLI slips of phases with a state or a previous epoch (memory.prev_sdp_m finite, consecutive);
+    masks[7] = states to drop (restart on a slip or where no TD could check, satellite gone, unused for
+    max_gap_s), masks[8] = phases needing a state (valid only when nothing is dropped).
+
+    Specification: gnssatt.attitude.reference_qc.triple_difference_tests and ambiguity_bookkeeping (seed 000
+    Table 2, sec. 2), gnssatt.attitude.reference_noise.update_white_noise.
     """
+    avail_c, avail_p, lli = flags
+    i, t_s, consecutive, do_td = step
+    amb_index, amb_last_t_s, n_fixed_part = book
+    prev_sdc_m, prev_sdp_m, prev_ub_m = memory
+    el_mask_ant_rad, clock_jump_m, td_max_dt_s, td_code_m, td_phase_cyc, max_gap_s, wavelength_m = limits
+    el_rad, reason, masks, values_m, median_td_m = work
+    ev_td, ev_lli, to_drop, to_add = masks[5], masks[6], masks[7], masks[8]
+    avail_p, lli = avail_p[i], lli[i]                                                # the epoch's rows
     n_bl, n_sat, n_sig = reason.shape
-    use_c, use_p, slip, td_c_ok, td_p_ok = wb[0], wb[1], wb[2], wb[3], wb[4]
-    td_c, td_p = wf[2], wf[3]
-    mc, mp = mcp[0], mcp[1]
-    if do_td and noise_on:
-        white_noise_update(td_c, td_p, td_c_ok, td_p_ok, mc, mp, wfac[0], wfac[1], est_var_c, est_var_p, est_n,
-                           noise_epochs, POW2)
+    use_c, use_p, slip, td_c_ok, td_p_ok = masks[0], masks[1], masks[2], masks[3], masks[4]
+    td_c, td_p = values_m[2], values_m[3]
+    mc, mp = median_td_m[0], median_td_m[1]
+    if do_td:
+        white_noise_update((td_c, td_p, td_c_ok, td_p_ok, mc, mp), wfac, noise, POW2)      # TripleDifferences
     n_td = 0
     n_lli = 0
     n_gap = 0
     n_drop = 0
     n_need = 0
-    t_gap = t - max_gap_s
+    t_gap = t_s - max_gap_s
     for j in range(n_bl):
         for f in range(n_sig):
             m_c = mc[j, f]
@@ -297,7 +325,7 @@ def td_checks(do_td, noise_on, wfac, est_var_c, est_var_p, est_n, noise_epochs, 
             m_p = mp[j, f]
             if np.isnan(m_p):
                 m_p = 0.0
-            lim_p = td_phase_cyc * lam[f]
+            lim_p = td_phase_cyc * wavelength_m[f]
             for s in range(n_sat):
                 ap = avail_p[j, s, f]
                 l1 = (lli[j, s, f] & 1) != 0
@@ -311,13 +339,13 @@ def td_checks(do_td, noise_on, wfac, est_var_c, est_var_p, est_n, noise_epochs, 
                     if np.isfinite(tp) and ap and np.abs(tp - m_p) > lim_p:
                         slip[j, s, f] = True
                         e_td = not l1
-                ev[0, j, s, f] = e_td
+                ev_td[j, s, f] = e_td
                 n_td += e_td
                 ai = amb_index[j, s, f]
                 have = ai >= 0
-                cont = consecutive and np.isfinite(prev_sdp[j, s, f])
+                cont = consecutive and np.isfinite(prev_sdp_m[j, s, f])
                 e_l = l1 and ap and (have or cont)
-                ev[1, j, s, f] = e_l
+                ev_lli[j, s, f] = e_l
                 n_lli += e_l
                 td_possible = do_td and np.isfinite(td_p[j, s, f])
                 sl = slip[j, s, f]
@@ -325,64 +353,78 @@ def td_checks(do_td, noise_on, wfac, est_var_c, est_var_p, est_n, noise_epochs, 
                 if have:
                     if ap and not sl and not td_possible:
                         n_gap += 1
-                    last_t = amb_last_t[ai - n_fixed_part]
+                    last_t = amb_last_t_s[ai - n_fixed_part]
                     drop = (ap and (sl or not td_possible)) or not ap or (not use_p[j, s, f] and last_t < t_gap)
-                bk[0, j, s, f] = drop
+                to_drop[j, s, f] = drop
                 n_drop += drop
                 need = use_p[j, s, f] and not have
-                bk[1, j, s, f] = need
+                to_add[j, s, f] = need
                 n_need += need
     return n_td, n_lli, n_gap, n_drop, n_need
 
 
 @njit(cache=True, nogil=True)
-def record_epoch(k, avail_c, avail_p, use_c, use_p, reason, el_ant, az_ant, cn0, post, m, jc, sc, fc, jp, sp, fp,
-                 lookup, ibuf, fbuf, pos, sdc_c, sdp_c, prev_sdc, prev_sdp, b_out, u, prev_ub):
-    """The residual rows of epoch k written from row pos of ibuf (6, cap) = epoch, bl, sat, sig, kind, reason and
-    fbuf (4, cap) = el_ant_deg, az_ant_deg (of az mod 2 pi), cn0_dbhz, residual_m: its code rows (kind 0, every
-    available code in (bl, sat, sig) order, residual (when m rows were used) post[r] of code row r (jc, sc, fc),
-    post[jc.size + r] of phase row r (jp, sp, fp), else NaN, reason 0 if
+def record_epoch(flags: SdBlockFlags, epoch: OutputEpoch, fit: PostFit, work: QcWork, memory: EpochMemory,
+                 buffers: ResidualBuffers, pos):
+    """The residual rows of epoch.k (row epoch.i of flags) written from row pos of buffers.ints (6, cap) = epoch,
+    bl, sat, sig, kind, reason and buffers.floats (4, cap) = el_ant_deg, az_ant_deg (of az mod 2 pi), cn0_dbhz,
+    residual_m: its code rows (kind 0, every available code in (bl, sat, sig) order, residual post_m[r] of code row
+    r (jc, sc, fc), post_m[jc.size + r] of phase row r (jp, sp, fp) when the update had rows, else NaN, reason 0 if
     used), then its phase rows (kind 1, where a phase exists; reason 0 if used, else the code's or 5 (td_phase));
-    and the memory of the triple differences prev_sdc / prev_sdp = sdc_c / sdp_c where available, else NaN,
-    prev_ub = b_out u^T (the epoch's output baselines, np.dot as run_filter's @).
-    Returns the next free row (run_filter's former per-epoch records and _residual_records, same values)."""
+    and the memory of the triple differences memory.prev_sdc_m / prev_sdp_m = sdc_c / sdp_c where available, else
+    NaN, memory.prev_ub_m = b_out_m u^T (the epoch's output baselines, np.dot as the former @). Returns the next
+    free row.
+
+    Specification: gnssatt.attitude.reference_records.epoch_residual_rows, residual_table (row order) and
+    triple_difference_memory (seed 000 Fig. 2 "output").
+    """
+    avail_c, avail_p, lli = flags
+    k, i, cn0_dbhz, u, b_out_m = epoch
+    avail_c, avail_p = avail_c[i], avail_p[i]                                        # the epoch's rows
+    post_m, jc, sc, fc, jp, sp, fp = fit
+    el_rad, reason, masks, values_m, median_td_m = work
+    prev_sdc_m, prev_sdp_m, prev_ub_m = memory
+    ints, floats, lookup = buffers
+    el_ant, az_ant = el_rad[1], el_rad[2]
+    use_c, use_p = masks[0], masks[1]
+    sdc_c, sdp_c = values_m[0], values_m[1]
     n_bl, n_sat, n_sig = avail_c.shape
     lookup[:] = np.nan
-    if m:
+    if post_m.size:
         mc_n = jc.size
         for r in range(mc_n):
-            lookup[0, jc[r], sc[r], fc[r]] = post[r]
+            lookup[0, jc[r], sc[r], fc[r]] = post_m[r]
         for r in range(jp.size):
-            lookup[1, jp[r], sp[r], fp[r]] = post[mc_n + r]
+            lookup[1, jp[r], sp[r], fp[r]] = post_m[mc_n + r]
     for kind in range(2):
         for j in range(n_bl):
             for s in range(n_sat):
-                el = el_ant[j, s] * RAD2DEG
-                az = (az_ant[j, s] % (2 * np.pi)) * RAD2DEG
+                el_deg = el_ant[j, s] * RAD2DEG
+                az_deg = (az_ant[j, s] % (2 * np.pi)) * RAD2DEG
                 for f in range(n_sig):
                     if not avail_c[j, s, f] or (kind == 1 and not avail_p[j, s, f]):
                         continue
-                    ibuf[0, pos] = k
-                    ibuf[1, pos] = j
-                    ibuf[2, pos] = s
-                    ibuf[3, pos] = f
-                    ibuf[4, pos] = kind
+                    ints[0, pos] = k
+                    ints[1, pos] = j
+                    ints[2, pos] = s
+                    ints[3, pos] = f
+                    ints[4, pos] = kind
                     r = reason[j, s, f]
                     if kind == 0:
-                        ibuf[5, pos] = 0 if use_c[j, s, f] else r
+                        ints[5, pos] = 0 if use_c[j, s, f] else r
                     else:
-                        ibuf[5, pos] = 0 if use_p[j, s, f] else (R_TD_PHASE if r == 0 else r)
-                    fbuf[0, pos] = el
-                    fbuf[1, pos] = az
-                    fbuf[2, pos] = cn0[j, s, f]
-                    fbuf[3, pos] = lookup[kind, j, s, f]
+                        ints[5, pos] = 0 if use_p[j, s, f] else (R_TD_PHASE if r == 0 else r)
+                    floats[0, pos] = el_deg
+                    floats[1, pos] = az_deg
+                    floats[2, pos] = cn0_dbhz[j, s, f]
+                    floats[3, pos] = lookup[kind, j, s, f]
                     pos += 1
     for j in range(n_bl):
         for s in range(n_sat):
             for f in range(n_sig):
-                prev_sdc[j, s, f] = sdc_c[j, s, f] if avail_c[j, s, f] else np.nan
-                prev_sdp[j, s, f] = sdp_c[j, s, f] if avail_p[j, s, f] else np.nan
-    prev_ub[:] = np.dot(b_out, u.T)
+                prev_sdc_m[j, s, f] = sdc_c[j, s, f] if avail_c[j, s, f] else np.nan
+                prev_sdp_m[j, s, f] = sdp_c[j, s, f] if avail_p[j, s, f] else np.nan
+    prev_ub_m[:] = np.dot(b_out_m, u.T)
     return pos
 
 
@@ -496,30 +538,42 @@ def warm_up() -> None:
         epoch_geometry(u, np.eye(3), bs_T, bs_T, x, b_idx[:nb], np.zeros((2, n_sat, nb)))
     f2, f3, b3 = np.zeros((n_bl, n_sat)), np.zeros(sh), np.zeros(sh, np.bool_)
     i3, lli = np.zeros(sh, np.int64), np.zeros(sh, np.int8)
-    wb, wf = np.zeros((5,) + sh, np.bool_), np.zeros((4,) + sh)
-    mcp, clk = np.zeros((2, n_bl, n_sig)), np.zeros((3, n_bl))
-    t = np.float64(1.0)
+    limits = tuple(QcLimits(el_mask_ant_rad=0.0, clock_jump_m=1.0, td_max_dt_s=3.0, td_code_m=1.0, td_phase_cyc=0.5,
+                            max_gap_s=10.0, wavelength_m=np.ones(n_sig)))
+    work = tuple(QcWork(el_rad=np.zeros((3, n_bl, n_sat)), reason=i3.copy(), masks=np.zeros((9,) + sh, np.bool_),
+                        values_m=np.zeros((4,) + sh), median_td_m=np.zeros((2, n_bl, n_sig))))
+    memory = tuple(EpochMemory(prev_sdc_m=f3.copy(), prev_sdp_m=f3.copy(), prev_ub_m=f2.copy()))
+    clock = tuple(EpochClock(clock_state=np.zeros((3, n_bl)), clock_m=np.zeros((2, n_bl)),
+                             jump=np.zeros(n_bl, np.bool_)))
+    f4, b4 = np.zeros((2,) + sh), np.zeros((2,) + sh, np.bool_)                 # SdBlock arrays of 2 epochs
+    sd = tuple(SdBlockQc(sdc_m=f4, sdp_m=f4, low_cn0=b4, reason0=np.zeros((2,) + sh, np.int64),
+                         clock_factor=np.ones((2, n_sat)), baseline_ok=np.ones((2, n_bl), np.bool_)))
+    flags = tuple(SdBlockFlags(avail_c=b4, avail_p=b4, lli=np.zeros((2,) + sh, np.int8)))
+    noise = tuple(WhiteNoise(var_code_m2=np.ones(n_sig), var_phase_m2=np.ones(n_sig), n_white=np.zeros(n_sig),
+                             memory_epochs=300.0, enabled=True))
+    book = ambiguity_book(amb_index=i3 - 1, amb_last_t_s=np.zeros(0), n_fixed_part=8)
     for do in (False, True):
-        qc_epoch(asn, np.zeros(n_sat), do, np.zeros(n_bl, np.bool_), 0.0, i3, b3, do, b3, b3, f3, f3, np.ones(n_sat),
-                 f2, f2, do, f3, f3, np.ones(n_bl, np.bool_), lli, t, clk, 1.0, 3.0, f2, f2.copy(), f2.copy(),
-                 i3.copy(), wb, wf, np.zeros((2, n_bl)), np.zeros(n_bl, np.bool_), mcp)
+        view = antenna_view(asn_rad=asn, az_rad=np.zeros(n_sat), mask_on=do, ever_fixed=np.zeros(n_bl, np.bool_),
+                            pcv_on=do, pcv_empty=b3, ub_m=f2)
+        step = epoch_step(i=1, t_s=1.0, consecutive=do, do_td=do)
+        qc_epoch(sd, flags, view, step, memory, clock, limits, work)
+        td_checks(flags, step, np.ones((2,) + sh), noise, book, memory, limits, work)
     z = np.zeros(0)
     for do in (False, True):
         growth_weights(do, z, z, np.zeros(2 * n_sig + 1, np.int64), np.zeros((2, n_sig, 4)), np.zeros((2, n_sig)),
                        np.ones((2, n_sig)), 300.0, 10, 0.05, f3, np.zeros((2,) + sh))
-    td_checks(True, True, np.ones((2,) + sh), np.ones(n_sig), np.ones(n_sig), np.zeros(n_sig), 300.0, 1.0, 0.5,
-              np.ones(n_sig), b3, lli, i3.copy(), wb, wf, mcp, True, f3, i3 - 1, z, 8, t, 10.0,
-              np.zeros((2,) + sh, np.bool_), np.zeros((2,) + sh, np.bool_))
     take_square(P, np.arange(3, dtype=np.int64))
     grow_square(P, 2, 1.0)
     amb_index = np.full(sh, -1, np.int64)
     keys = np.array([[0, 1, 0], [1, 2, 1]], np.int64)
-    st = add_states(x, P, np.ones(2), 1.0, keys, t, 0, np.zeros((0, 3), np.int64), np.zeros(0, np.bool_),
+    st = add_states(x, P, np.ones(2), 1.0, keys, 1.0, 0, np.zeros((0, 3), np.int64), np.zeros(0, np.bool_),
                     np.zeros(0), np.zeros(0, np.int64), amb_index)
     keep = np.ones(16, np.bool_)
     keep[14] = False
     drop_states(st[0], st[1], keep, 14, st[2], st[3], st[4], st[5], amb_index)
-    ibuf, fbuf = np.zeros((6, 8), np.int64), np.zeros((4, 8))
+    buffers = tuple(ResidualBuffers(ints=np.zeros((6, 8), np.int64), floats=np.zeros((4, 8)),
+                                    lookup=np.zeros((2,) + sh)))
+    epoch = output_epoch(k=0, i=1, cn0_dbhz=f3, u=u, b_out_m=np.zeros((n_bl, 3)))
     for idx in (np.zeros(1, np.int64), np.nonzero(np.ones((2, 2)))[0]):      # contiguous, strided
-        record_epoch(0, b3, b3, b3, b3, i3, f2, f2, f3, z, 0, idx, idx, idx, idx, idx, idx, np.zeros((2,) + sh),
-                     ibuf, fbuf, 0, f3, f3, f3.copy(), f3.copy(), np.zeros((n_bl, 3)), u, f2.copy())
+        fit = post_fit(post_m=z, jc=idx, sc=idx, fc=idx, jp=idx, sp=idx, fp=idx)
+        record_epoch(flags, epoch, fit, work, memory, buffers, 0)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from gnssatt.attitude import kernels as K, qc_kernels as QK, update_kernels as UK
+from gnssatt.attitude import kernels as K, qc_kernels as QK, qc_records as QR, update_kernels as UK
 from gnssatt.attitude.reference_noise import NoiseEstimates, NoiseSettings
 from gnssatt.attitude.reference_qc import (AmbiguityBook, AntennaView, ClockState, PreviousEpoch, QcLimits, SdEpoch,
                                            TripleDifferences)
@@ -99,11 +99,20 @@ def call_cn0_growth(td: TripleDifferences, ln_factor, wavelength_m, est: NoiseEs
                         settings.min_epochs, settings.min_var_ln_factor, K.POW2)
 
 
+def _white_noise(est: NoiseEstimates, settings: NoiseSettings, enabled: bool = True) -> tuple:
+    """The kernels' WhiteNoise record over est's arrays (updated in place through it)."""
+    return tuple(QR.WhiteNoise(var_code_m2=est.var_code_m2, var_phase_m2=est.var_phase_m2, n_white=est.n_white,
+                               memory_epochs=float(settings.memory_epochs), enabled=enabled))
+
+
+def _triple_differences(td: TripleDifferences) -> tuple:
+    return tuple(QR.TripleDifferences(code_m=td.code_m, phase_m=td.phase_m, code_ok=td.code_ok, phase_ok=td.phase_ok,
+                                      median_code_m=td.median_code_m, median_phase_m=td.median_phase_m))
+
+
 def call_white_noise(td: TripleDifferences, weights, est: NoiseEstimates, settings: NoiseSettings):
     """white_noise_update, est updated in place."""
-    K.white_noise_update(td.code_m, td.phase_m, td.code_ok, td.phase_ok, td.median_code_m, td.median_phase_m,
-                         weights[0], weights[1], est.var_code_m2, est.var_phase_m2, est.n_white,
-                         settings.memory_epochs, K.POW2)
+    K.white_noise_update(_triple_differences(td), np.ascontiguousarray(weights), _white_noise(est, settings), K.POW2)
 
 
 # --- gnssatt.attitude.qc_kernels ---------------------------------------------------------------------------------
@@ -140,27 +149,59 @@ def call_epoch_geometry(u, R, bs_a_T, bs_b_T, x, b_idx):
     return los, ub, asn
 
 
+def _qc_limits(limits: QcLimits) -> tuple:
+    return tuple(QR.QcLimits(el_mask_ant_rad=limits.el_mask_ant_rad, clock_jump_m=limits.clock_jump_m,
+                             td_max_dt_s=limits.td_max_dt_s, td_code_m=limits.td_code_m,
+                             td_phase_cyc=limits.td_phase_cyc, max_gap_s=limits.max_gap_s,
+                             wavelength_m=limits.wavelength_m))
+
+
+def _block(a) -> np.ndarray:
+    """An epoch's array as the one row of an SdBlock's (the kernels read row i = 0)."""
+    return np.ascontiguousarray(a)[None]
+
+
+def _sd_block_qc(sd: SdEpoch) -> tuple:
+    return tuple(QR.SdBlockQc(sdc_m=_block(sd.sdc_m), sdp_m=_block(sd.sdp_m), low_cn0=_block(sd.low_cn0),
+                              reason0=_block(sd.reason0), clock_factor=_block(sd.clock_factor),
+                              baseline_ok=_block(sd.baseline_ok)))
+
+
+def _sd_block_flags(avail_c, avail_p, lli) -> tuple:
+    return tuple(QR.SdBlockFlags(avail_c=_block(avail_c), avail_p=_block(avail_p), lli=_block(lli)))
+
+
+def _epoch_step(prev: PreviousEpoch, t_s: float) -> tuple:
+    return QR.epoch_step(i=0, t_s=float(t_s), consecutive=bool(prev.consecutive), do_td=bool(prev.do_td))
+
+
+def _qc_work(sh: tuple) -> QR.QcWork:
+    n_bl, n_sat, n_sig = sh
+    return QR.QcWork(el_rad=np.zeros((3, n_bl, n_sat)), reason=np.zeros(sh, np.int64),
+                     masks=np.zeros((9,) + sh, bool), values_m=np.zeros((4,) + sh),
+                     median_td_m=np.zeros((2, n_bl, n_sig)))
+
+
 def call_qc_epoch(sd: SdEpoch, view: AntennaView, ub_m, prev: PreviousEpoch, clock: ClockState, t_s: float,
                   limits: QcLimits) -> dict:
     """qc_epoch's outputs by name (the names of reference_qc.QcEpoch / TripleDifferences / EpochClock), with the
-    clock state after the epoch as a ClockState."""
-    n_bl, n_sat, n_sig = sh = sd.sdc_m.shape
-    el = np.zeros((3, n_bl, n_sat))
-    reason = np.zeros(sh, np.int64)
-    wb, wf = np.zeros((5,) + sh, bool), np.zeros((4,) + sh)
-    clk_state = clock.as_array()
-    clk_out, jump, mcp = np.zeros((2, n_bl)), np.zeros(n_bl, bool), np.zeros((2, n_bl, n_sig))
-    asn = np.ascontiguousarray(np.stack([view.asn_a_rad, view.asn_b_rad]))
-    n_jump, n_common = QK.qc_epoch(asn, view.az_rad, view.mask_on, view.ever_fixed, limits.el_mask_ant_rad,
-                                   sd.reason0, sd.pcv_empty, view.pcv_on, sd.low_cn0, sd.avail_p, sd.sdc_m, sd.sdp_m,
-                                   sd.clock_factor, ub_m, prev.ub_m, prev.do_td, prev.sdc_m, prev.sdp_m,
-                                   sd.baseline_ok, sd.lli, t_s, clk_state, limits.clock_jump_m, limits.td_max_dt_s,
-                                   el[0], el[1], el[2], reason, wb, wf, clk_out, jump, mcp)
+    clock state after the epoch as a ClockState; _work, _memory: the kernel records for call_td_checks."""
+    n_bl = sd.sdc_m.shape[0]
+    work = _qc_work(sd.sdc_m.shape)
+    memory = QR.EpochMemory(prev_sdc_m=prev.sdc_m, prev_sdp_m=prev.sdp_m, prev_ub_m=prev.ub_m)
+    kclock = QR.EpochClock(clock_state=clock.as_array(), clock_m=np.zeros((2, n_bl)), jump=np.zeros(n_bl, bool))
+    kview = QR.antenna_view(asn_rad=np.ascontiguousarray(np.stack([view.asn_a_rad, view.asn_b_rad])),
+                            az_rad=view.az_rad, mask_on=bool(view.mask_on), ever_fixed=view.ever_fixed,
+                            pcv_on=bool(view.pcv_on), pcv_empty=sd.pcv_empty, ub_m=ub_m)
+    flags = _sd_block_flags(sd.avail_p, sd.avail_p, sd.lli)           # (avail_c: not read by qc_epoch)
+    n_jump, n_common = QK.qc_epoch(_sd_block_qc(sd), flags, kview, _epoch_step(prev, t_s), tuple(memory),
+                                   tuple(kclock), _qc_limits(limits), tuple(work))
+    el, wb, wf, mcp = work.el_rad, work.masks, work.values_m, work.median_td_m
     td = TripleDifferences(wf[2], wf[3], wb[3], wb[4], mcp[0], mcp[1])
-    return dict(el_w_rad=el[0], el_ant_rad=el[1], az_ant_rad=el[2], reason=reason, use_c=wb[0], use_p=wb[1],
-                slip=wb[2], sdc_c_m=wf[0], sdp_c_m=wf[1], td=td, clock_m=clk_out[0], predicted_m=clk_out[1],
-                jump=jump, n_jump=n_jump, n_common_jumps=n_common, clock_state=ClockState(*clk_state),
-                _wb=wb, _wf=wf, _mcp=mcp)
+    return dict(el_w_rad=el[0], el_ant_rad=el[1], az_ant_rad=el[2], reason=work.reason, use_c=wb[0], use_p=wb[1],
+                slip=wb[2], sdc_c_m=wf[0], sdp_c_m=wf[1], td=td, clock_m=kclock.clock_m[0],
+                predicted_m=kclock.clock_m[1], jump=kclock.jump, n_jump=n_jump, n_common_jumps=n_common,
+                clock_state=ClockState(*kclock.clock_state), _work=work, _memory=memory)
 
 
 def call_growth_weights(update: bool, td: TripleDifferences, ln_factor, wavelength_m, est: NoiseEstimates,
@@ -182,14 +223,14 @@ def call_td_checks(qc: dict, weights, est: NoiseEstimates, settings: NoiseSettin
                    prev: PreviousEpoch, book: AmbiguityBook, t_s: float, limits: QcLimits, noise_on: bool) -> dict:
     """td_checks after call_qc_epoch (qc's reason / use_c / slip updated in place, est too when noise_on):
     ev_td, ev_lli, drop, need and the counts."""
-    sh = sd.sdc_m.shape
-    ev, bk = np.zeros((2,) + sh, bool), np.zeros((2,) + sh, bool)
+    work = qc["_work"]
+    kbook = QR.ambiguity_book(amb_index=book.amb_index, amb_last_t_s=book.amb_last_t_s,
+                              n_fixed_part=int(book.n_fixed_part))
     n_td, n_lli, n_gap, n_drop, n_need = QK.td_checks(
-        prev.do_td, noise_on, weights, est.var_code_m2, est.var_phase_m2, est.n_white, settings.memory_epochs,
-        limits.td_code_m, limits.td_phase_cyc, limits.wavelength_m, sd.avail_p, sd.lli, qc["reason"], qc["_wb"],
-        qc["_wf"], qc["_mcp"], prev.consecutive, prev.sdp_m, book.amb_index, book.amb_last_t_s, book.n_fixed_part,
-        t_s, limits.max_gap_s, ev, bk)
-    return dict(ev_td=ev[0], ev_lli=ev[1], drop=bk[0], need=bk[1], n_td=n_td, n_lli=n_lli, n_gap=n_gap,
+        _sd_block_flags(sd.avail_p, sd.avail_p, sd.lli), _epoch_step(prev, t_s), np.ascontiguousarray(weights),
+        _white_noise(est, settings, noise_on), kbook, tuple(qc["_memory"]), _qc_limits(limits), tuple(work))
+    m = work.masks
+    return dict(ev_td=m[5], ev_lli=m[6], drop=m[7], need=m[8], n_td=n_td, n_lli=n_lli, n_gap=n_gap,
                 n_drop=n_drop, n_need=n_need)
 
 
@@ -197,10 +238,16 @@ def call_record_epoch(k: int, flags: EpochFlags, el_ant_rad, az_ant_rad, cn0_dbh
                       buffers: dict, sdc_c_m, sdp_c_m, b_out_m, u) -> None:
     """record_epoch into buffers (ibuf, fbuf, pos, prev_sdc, prev_sdp, prev_ub, lookup), updated in place."""
     b = buffers
-    b["pos"] = QK.record_epoch(k, flags.avail_c, flags.avail_p, flags.use_c, flags.use_p, flags.reason, el_ant_rad,
-                               az_ant_rad, cn0_dbhz, post_m, post_m.size, rows.jc, rows.sc, rows.fc, rows.jp,
-                               rows.sp, rows.fp, b["lookup"], b["ibuf"], b["fbuf"], b["pos"], sdc_c_m, sdp_c_m,
-                               b["prev_sdc"], b["prev_sdp"], b_out_m, u, b["prev_ub"])
+    work = _qc_work(flags.avail_c.shape)            # the QC's outputs the records read
+    work.el_rad[1], work.el_rad[2], work.reason[:] = el_ant_rad, az_ant_rad, flags.reason
+    work.masks[0], work.masks[1] = flags.use_c, flags.use_p
+    work.values_m[0], work.values_m[1] = sdc_c_m, sdp_c_m
+    kflags = _sd_block_flags(flags.avail_c, flags.avail_p, np.zeros(flags.avail_c.shape, np.int8))
+    epoch = QR.output_epoch(k=int(k), i=0, cn0_dbhz=cn0_dbhz, u=u, b_out_m=b_out_m)
+    fit = QR.post_fit(post_m=post_m, jc=rows.jc, sc=rows.sc, fc=rows.fc, jp=rows.jp, sp=rows.sp, fp=rows.fp)
+    memory = QR.EpochMemory(prev_sdc_m=b["prev_sdc"], prev_sdp_m=b["prev_sdp"], prev_ub_m=b["prev_ub"])
+    kbuf = QR.ResidualBuffers(ints=b["ibuf"], floats=b["fbuf"], lookup=b["lookup"])
+    b["pos"] = QK.record_epoch(kflags, epoch, fit, tuple(work), tuple(memory), tuple(kbuf), int(b["pos"]))
 
 
 def call_take_square(P, idx):

@@ -12,6 +12,7 @@ import numpy as np
 
 from gnssatt.attitude.filter_state import EpochData, FilterResult, FilterRun
 from gnssatt.attitude.qc_kernels import record_epoch
+from gnssatt.attitude.qc_records import output_epoch, post_fit
 from gnssatt.attitude.update_kernels import store_outputs
 
 
@@ -30,10 +31,9 @@ def output(run: FilterRun, ep: EpochData) -> None:
         run.R_mask_t = ep.t
     # residual records (used and rejected): the epoch's code rows, then its phase rows; and the memory for the
     # triple differences (clock-corrected SDs where available)
-    run.res_n = record_epoch(k, ep.avail_c, ep.avail_p, ep.use_c, ep.use_p, ep.reason, ep.el_ant, ep.az_ant, ep.cn0,
-                             ep.post, ep.m, ep.jc, ep.sc, ep.fc, ep.jp, ep.sp, ep.fp, run.w_lookup, run.res_i,
-                             run.res_f, run.res_n, ep.sdc_c, ep.sdp_c, run.prev_sdc, run.prev_sdp, run.out_b[k], ep.u,
-                             run.prev_ub)                                   # prev_ub = out_b[k] @ u.T
+    epoch = output_epoch(k=k, i=ep.i, cn0_dbhz=ep.cn0, u=ep.u, b_out_m=run.out_b[k])
+    fit = post_fit(post_m=ep.post, jc=ep.jc, sc=ep.sc, fc=ep.fc, jp=ep.jp, sp=ep.sp, fp=ep.fp)
+    run.res_n = record_epoch(run.sd_flags, epoch, fit, run.qc_work, run.qc_memory, run.res_buffers, run.res_n)
     run.prev_t = ep.t
     run.prev_b = run.out_b[k]
 

@@ -12,18 +12,19 @@ from __future__ import annotations
 import numpy as np
 
 from gnssatt.attitude.fastops import nz as _nz
-from gnssatt.attitude.filter_state import (CLOCK_JUMP_M, DEG, NOISE_EPOCHS, NOISE_MIN_EPOCHS, PCV_ATTITUDE_AGE_S,
-                                           TD_MAX_DT_S, EpochData, FilterRun, cn0_factor)
+from gnssatt.attitude.filter_state import (DEG, NOISE_EPOCHS, NOISE_MIN_EPOCHS, PCV_ATTITUDE_AGE_S, TD_MAX_DT_S,
+                                           EpochData, FilterRun, cn0_factor)
 from gnssatt.attitude.kernels import cn0_growth_samples
 from gnssatt.attitude.pcv_correction import epoch_correction_m
 from gnssatt.attitude.qc_kernels import epoch_geometry, growth_weights, qc_epoch, td_checks
+from gnssatt.attitude.qc_records import SdBlockFlags, SdBlockQc, ambiguity_book, antenna_view, epoch_step
 from gnssatt.attitude.sd_block import BLOCK_EPOCHS, sd_block
 from gnssatt.gnss.constants import C_M_S
 
 
 def quality_control(run: FilterRun, ep: EpochData) -> None:
-    """The epoch's SDs (ep.sdc, ep.sdp, ...), their editing (ep.use_c, ep.use_p, ep.reason ...), slips and the
-    ambiguity states added or dropped; Table 2 in the order of seed 000 sec. 2."""
+    """The epoch's SDs (from the SdBlock, run.blk), their editing (ep.use_c, ep.use_p, ep.reason ...), slips and
+    the ambiguity states added or dropped; Table 2 in the order of seed 000 sec. 2."""
     load_epoch(run, ep)
     epoch_geometry_and_pcv(run, ep)
     edit_epoch(run, ep)
@@ -32,8 +33,9 @@ def quality_control(run: FilterRun, ep: EpochData) -> None:
 
 
 def load_epoch(run: FilterRun, ep: EpochData) -> None:
-    """The epoch's single differences from the current SdBlock (a new block every BLOCK_EPOCHS epochs), with room
-    in the residual records for the block's rows."""
+    """The epoch's single differences from the current SdBlock (a new block every BLOCK_EPOCHS epochs, with room
+    in the residual records for its rows and the QC kernels' records of it, run.sd_qc and run.sd_flags: the kernels
+    read the epoch's row ep.i themselves); views of the epoch's row for the other boxes."""
     k = ep.k
     blk = run.blk
     if blk is None or k - blk.k0 >= blk.pa.shape[0]:
@@ -46,11 +48,13 @@ def load_epoch(run: FilterRun, ep: EpochData) -> None:
             cap = max(rows, int(1.1 * rows * run.n_ep / (k + blk.pa.shape[0])) + 64)
             res_i1, res_f1 = np.empty((6, cap), np.int64), np.empty((4, cap))
             res_i1[:, :run.res_n], res_f1[:, :run.res_n] = run.res_i[:, :run.res_n], run.res_f[:, :run.res_n]
-            run.res_i, run.res_f = res_i1, res_f1
+            run.set_residual_buffers(res_i1, res_f1)
+        run.sd_qc = tuple(SdBlockQc(sdc_m=blk.sdc, sdp_m=blk.sdp, low_cn0=blk.low_cn0, reason0=blk.reason,
+                                    clock_factor=blk.cfac, baseline_ok=blk.pa))
+        run.sd_flags = tuple(SdBlockFlags(avail_c=blk.avail_c, avail_p=blk.avail_p, lli=blk.lli))
     i = ep.i = k - blk.k0
-    ep.pa, ep.u, ep.cfac = blk.pa[i], blk.u[i], blk.cfac[i]                      # (n_bl,) (n_sat, 3) (n_sat,)
-    ep.sdc, ep.sdp, ep.cn0, ep.lli = blk.sdc[i], blk.sdp[i], blk.cn0[i], blk.lli[i]  # (n_bl, n_sat, n_sig)
-    ep.avail_c, ep.avail_p = blk.avail_c[i], blk.avail_p[i]
+    # (n_bl,) (n_sat, 3) (n_sat,) (n_bl, n_sat, n_sig): what the other boxes read of the epoch
+    ep.pa, ep.u, ep.cfac, ep.cn0 = blk.pa[i], blk.u[i], blk.cfac[i], blk.cn0[i]
     ep.el_loc = run.geom.elevation_local_rad[k]
 
 
@@ -87,15 +91,16 @@ def edit_epoch(run: FilterRun, ep: EpochData) -> None:
     prediction from the last estimate and the differential drift (free-running clocks drift by up to ~10 us/s
     relative to each other, so across an outage the change alone is no jump; no code this epoch: the prediction,
     the phase clocks absorb the drift), and the triple differences (time differences of SDs with the predicted
-    geometry change, median-referenced)."""
+    geometry change, median-referenced). ep.step: the epoch's EpochStep (gnssatt.attitude.qc_records), td_checks
+    takes it too."""
     k, t, st, lam = ep.k, ep.t, run.st, run.lam
-    ep.consecutive = ep.prev_t is not None and (t - ep.prev_t) <= TD_MAX_DT_S
+    ep.consecutive = ep.prev_t is not None and (t - ep.prev_t) <= TD_MAX_DT_S       # bool or np.bool_: one type
     ep.do_td = ep.consecutive and run.prev_b is not None
-    n_jump, n_common = qc_epoch(
-        ep.asn, ep.az, run.R_mask is not None, run.ever_fixed, run.s.table2.elevation_mask_antenna_deg * DEG,
-        run.blk.reason[ep.i], ep.empty, ep.pcv_on, run.blk.low_cn0[ep.i], ep.avail_p, ep.sdc, ep.sdp, ep.cfac, ep.ub,
-        run.prev_ub, ep.do_td, run.prev_sdc, run.prev_sdp, ep.pa, ep.lli, t, run.clk_state, CLOCK_JUMP_M,
-        TD_MAX_DT_S, *run.views[:3], run.w_reason, run.wb, run.wf, run.w_clk, run.w_jump, run.w_mcp)
+    ep.step = epoch_step(i=ep.i, t_s=t, consecutive=ep.consecutive, do_td=ep.do_td)
+    view = antenna_view(asn_rad=ep.asn, az_rad=ep.az, mask_on=run.R_mask is not None, ever_fixed=run.ever_fixed,
+                        pcv_on=ep.pcv_on, pcv_empty=ep.empty, ub_m=ep.ub)
+    n_jump, n_common = qc_epoch(run.sd_qc, run.sd_flags, view, ep.step, run.qc_memory, run.qc_clock, run.qc_limits,
+                                run.qc_work)
     (ep.el_w, ep.el_ant, ep.az_ant, ep.reason, ep.use_c, ep.use_p, ep.slip, ep.td_c_ok, ep.td_p_ok, ep.sdc_c,
      ep.sdp_c, ep.td_c, ep.td_p, ep.mc, ep.mp) = run.views
     if n_jump:
@@ -149,10 +154,9 @@ def triple_differences(run: FilterRun, ep: EpochData) -> None:
     k, st, s = ep.k, run.st, run.s
     ep.noise_on = s.noise.noise_estimation and ep.do_td
     wfac = noise_weights(run, ep)
-    n_td, n_lli, ep.n_gap, ep.n_drop, ep.n_need = td_checks(
-        ep.do_td, ep.noise_on, wfac, run.est_var_c, run.est_var_p, run.est_n, NOISE_EPOCHS, s.table2.td_code_m,
-        s.table2.td_phase_cyc, run.lam, ep.avail_p, ep.lli, ep.reason, run.wb, run.wf, run.w_mcp, ep.consecutive,
-        run.prev_sdp, st.amb_index, st.amb_last_t, st.n_fixed_part, ep.t, s.ambiguity.max_gap_s, run.w_ev, run.w_bk)
+    book = ambiguity_book(amb_index=st.amb_index, amb_last_t_s=st.amb_last_t, n_fixed_part=st.n_fixed_part)
+    n_td, n_lli, ep.n_gap, ep.n_drop, ep.n_need = td_checks(run.sd_flags, ep.step, wfac, run.white_noise, book,
+                                                            run.qc_memory, run.qc_limits, run.qc_work)
     # every slip is reported, also on phases not in use; an LLI on the first epoch of an arc is an acquisition
     for n, evm, how in ((n_td, run.w_ev[0], "triple-difference test"), (n_lli, run.w_ev[1], "loss-of-lock indicator")):
         if n:
