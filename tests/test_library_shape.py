@@ -18,14 +18,9 @@ MAX_PARAMS = 12
 #: off the list then). Their readable numpy specifications (gnssatt/attitude/reference_*.py) already meet the rule.
 KNOWN_KERNELS = {
     "gnssatt/attitude/kernels.py white_noise_update",
-    "gnssatt/attitude/kernels.py measurement_rows",
     "gnssatt/attitude/qc_kernels.py qc_epoch",
     "gnssatt/attitude/qc_kernels.py td_checks",
     "gnssatt/attitude/qc_kernels.py record_epoch",
-    "gnssatt/attitude/update_kernels.py measurement_variances",
-    "gnssatt/attitude/update_kernels.py measurement_update",
-    "gnssatt/attitude/update_kernels.py fix_newcomers",
-    "gnssatt/attitude/update_kernels.py store_outputs",
 }
 
 

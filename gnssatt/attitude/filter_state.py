@@ -18,6 +18,7 @@ from gnssatt.attitude.fastops import clip as _clip, nz as _nz
 from gnssatt.attitude.pcv_correction import pcv_tables_for
 from gnssatt.attitude.qc_kernels import add_states, drop_states
 from gnssatt.attitude.settings import AttitudeSettings, cn0_mask_of
+from gnssatt.attitude.update_records import OutputBuffers, OutputSettings, RoundingLimits, StateLayout
 from gnssatt.gnss.constants import C_M_S
 
 __all__ = ["FilterResult", "FilterState", "FilterRun", "EpochData", "EventLog", "REASONS", "DEG"]
@@ -196,6 +197,7 @@ class FilterRun:
         self._init_outputs()
         self._init_memory()
         self._init_work()
+        self._init_update_records()
 
     def _init_state(self):
         """Initial x, P: seed 000 Table 1 (baselines from the initial attitude, sigma0 2 m or 1.2 x the length)."""
@@ -320,6 +322,20 @@ class FilterRun:
         self.w_idx3 = np.arange(3)
         self.sub_w_b = np.concatenate([self.w_idx3, self.all_b_idx])   # omega and baselines (smoother's sub-state)
         self.ix_sub = np.ix_(self.sub_w_b, self.sub_w_b)
+
+    def _init_update_records(self):
+        """The run-constant records of the compiled update kernels (gnssatt.attitude.update_records), as plain
+        tuples: the state layout, the newcomer rounding limits, the output settings and buffers."""
+        s, st = self.s, self.st
+        self.update_layout = tuple(StateLayout(b_idx=self.b_idx, clk=st.clk, pclk=st.pclk, bias=st.bias,
+                                               amb_index=st.amb_index, n_fixed_part=st.n_fixed_part))
+        self.rounding_limits = tuple(RoundingLimits(max_sigma_cyc=float(s.ambiguity.new_amb_round_sigma_cyc),
+                                                    max_frac_cyc=float(s.ambiguity.new_amb_round_frac_cyc),
+                                                    var_cyc2=PSEUDO_VAR_CYC2))
+        self.output_settings = tuple(OutputSettings(all_b_idx=self.all_b_idx, dynamic=self.dynamic,
+                                                    fixed_min_sats=int(s.ambiguity.fixed_min_sats)))
+        self.output_buffers = tuple(OutputBuffers(b_ecef_m=self.out_b, P_b_m2=self.out_P, omega_ecef_rad_s=self.out_w,
+                                                  ok=self.out_ok, fixed=self.out_fixed, n_sats=self.out_n))
 
     def mark_segment_start(self, k: int) -> None:
         """The smoother's segment restarts at epoch k (a reset of omega or of a baseline's covariance)."""

@@ -20,9 +20,8 @@ def output(run: FilterRun, ep: EpochData) -> None:
     out_n = n_used, fixed_now = ever_fixed & (n_fixed_used >= fixed_min_sats); the mask attitude once every baseline
     is fixed; the residual rows; the previous-epoch memory."""
     st, k = run.st, ep.k
-    fixed_now = store_outputs(st.x, st.P, run.all_b_idx, k, run.out_b, run.out_P, run.out_w, run.dynamic, ep.pa,
-                              ep.n_used, run.ever_fixed, ep.n_fixed_used, run.s.ambiguity.fixed_min_sats, run.out_ok,
-                              run.out_fixed, run.out_n)
+    status = (ep.pa, ep.n_used, run.ever_fixed, ep.n_fixed_used)   # update_records.EpochStatus
+    fixed_now = store_outputs(st.x, st.P, k, status, run.output_settings, run.output_buffers)
     if run.record:
         run.sm_xf[k], run.sm_Pf[k] = st.x[run.sub_w_b], st.P[run.ix_sub]
     if run.attitude_fn is not None and k % (1 if run.pcv_tables else 10) == 0 and fixed_now.all():
