@@ -266,6 +266,25 @@ def call_measurement_update(x, P, rows: UsedRows, layout: StateLayout, obs: Upda
     return dict(out._asdict(), x=x1, P=P1, amb_last_t_s=last_t)
 
 
+def call_update_epoch(x, P, rows: UsedRows, layout: StateLayout, obs: UpdateObs, model: VarianceModel, est: dict,
+                      fix: FixState, amb_last_t_s, t_s: float, joseph_ratio: float) -> dict:
+    """update_epoch on copies of x, P, amb_last_t: the white variances from the estimator state `est`
+    (est_var_code_m2, est_var_phase_m2, est_n, floor_code_m2, floor_phase_m2, min_epochs, estimate; model's own
+    var_code_m2 / var_phase_m2 are not used), then the update; outputs as call_measurement_update's plus
+    var_code_m2, var_phase_m2."""
+    x1, P1, last_t = x.copy(), P.copy(), amb_last_t_s.copy()
+    noise = UR.NoiseModel.plain(
+        est_var_code_m2=est["est_var_code_m2"], est_var_phase_m2=est["est_var_phase_m2"], est_n=est["est_n"],
+        floor_code_m2=float(est["floor_code_m2"]), floor_phase_m2=float(est["floor_phase_m2"]),
+        min_epochs=int(est["min_epochs"]), estimate=bool(est["estimate"]), gamma=model.gamma,
+        cn0_growth=bool(model.cn0_growth), elevation_weighting=bool(model.elevation_weighting),
+        mp_model=bool(model.mp_model), mp_sigma_m=model.mp_sigma_m)
+    vc, vp, res = UK.update_epoch(x1, P1, _rows(rows), _layout(layout), _obs(obs), noise, float(model.mp_mult),
+                                  _fix(fix), last_t, float(t_s), float(joseph_ratio))
+    return dict(UR.UpdateOutputs._make(res)._asdict(), x=x1, P=P1, amb_last_t_s=last_t, var_code_m2=vc,
+                var_phase_m2=vp)
+
+
 def call_phase_row_stats(rows: UsedRows, cols, fix: FixState, post_m, n_fixed_part, n_bl, n_sat) -> dict:
     out = UK.phase_row_stats(rows.jp, rows.sp, cols, rows.n_code, fix.amb_fixed, n_fixed_part, post_m, n_bl, n_sat)
     return dict(zip(("n_used", "n_fixed_used", "n_unfixed", "n_fix_rows", "ms_fix_m2"), out))

@@ -3,7 +3,8 @@
 A kernel receives each record as a plain tuple and unpacks it in one line at its top, so nothing but the order of the
 names ties the kernel to the layout: these tests parse the kernel modules with `ast` and check that every unpacking of
 a record parameter names exactly the record's `_fields` in order, that a record parameter is otherwise only passed on
-whole, and that a kernel annotated to return a record returns a tuple of exactly its fields.
+whole, that a record built inside a kernel (`model: VarianceModel = (...)`) names its fields in order, and that a
+kernel annotated to return a record returns a tuple of exactly its fields.
 """
 from __future__ import annotations
 
@@ -76,6 +77,13 @@ def check_function(fn: ast.FunctionDef) -> list[str]:
     for node in ast.walk(fn):
         if isinstance(node, ast.Name) and node.id in params and id(node) not in passed_whole | top_values:
             bad.append(f"{fn.name}:{node.lineno}: record {node.id} used other than unpacked at the top or passed on")
+    for node in ast.walk(fn):
+        if isinstance(node, ast.AnnAssign) and _annotation_name(node.annotation):
+            rec = _annotation_name(node.annotation)
+            names = [e.id if isinstance(e, ast.Name) else ast.unparse(e) for e in node.value.elts] \
+                if isinstance(node.value, ast.Tuple) else [ast.unparse(node.value)]
+            if names != list(RECORDS[rec]._fields):
+                bad.append(f"{fn.name}:{node.lineno}: {rec} built from ({', '.join(names)}), not its _fields")
     ret = _annotation_name(fn.returns)
     if ret:
         fields = list(RECORDS[ret]._fields)
@@ -117,7 +125,7 @@ def _record_users() -> dict[str, ast.FunctionDef]:
 def test_the_record_kernels_are_found():
     """The walk sees the kernels that take records (so the checks below are not vacuous)."""
     found = {k.split(" ")[1] for k in _record_users()}
-    assert {"measurement_rows", "measurement_variances", "measurement_update", "fix_newcomers",
+    assert {"measurement_rows", "measurement_variances", "measurement_update", "update_epoch", "fix_newcomers",
             "round_newcomers_rows", "store_outputs"} <= found, found
 
 
@@ -157,6 +165,12 @@ def test_the_check_fails_on_a_wrong_order_a_second_unpacking_an_index_and_a_wron
             return baseline_ok, n_used, ever_fixed
     ''')
     assert any("not EpochStatus._fields" in p for p in check_function(short))
+    built = _parse_fn('''
+        def k(x):
+            fix: FixState = (amb_key, amb_fixed)
+            return inner(fix)
+    ''')
+    assert any("FixState built from" in p for p in check_function(built))
     good = _parse_fn('''
         def k(x, fix: FixState, limits: "RoundingLimits"):
             """doc"""

@@ -11,15 +11,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from gnssatt.attitude.filter_state import (JOSEPH_RATIO, MP_SCALE_MAX, MP_SCALE_MIN, NOISE_EPOCHS, NOISE_MIN_EPOCHS,
-                                           EpochData, FilterRun)
-from gnssatt.attitude.update_kernels import measurement_update as update_kernel, white_variances_cp
-from gnssatt.attitude.update_records import UpdateObs, UpdateOutputs, VarianceModel
+from gnssatt.attitude.filter_state import JOSEPH_RATIO, MP_SCALE_MAX, MP_SCALE_MIN, NOISE_EPOCHS, EpochData, FilterRun
+from gnssatt.attitude.update_kernels import update_epoch
+from gnssatt.attitude.update_records import FixState, UpdateObs, UpdateOutputs
 
 
 def measurement_update(run: FilterRun, ep: EpochData) -> None:
     """x and P updated in place with the epoch's used code rows, then phase rows (compiled
-    update_kernels.measurement_update); sets ep.post (post-fit residuals), ep.n_used, ep.n_fixed_used,
+    update_kernels.update_epoch); sets ep.vc_f, ep.vp_f (white variances per signal), ep.post (post-fit residuals), ep.n_used, ep.n_fixed_used,
     ep.n_unfixed, ep.has_fix (per baseline), ep.cols (the rows' state columns) and the fix monitor's statistics."""
     ep.rows = np.nonzero(ep.use_c) + np.nonzero(ep.use_p)          # update_records.UsedRows: jc, sc, fc, jp, sp, fp
     ep.jc, ep.sc, ep.fc, ep.jp, ep.sp, ep.fp = ep.rows
@@ -42,8 +41,6 @@ def _update(run: FilterRun, ep: EpochData) -> UpdateOutputs:
     the update as scalar updates in turn; the post-fit residuals and the sums of the multipath scale. Returns the
     kernel's outputs."""
     st, s, k, n_bl = run.st, run.s, ep.k, run.n_bl
-    ep.vc_f, ep.vp_f = white_variances_cp(run.est_var_c, run.est_var_p, run.est_n, run.var_c_floor, run.var_p_floor,
-                                          NOISE_MIN_EPOCHS, s.noise.noise_estimation)
     watch_w = run.adapter is not None and run.ever_fixed.all() and ep.prev_t is not None
     if watch_w:
         sub_prior, P_sub_prior = st.x[run.sub_w_b], st.P[run.ix_sub]          # (fancy indexing: copies)
@@ -51,14 +48,12 @@ def _update(run: FilterRun, ep: EpochData) -> UpdateOutputs:
     el_e = el_wc if not run.elev_w else (ep.el_ant if run.R_mask is not None
                                          else np.repeat(ep.el_loc[None, :], n_bl, 0))
     mp_mult = run.mp_infl * run.mp_scale
-    obs = UpdateObs(u=ep.u, clock_factor=ep.cfac, wavelength_m=run.lam, sdc_c_m=ep.sdc_c, sdp_c_m=ep.sdp_c,
-                    pcv_m=ep.pcv_m, cn0_dbhz=np.ascontiguousarray(ep.cn0), el_e_rad=el_e, el_w_rad=el_wc)
-    model = VarianceModel(var_code_m2=ep.vc_f, var_phase_m2=ep.vp_f, gamma=run.gamma, cn0_growth=run.cn0_growth,
-                          elevation_weighting=run.elev_w, mp_model=run.mp_model, mp_sigma_m=run.mp_sig,
-                          mp_mult=mp_mult)
-    fix = (st.amb_fixed, st.amb_key)                            # update_records.FixState (replaced with the states)
-    out = UpdateOutputs(*update_kernel(st.x, st.P, ep.rows, run.update_layout, tuple(obs), tuple(model), fix,
-                                       st.amb_last_t, ep.t, JOSEPH_RATIO))
+    obs = UpdateObs.plain(u=ep.u, clock_factor=ep.cfac, wavelength_m=run.lam, sdc_c_m=ep.sdc_c, sdp_c_m=ep.sdp_c,
+                          pcv_m=ep.pcv_m, cn0_dbhz=np.ascontiguousarray(ep.cn0), el_e_rad=el_e, el_w_rad=el_wc)
+    fix = FixState.plain(amb_fixed=st.amb_fixed, amb_key=st.amb_key)       # (arrays replaced with the states)
+    ep.vc_f, ep.vp_f, res = update_epoch(st.x, st.P, ep.rows, run.update_layout, obs, run.noise_model, mp_mult, fix,
+                                         st.amb_last_t, ep.t, JOSEPH_RATIO)
+    out = UpdateOutputs._make(res)
     ep.cols, ep.post, ep.has_fix = out.cols, out.post_m, out.has_fix
     ep.n_used, ep.n_fixed_used, ep.n_unfixed, ep.n_fix_rows, ep.ms_fix = (out.n_used, out.n_fixed_used, out.n_unfixed,
                                                                           out.n_fix_rows, out.ms_fix_m2)

@@ -13,6 +13,7 @@ import numpy as np
 from gnssatt.attitude.filter_state import EpochData, FilterResult, FilterRun
 from gnssatt.attitude.qc_kernels import record_epoch
 from gnssatt.attitude.update_kernels import store_outputs
+from gnssatt.attitude.update_records import EpochStatus
 
 
 def output(run: FilterRun, ep: EpochData) -> None:
@@ -20,7 +21,8 @@ def output(run: FilterRun, ep: EpochData) -> None:
     out_n = n_used, fixed_now = ever_fixed & (n_fixed_used >= fixed_min_sats); the mask attitude once every baseline
     is fixed; the residual rows; the previous-epoch memory."""
     st, k = run.st, ep.k
-    status = (ep.pa, ep.n_used, run.ever_fixed, ep.n_fixed_used)   # update_records.EpochStatus
+    status = EpochStatus.plain(baseline_ok=ep.pa, n_used=ep.n_used, ever_fixed=run.ever_fixed,
+                               n_fixed_used=ep.n_fixed_used)
     fixed_now = store_outputs(st.x, st.P, k, status, run.output_settings, run.output_buffers)
     if run.record:
         run.sm_xf[k], run.sm_Pf[k] = st.x[run.sub_w_b], st.P[run.ix_sub]
