@@ -193,3 +193,17 @@ def test_every_record_field_has_a_comment():
         assert [f.target.id for f in fields] == list(RECORDS[cls.name]._fields)
         for f in fields:
             assert "#" in lines[f.lineno - 1], f"{cls.name}.{f.target.id}: no comment"
+
+
+@pytest.mark.parametrize("record", update_records.RECORDS, ids=lambda r: r.__name__)
+def test_plain_builds_the_plain_tuple_by_keyword_only(record):
+    """Record.plain(**fields) is tuple(Record(**fields)); positional, missing and unknown fields are refused."""
+    fields = {name: object() for name in record._fields}
+    built = record.plain(**fields)
+    assert type(built) is tuple and built == tuple(record(**fields))
+    with pytest.raises(TypeError):
+        record.plain(*fields.values())
+    with pytest.raises(TypeError):
+        record.plain(**{k: v for k, v in list(fields.items())[1:]})
+    with pytest.raises(TypeError):
+        record.plain(**fields, not_a_field=1)
