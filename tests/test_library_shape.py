@@ -12,19 +12,6 @@ from tests.conftest import REPO_ROOT
 MAX_LINES = 150
 MAX_PARAMS = 12
 
-#: The one open item of issue 15's shape rule: the attitude filter's compiled kernels still take their arrays
-#: positionally (numba signatures; their record-type form is the next step of issue 15, item 4). Listed by name so
-#: that the list can only shrink: a new offender fails, and so does a listed kernel that no longer offends (take it
-#: off the list then). Their readable numpy specifications (gnssatt/attitude/reference_*.py) already meet the rule.
-KNOWN_KERNELS = {
-    "gnssatt/attitude/kernels.py measurement_rows",
-    "gnssatt/attitude/update_kernels.py measurement_variances",
-    "gnssatt/attitude/update_kernels.py measurement_update",
-    "gnssatt/attitude/update_kernels.py fix_newcomers",
-    "gnssatt/attitude/update_kernels.py store_outputs",
-}
-
-
 def _offenders() -> list[str]:
     out = []
     for path in sorted((REPO_ROOT / "gnssatt").rglob("*.py")):
@@ -49,19 +36,7 @@ def test_the_walk_sees_the_library():
     assert (REPO_ROOT / "gnssatt" / "gnss" / "positioning.py").is_file()
 
 
-def _key(offender: str) -> str:
-    """'path:line name: why' -> 'path name'."""
-    where = offender.split(": ", 1)[0]
-    path_line, name = where.split(" ", 1)
-    return f"{path_line.rsplit(':', 1)[0]} {name}"
-
-
 def test_no_long_function_and_no_long_parameter_list():
-    bad = [o for o in _offenders() if _key(o) not in KNOWN_KERNELS]
+    """The compiled attitude kernels too: they take a few records (gnssatt.attitude.qc_records, update_records)."""
+    bad = _offenders()
     assert not bad, "functions to split:\n" + "\n".join(bad)
-
-
-def test_the_known_kernel_list_only_shrinks():
-    still = {_key(o) for o in _offenders()}
-    fixed = sorted(KNOWN_KERNELS - still)
-    assert not fixed, "these kernels meet the rule now; take them off KNOWN_KERNELS: " + ", ".join(fixed)

@@ -19,6 +19,7 @@ from gnssatt.attitude.pcv_correction import pcv_tables_for
 from gnssatt.attitude.qc_kernels import add_states, drop_states
 from gnssatt.attitude.qc_records import EpochClock, EpochMemory, QcLimits, QcWork, ResidualBuffers, WhiteNoise
 from gnssatt.attitude.settings import AttitudeSettings, cn0_mask_of
+from gnssatt.attitude.update_records import NoiseModel, OutputBuffers, OutputSettings, RoundingLimits, StateLayout
 from gnssatt.gnss.constants import C_M_S
 
 __all__ = ["FilterResult", "FilterState", "FilterRun", "EpochData", "EventLog", "REASONS", "DEG"]
@@ -197,6 +198,7 @@ class FilterRun:
         self._init_outputs()
         self._init_memory()
         self._init_work()
+        self._init_update_records()
 
     def _init_state(self):
         """Initial x, P: seed 000 Table 1 (baselines from the initial attitude, sigma0 2 m or 1.2 x the length)."""
@@ -338,6 +340,26 @@ class FilterRun:
         """The residual records' buffers (res_i (6, cap), res_f (4, cap)) and record_epoch's record of them."""
         self.res_i, self.res_f = ints, floats
         self.res_buffers = tuple(ResidualBuffers(ints=ints, floats=floats, lookup=self.w_lookup))
+
+    def _init_update_records(self):
+        """The run-constant records of the compiled update kernels (gnssatt.attitude.update_records), as plain
+        tuples: the state layout, the noise model (its arrays updated in place), the newcomer rounding limits, the
+        output settings and buffers."""
+        s, st = self.s, self.st
+        self.update_layout = StateLayout.plain(b_idx=self.b_idx, clk=st.clk, pclk=st.pclk, bias=st.bias,
+                                               amb_index=st.amb_index, n_fixed_part=st.n_fixed_part)
+        self.noise_model = NoiseModel.plain(
+            est_var_code_m2=self.est_var_c, est_var_phase_m2=self.est_var_p, est_n=self.est_n,
+            floor_code_m2=float(self.var_c_floor), floor_phase_m2=float(self.var_p_floor), min_epochs=NOISE_MIN_EPOCHS,
+            estimate=bool(s.noise.noise_estimation), gamma=self.gamma, cn0_growth=bool(self.cn0_growth),
+            elevation_weighting=bool(self.elev_w), mp_model=bool(self.mp_model), mp_sigma_m=self.mp_sig)
+        self.rounding_limits = RoundingLimits.plain(max_sigma_cyc=float(s.ambiguity.new_amb_round_sigma_cyc),
+                                                    max_frac_cyc=float(s.ambiguity.new_amb_round_frac_cyc),
+                                                    var_cyc2=PSEUDO_VAR_CYC2)
+        self.output_settings = OutputSettings.plain(all_b_idx=self.all_b_idx, dynamic=self.dynamic,
+                                                    fixed_min_sats=int(s.ambiguity.fixed_min_sats))
+        self.output_buffers = OutputBuffers.plain(b_ecef_m=self.out_b, P_b_m2=self.out_P, omega_ecef_rad_s=self.out_w,
+                                                  ok=self.out_ok, fixed=self.out_fixed, n_sats=self.out_n)
 
     def mark_segment_start(self, k: int) -> None:
         """The smoother's segment restarts at epoch k (a reset of omega or of a baseline's covariance)."""

@@ -20,6 +20,7 @@ import numpy as np
 from numba import njit
 
 from gnssatt.attitude.qc_records import TripleDifferences, WhiteNoise
+from gnssatt.attitude.update_records import StateLayout, UpdateObs, UsedRows
 
 __all__ = ["POW2", "np_sum", "count_pairs_masked", "masked_median_axis1", "measurement_rows", "cn0_growth_samples", "cn0_growth_update", "white_noise_update",
            "warm_up"]
@@ -265,15 +266,20 @@ def count_pairs_masked(first, second, mask, n_first, n_second):
 
 
 @njit(cache=True, nogil=True)
-def measurement_rows(jc, sc, fc, jp, sp, fp, b_idx, u, cfac, clk, pclk, bias, amb_index, lam, sdc_c, sdp_c,
-                     pcv_m):
-    """(cols (m, 5) int64, coef (m, 5), z (m,)) of run_filter's update: the code rows (jc, sc, fc), then the phase
-    rows (jp, sp, fp) of seed 000 eq. 1 in sparse-row form (gnssatt.estimation.ekf.joseph_update_sparse):
-    baseline -u (3), clock partial 1 - rho_dot / c on the code / phase clock, then the code bias of signals 2..
-    (coefficient 1; no term for signal 1) or the ambiguity (lambda); z = clock-corrected SD code, SD phase - PCV."""
+def measurement_rows(rows: UsedRows, layout: StateLayout, obs: UpdateObs):
+    """(cols (m, 5) int64, coef (m, 5), z (m,)) of the update: the code rows, then the phase rows of `rows` in
+    sparse-row form (gnssatt.estimation.ekf.joseph_update_sparse): baseline -u (3), clock partial 1 - rho_dot / c on
+    the code / phase clock, then the code bias of signals 2.. (coefficient 1; no term for signal 1) or the ambiguity
+    (coefficient lambda); z = clock-corrected SD code, SD phase - PCV. Records: gnssatt.attitude.update_records.
+
+    Specification: gnssatt.attitude.reference_update.measurement_rows (seed 000 eq. 1).
+    """
+    jc, sc, fc, jp, sp, fp = rows
+    b_idx, clk, pclk, bias, amb_index, n_fixed_part = layout
+    u, clock_factor, wavelength_m, sdc_c_m, sdp_c_m, pcv_m, cn0_dbhz, el_e_rad, el_w_rad = obs
     mc_n = jc.size
     m = mc_n + jp.size
-    n_sig = sdc_c.shape[2]
+    n_sig = sdc_c_m.shape[2]
     cols = np.full((m, 5), -1, np.int64)
     coef = np.zeros((m, 5))
     z = np.empty(m)
@@ -285,18 +291,18 @@ def measurement_rows(jc, sc, fc, jp, sp, fp, b_idx, u, cfac, clk, pclk, bias, am
         for a in range(3):
             cols[r, a] = b_idx[j, a]
             coef[r, a] = -u[s, a]
-        coef[r, 3] = cfac[s]
+        coef[r, 3] = clock_factor[s]
         if r < mc_n:
             cols[r, 3] = clk[j]
             if n_sig > 1:
                 cols[r, 4] = bias[j, f]
                 coef[r, 4] = 1.0
-            z[r] = sdc_c[j, s, f]
+            z[r] = sdc_c_m[j, s, f]
         else:
             cols[r, 3] = pclk[j, f]
             cols[r, 4] = amb_index[j, s, f]
-            coef[r, 4] = lam[f]
-            z[r] = sdp_c[j, s, f] - pcv_m[j, s, f]
+            coef[r, 4] = wavelength_m[f]
+            z[r] = sdp_c_m[j, s, f] - pcv_m[j, s, f]
     return cols, coef, z
 
 
@@ -309,8 +315,13 @@ def warm_up() -> None:
     count_pairs_masked(np.zeros(2, np.int64), np.ones(2, np.int64), np.ones(2, np.bool_), 1, 2)
     i0 = np.zeros(1, np.int64)
     idx2 = np.zeros((1, 2), np.int64)
-    measurement_rows(i0, i0, i0, i0, i0, i0, np.zeros((1, 3), np.int64), np.ones((3, 3)), np.ones(3), i0, idx2,
-                     idx2, np.zeros((1, 3, 2), np.int64), np.ones(2), td, td, td)
+    rows = UsedRows(jc=i0, sc=i0, fc=i0, jp=i0, sp=i0, fp=i0)
+    layout = StateLayout(b_idx=np.zeros((1, 3), np.int64), clk=i0, pclk=idx2, bias=idx2,
+                         amb_index=np.zeros((1, 3, 2), np.int64), n_fixed_part=8)
+    el = np.ones((1, 3))
+    obs = UpdateObs(u=np.ones((3, 3)), clock_factor=np.ones(3), wavelength_m=np.ones(2), sdc_c_m=td, sdp_c_m=td,
+                    pcv_m=td, cn0_dbhz=td, el_e_rad=el, el_w_rad=el)
+    measurement_rows(tuple(rows), tuple(layout), tuple(obs))
     xs, rs, off = cn0_growth_samples(td, td, ok, ok, m, m, td, np.ones(2))
     cn0_growth_update(xs, rs, off, np.zeros((2, 2, 4)), np.zeros((2, 2)), np.ones((2, 2)), 300.0, 10, 0.05, POW2)
     est = WhiteNoise(var_code_m2=np.ones(2), var_phase_m2=np.ones(2), n_white=np.zeros(2), memory_epochs=300.0,

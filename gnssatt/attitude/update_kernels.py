@@ -1,5 +1,5 @@
-"""Compiled (numba) kernels of the attitude filter's measurement update, fix bookkeeping and mask attitude
-(gnssatt.attitude.filter.run_filter, second half of the epoch loop).
+"""Compiled (numba) kernels of the attitude filter's measurement update, fix bookkeeping and mask attitude (the
+boxes "measurement update", "ambiguity resolution" and "output" of seed 000 Fig. 2, gnssatt.attitude.boxes).
 
 `measurement_update` does in one call what the filter did with a few dozen numpy calls per epoch: the sparse
 rows (gnssatt.attitude.kernels.measurement_rows), the measurement variances (white noise x C/N0 factor^gamma
@@ -7,11 +7,16 @@ rows (gnssatt.attitude.kernels.measurement_rows), the measurement variances (whi
 .sequential_update_sparse, m scalar updates instead of the batch Joseph form: the same estimator, results equal to
 the last bits of the arithmetic), the post-fit residuals and the sums of the adaptive multipath scale.
 `phase_row_stats` gives the per-baseline satellite counts, the unfixed rows (the ambiguity resolution skips a
-baseline whose used ambiguities are all fixed) and the fix monitor's post-fit sums; `quest_dcm` the attitude of
-the antenna-frame mask (the q-method of gnssatt.gnss.rotations.quest for one epoch).
+baseline whose used ambiguities are all fixed) and the fix monitor's post-fit sums; `fix_newcomers` rounds and
+constrains the newcomers of a fixed baseline; `store_outputs` writes an epoch's outputs; `quest_dcm` gives the
+attitude of the antenna-frame mask (the q-method of gnssatt.gnss.rotations.quest for one epoch).
 
-tests/attitude/test_update_kernels.py compares every kernel with an independent numpy reference.
-Implements: nothing new; each kernel names the filter code it replaces.
+The kernels take their inputs as a few records (plain tuples in the field order of the NamedTuples of
+gnssatt.attitude.update_records), unpacked in one line at the top.
+
+Specification: gnssatt.attitude.reference_update, the readable numpy form of the same steps (seed 000 eq. 1,
+Table 1, Fig. 2; each kernel names its function there); tests/attitude/test_update_kernels.py compares every
+kernel with it, with tolerances in physical units.
 """
 from __future__ import annotations
 
@@ -19,9 +24,12 @@ import numpy as np
 from numba import njit
 
 from gnssatt.attitude.kernels import measurement_rows, np_sum
+from gnssatt.attitude.update_records import (EpochStatus, FixState, NoiseModel, OutputBuffers, OutputSettings,
+                                             RoundingLimits, StateLayout, UpdateObs, UpdateOutputs, UsedRows,
+                                             VarianceModel)
 from gnssatt.estimation.ekf_kernels import sequential_update_sparse
 
-__all__ = ["cn0_factor", "mp_var", "measurement_variances", "white_variances", "measurement_update",
+__all__ = ["cn0_factor", "mp_var", "measurement_variances", "white_variances", "measurement_update", "update_epoch",
            "white_variances_cp", "phase_row_stats", "round_newcomers_rows", "fix_newcomers", "store_outputs",
            "quest_dcm", "warm_up"]
 
@@ -30,7 +38,8 @@ _HALF_PI = np.pi / 2
 
 @njit(cache=True, nogil=True)
 def cn0_factor(cn0_dbhz):
-    """Variance factor 10^((45 - C/N0)/10) clipped to [0.25, 16] (NaN C/N0 -> 45 dB-Hz): filter._cn0_factor."""
+    """Variance factor 10^((45 - C/N0)/10) clipped to [0.25, 16] (NaN C/N0 -> 45 dB-Hz) of one observation.
+    Specification: gnssatt.attitude.reference_noise.cn0_variance_factor."""
     c = 45.0 if np.isnan(cn0_dbhz) else cn0_dbhz
     v = 10.0 ** ((45.0 - c) / 10.0)
     return min(max(v, 0.25), 16.0)
@@ -38,8 +47,9 @@ def cn0_factor(cn0_dbhz):
 
 @njit(cache=True, nogil=True)
 def mp_var(off_boresight_rad, sigma_boresight_m, sigma_horizon_m):
-    """Variance (m^2) of the time-correlated error of one SD: filter._mp_var (sigma grows with the square of the
-    off-boresight angle from the boresight value to sigma_horizon_m at 90 deg; capped at 120 deg; NaN -> 90 deg)."""
+    """Variance (m^2) of the time-correlated error of one SD (sigma grows with the square of the off-boresight
+    angle from the boresight value to sigma_horizon_m at 90 deg; capped at 120 deg; NaN -> 90 deg).
+    Specification: gnssatt.attitude.reference_noise.multipath_variance_m2."""
     th = _HALF_PI if np.isnan(off_boresight_rad) else off_boresight_rad
     x = min(max(th / _HALF_PI, 0.0), 4.0 / 3.0)
     v = sigma_boresight_m + (sigma_horizon_m - sigma_boresight_m) * x * x
@@ -49,7 +59,8 @@ def mp_var(off_boresight_rad, sigma_boresight_m, sigma_horizon_m):
 @njit(cache=True, nogil=True)
 def white_variances(est_var, est_n, floor_var, min_epochs, estimate):
     """(n_sig,) white-noise variance of one SD per signal: the estimate (not below the configured floor) once
-    min_epochs of triple differences were seen, else the floor; the floor alone without noise estimation."""
+    min_epochs of triple differences were seen, else the floor; the floor alone without noise estimation.
+    Specification: gnssatt.attitude.reference_update.white_variances."""
     out = np.empty(est_var.size)
     for f in range(est_var.size):
         out[f] = max(est_var[f], floor_var) if (estimate and est_n[f] >= min_epochs) else floor_var
@@ -57,14 +68,18 @@ def white_variances(est_var, est_n, floor_var, min_epochs, estimate):
 
 
 @njit(cache=True, nogil=True)
-def measurement_variances(jc, sc, fc, jp, sp, fp, vc_f, vp_f, cn0, gamma, cn0_growth, el_e, elevation_weighting,
-                          el_w, mp_model, mp_sig, mp_mult):
-    """(var (m,), v_white (m,), v_mp (m,)) of the code rows (jc, sc, fc) then the phase rows (jp, sp, fp):
-    white variance per signal (vc_f, vp_f) x C/N0 factor^gamma[kind, f] (if cn0_growth) x clip(1/sin^2 e, 1, 16)
-    of el_e (NaN -> 0.5 rad, e >= 0.05; if elevation_weighting) = v_white, plus v_mp x mp_mult where v_mp is the
-    multipath variance at the off-boresight angle 90 deg - el_w (if mp_model; mp_sig = (code boresight, code
-    horizon, phase boresight, phase horizon) sigmas, m). run_filter's variance block (seed 000 Table 1 and the
-    noise model of docs/attitude.md)."""
+def measurement_variances(rows: UsedRows, obs: UpdateObs, model: VarianceModel):
+    """(var (m,), v_white (m,), v_mp (m,)) in m^2 of the code rows, then the phase rows of `rows`: the white
+    variance of the signal x C/N0 factor^gamma[kind, f] (if cn0_growth) x clip(1/sin^2 e, 1, 16) of el_e_rad (NaN ->
+    0.5 rad, e >= 0.05 rad; if elevation_weighting) = v_white, plus mp_mult x v_mp, v_mp the multipath variance at
+    the off-boresight angle 90 deg - el_w_rad (if mp_model). Records: gnssatt.attitude.update_records.
+
+    Specification: gnssatt.attitude.reference_update.measurement_variances (seed 000 Table 1 and the noise model of
+    docs/attitude.md).
+    """
+    jc, sc, fc, jp, sp, fp = rows
+    u, clock_factor, wavelength_m, sdc_c_m, sdp_c_m, pcv_m, cn0_dbhz, el_e_rad, el_w_rad = obs
+    var_code_m2, var_phase_m2, gamma, cn0_growth, elevation_weighting, mp_model, mp_sigma_m, mp_mult = model
     mc_n = jc.size
     m = mc_n + jp.size
     var = np.empty(m)
@@ -73,14 +88,14 @@ def measurement_variances(jc, sc, fc, jp, sp, fp, vc_f, vp_f, cn0, gamma, cn0_gr
     for r in range(m):
         if r < mc_n:
             j, s, f, kind = jc[r], sc[r], fc[r], 0
-            v = vc_f[f]
+            v = var_code_m2[f]
         else:
             j, s, f, kind = jp[r - mc_n], sp[r - mc_n], fp[r - mc_n], 1
-            v = vp_f[f]
+            v = var_phase_m2[f]
         if cn0_growth:
-            v *= cn0_factor(cn0[j, s, f]) ** gamma[kind, f]
+            v *= cn0_factor(cn0_dbhz[j, s, f]) ** gamma[kind, f]
         if elevation_weighting:
-            e = el_e[j, s]
+            e = el_e_rad[j, s]
             if np.isnan(e):
                 e = 0.5
             e = max(e, 0.05)
@@ -88,7 +103,7 @@ def measurement_variances(jc, sc, fc, jp, sp, fp, vc_f, vp_f, cn0, gamma, cn0_gr
             v *= min(max(1.0 / (se * se), 1.0), 16.0)
         v_white[r] = v
         if mp_model:
-            vm = mp_var(_HALF_PI - el_w[j, s], mp_sig[2 * kind], mp_sig[2 * kind + 1])
+            vm = mp_var(_HALF_PI - el_w_rad[j, s], mp_sigma_m[2 * kind], mp_sigma_m[2 * kind + 1])
             v_mp[r] = vm
             v += vm * mp_mult
         var[r] = v
@@ -96,38 +111,44 @@ def measurement_variances(jc, sc, fc, jp, sp, fp, vc_f, vp_f, cn0, gamma, cn0_gr
 
 
 @njit(cache=True, nogil=True)
-def measurement_update(x, P, jc, sc, fc, jp, sp, fp, b_idx, u, cfac, clk, pclk, bias, amb_index, lam, sdc_c, sdp_c,
-                       pcv_m, vc_f, vp_f, cn0, gamma, cn0_growth, el_e, elevation_weighting, el_w, mp_model, mp_sig,
-                       mp_mult, amb_fixed, n_fixed_part, amb_last_t, t, joseph_ratio, amb_key, n_bl, n_sat):
-    """One epoch's measurement update of run_filter, x and P in place (unchanged if an innovation variance is not
-    positive; good = False).
+def measurement_update(x, P, rows: UsedRows, layout: StateLayout, obs: UpdateObs, model: VarianceModel,
+                       fix: FixState, amb_last_t_s, t_s, joseph_ratio) -> UpdateOutputs:
+    """One epoch's measurement update, x (n,) and P (n, n) in place (unchanged if an innovation variance is not
+    positive; good = False); amb_last_t_s (n_amb,) of the ambiguities in the update set to t_s (s).
 
-    Returns (cols, coef, z, var, v_mp, post, good, mp_num, mp_den, n_mp): the sparse rows and observations
+    Returns the fields of update_records.UpdateOutputs as a plain tuple: the sparse rows and observations
     (measurement_rows), the variances (measurement_variances; v_mp without the multipath multiplier mp_mult),
     the post-fit residuals z - H x+, and over the phase rows of fixed ambiguities the sums of the adaptive
     multipath scale: mp_num = sum(post^2 / (1 - h) - v_white), mp_den = sum(v_mp), n_mp rows, with the leverage
-    h = clip(H P+ H^T / var, 0, 0.95) (E[r^2] = R_true (1 - h)); amb_last_t of the ambiguities in the update
-    is set to t. Then phase_row_stats of the phase rows (n_used, n_fixed_used, n_unfixed, n_fix_rows, ms_fix) and
-    (n_bl,) has_fix: the baselines with a fixed ambiguity state (amb_key (n_amb, 3) rows (bl, sat, sig)).
+    h = clip(H P+ H^T / var, 0, 0.95) (E[r^2] = R_true (1 - h)); then phase_row_stats of the phase rows (n_used,
+    n_fixed_used, n_unfixed, n_fix_rows, ms_fix) and (n_bl,) has_fix: the baselines with a fixed ambiguity state.
+    The rows are applied as m scalar updates in turn (gnssatt.estimation.ekf_kernels.sequential_update_sparse,
+    short form, Joseph form for rows with H P H^T > joseph_ratio R): the same estimator as the batch Joseph update
+    of the specification, equal to rounding errors.
+
+    Specification: gnssatt.attitude.reference_update.measurement_update (seed 000 Fig. 2 "measurement update", eq. 1,
+    Table 1; Joseph form, Gelb 1974 eq. 4.2-21) and multipath_scale_sums (docs/attitude.md).
     """
-    cols, coef, z = measurement_rows(jc, sc, fc, jp, sp, fp, b_idx, u, cfac, clk, pclk, bias, amb_index, lam,
-                                     sdc_c, sdp_c, pcv_m)
-    var, v_white, v_mp = measurement_variances(jc, sc, fc, jp, sp, fp, vc_f, vp_f, cn0, gamma, cn0_growth, el_e,
-                                               elevation_weighting, el_w, mp_model, mp_sig, mp_mult)
-    good = sequential_update_sparse(x, P, cols, coef, var, z, joseph_ratio)
+    jc, sc, fc, jp, sp, fp = rows
+    b_idx, clk, pclk, bias, amb_index, n_fixed_part = layout
+    amb_fixed, amb_key = fix
+    n_bl, n_sat = amb_index.shape[0], amb_index.shape[1]
+    cols, coef, z = measurement_rows(rows, layout, obs)
+    var_m2, v_white, v_mp_m2 = measurement_variances(rows, obs, model)
+    good = sequential_update_sparse(x, P, cols, coef, var_m2, z, joseph_ratio)
     mc_n = jc.size
     m = cols.shape[0]
     kk = cols.shape[1]
     for r in range(mc_n, m):
-        amb_last_t[cols[r, 4] - n_fixed_part] = t
-    post = np.empty(m)
+        amb_last_t_s[cols[r, 4] - n_fixed_part] = t_s
+    post_m = np.empty(m)
     for r in range(m):
         hx = 0.0
         for a in range(kk):
             c = cols[r, a]
             if c >= 0:
                 hx += coef[r, a] * x[c]
-        post[r] = z[r] - hx
+        post_m[r] = z[r] - hx
     bn = np.empty(m)
     bd = np.empty(m)
     n_mp = 0
@@ -145,29 +166,29 @@ def measurement_update(x, P, jc, sc, fc, jp, sp, fp, b_idx, u, cfac, clk, pclk, 
                 if cb >= 0:
                     acc += P[ca, cb] * coef[r, b]
             hph += coef[r, a] * acc
-        one_h = min(max(1.0 - hph / var[r], 0.05), 1.0)
-        bn[n_mp] = post[r] * post[r] / one_h - v_white[r]
-        bd[n_mp] = v_mp[r]
+        one_h = min(max(1.0 - hph / var_m2[r], 0.05), 1.0)
+        bn[n_mp] = post_m[r] * post_m[r] / one_h - v_white[r]
+        bd[n_mp] = v_mp_m2[r]
         n_mp += 1
     mp_num = np_sum(bn[:n_mp])
     mp_den = np_sum(bd[:n_mp])
-    n_used, n_fixed, n_unfixed, n_fix_rows, ms = phase_row_stats(jp, sp, cols, mc_n, amb_fixed, n_fixed_part, post,
-                                                                 n_bl, n_sat)
+    n_used, n_fixed_used, n_unfixed, n_fix_rows, ms_fix_m2 = phase_row_stats(jp, sp, cols, mc_n, amb_fixed,
+                                                                             n_fixed_part, post_m, n_bl, n_sat)
     has_fix = np.zeros(n_bl, np.bool_)
     for a in range(amb_key.shape[0]):
         if amb_fixed[a]:
             has_fix[amb_key[a, 0]] = True
-    return (cols, coef, z, var, v_mp, post, good, mp_num, mp_den, n_mp, n_used, n_fixed, n_unfixed, n_fix_rows, ms,
-            has_fix)
+    return (cols, coef, z, var_m2, v_mp_m2, post_m, good, mp_num, mp_den, n_mp, n_used, n_fixed_used, n_unfixed,
+            n_fix_rows, ms_fix_m2, has_fix)
 
 
 @njit(cache=True, nogil=True)
 def phase_row_stats(jp, sp, cols, mc_n, amb_fixed, n_fixed_part, post, n_bl, n_sat):
     """Per baseline over the phase rows (jp, sp) of an update (rows mc_n.. of cols / post; ambiguity in column 4):
     (n_used satellites, n_fixed_used satellites with a fixed ambiguity, n_unfixed rows, n_fix_rows rows with a
-    fixed ambiguity, mean square of their post-fit residuals (NaN if none)): run_filter's counts
-    (count_pairs_masked), the skip of the ambiguity resolution for a baseline without unfixed rows, and the fix
-    monitor's RMS."""
+    fixed ambiguity, mean square of their post-fit residuals (NaN if none)): the satellite counts of the fix test,
+    the skip of the ambiguity resolution for a baseline without unfixed rows, and the fix monitor's RMS.
+    Specification: gnssatt.attitude.reference_update.phase_row_stats."""
     occ = np.zeros((n_bl, n_sat), np.bool_)
     occ_f = np.zeros((n_bl, n_sat), np.bool_)
     n_used = np.zeros(n_bl, np.int64)
@@ -202,17 +223,21 @@ def phase_row_stats(jp, sp, cols, mc_n, amb_fixed, n_fixed_part, post, n_bl, n_s
 
 
 @njit(cache=True, nogil=True)
-def round_newcomers_rows(x, P, amb_key, amb_fixed, n_fixed_part, idx_j, sig_j, el_j, n_sig, j, max_sigma_cyc,
-                         max_frac_cyc):
+def round_newcomers_rows(x, P, fix: FixState, n_fixed_part, idx_j, sig_j, el_j, n_sig, j, limits: RoundingLimits):
     """(new (r,), ref (r,), integers (r,)) of the DD ambiguities new - ref of baseline j fixed by rounding, and
-    amb_fixed set in place for them and their references: run_filter's "newcomers" branch with
-    gnssatt.attitude.ambiguity.round_newcomers, per signal f in turn.
+    fix.amb_fixed set in place for them and their references, per signal f in turn.
 
     idx_j, sig_j, el_j: state index, signal and local elevation of baseline j's phase rows. Per signal: the
     reference is the first fixed ambiguity state of (j, f), else the unfixed newcomer at the highest elevation
     (first of equals; NaN counts as highest, as np.argmax); a DD is rounded when its sigma < max_sigma_cyc and its
-    float lies within max_frac_cyc of the integer (bootstrapping, Teunissen 1998).
+    float lies within max_frac_cyc of the integer (bootstrapping, Teunissen 1998). Records:
+    gnssatt.attitude.update_records.
+
+    Specification: gnssatt.attitude.reference_update.round_newcomers_rows (gnssatt.attitude.ambiguity
+    .round_newcomers per signal).
     """
+    amb_fixed, amb_key = fix
+    max_sigma_cyc, max_frac_cyc, var_cyc2 = limits
     nr = idx_j.size
     fixed_j = np.empty(nr, np.bool_)
     for i in range(nr):
@@ -269,13 +294,19 @@ def round_newcomers_rows(x, P, amb_key, amb_fixed, n_fixed_part, idx_j, sig_j, e
 
 
 @njit(cache=True, nogil=True)
-def fix_newcomers(x, P, amb_key, amb_fixed, n_fixed_part, cols, mc_n, jp, sp, fp, el_loc, n_sig, j, max_sigma_cyc,
-                  max_frac_cyc, var_cyc2):
-    """round_newcomers_rows over baseline j's phase rows of the update (rows mc_n + i of cols with jp[i] == j:
-    ambiguity state cols[., 4], signal fp[i], local elevation el_loc[sp[i]]), then x, P constrained in place to
-    its DDs x[new] - x[ref] = integer by scalar pseudo-measurements of variance var_cyc2, each in the Joseph form
-    (filter._pseudo_update's constraint for these two-term rows, as scalar updates in turn); returns (new, ref,
-    integers) as round_newcomers_rows."""
+def fix_newcomers(x, P, fix: FixState, n_fixed_part, cols, rows: UsedRows, el_loc_rad, n_sig, j,
+                  limits: RoundingLimits):
+    """(new, ref, integers) as round_newcomers_rows over baseline j's phase rows of the update (row m_code + i of
+    cols with jp[i] == j: ambiguity state cols[., 4], signal fp[i], local elevation el_loc_rad[sp[i]] (n_sat,)),
+    then x, P constrained in place to its DDs x[new] - x[ref] = integer by scalar pseudo-measurements of variance
+    limits.var_cyc2, each in the Joseph form (scalar updates in turn). Records: gnssatt.attitude.update_records.
+
+    Specification: gnssatt.attitude.reference_update.fix_newcomers (the batch Joseph DD constraint of
+    boxes.ambiguity_resolution.pseudo_update; Gelb 1974 eq. 4.2-21).
+    """
+    jc, sc, fc, jp, sp, fp = rows
+    max_sigma_cyc, max_frac_cyc, var_cyc2 = limits
+    mc_n = jc.size
     nr = 0
     for i in range(jp.size):
         if jp[i] == j:
@@ -288,10 +319,9 @@ def fix_newcomers(x, P, amb_key, amb_fixed, n_fixed_part, cols, mc_n, jp, sp, fp
         if jp[i] == j:
             idx_j[q] = cols[mc_n + i, 4]
             sig_j[q] = fp[i]
-            el_j[q] = el_loc[sp[i]]
+            el_j[q] = el_loc_rad[sp[i]]
             q += 1
-    nw, rf, vals = round_newcomers_rows(x, P, amb_key, amb_fixed, n_fixed_part, idx_j, sig_j, el_j, n_sig, j,
-                                        max_sigma_cyc, max_frac_cyc)
+    nw, rf, vals = round_newcomers_rows(x, P, fix, n_fixed_part, idx_j, sig_j, el_j, n_sig, j, limits)
     r = nw.size
     if r:
         c2 = np.empty((r, 2), np.int64)
@@ -305,33 +335,59 @@ def fix_newcomers(x, P, amb_key, amb_fixed, n_fixed_part, cols, mc_n, jp, sp, fp
 
 @njit(cache=True, nogil=True)
 def white_variances_cp(est_var_c, est_var_p, est_n, floor_c, floor_p, min_epochs, estimate):
-    """(vc_f, vp_f): white_variances of code and phase."""
+    """(var_code_m2, var_phase_m2) (n_sig,): white_variances of code and phase (VarianceModel's first fields)."""
     return (white_variances(est_var_c, est_n, floor_c, min_epochs, estimate),
             white_variances(est_var_p, est_n, floor_p, min_epochs, estimate))
 
 
 @njit(cache=True, nogil=True)
-def store_outputs(x, P, all_b_idx, k, out_b, out_P, out_w, dynamic, pa, n_used, ever_fixed, n_fixed_used,
-                  fixed_min_sats, out_ok, out_fixed, out_n):
-    """run_filter's per-epoch outputs, row k: out_b = baselines (n_bl, 3), out_P = their joint covariance, out_w =
-    omega (dynamic mode), out_ok = pa & (n_used >= 3), out_fixed = fixed_now & out_ok, out_n = n_used; returns
-    fixed_now = ever_fixed & (n_fixed_used >= fixed_min_sats) (n_bl,)."""
+def update_epoch(x, P, rows: UsedRows, layout: StateLayout, obs: UpdateObs, noise: NoiseModel, mp_mult,
+                 fix: FixState, amb_last_t_s, t_s, joseph_ratio):
+    """(var_code_m2 (n_sig,), var_phase_m2 (n_sig,), measurement_update's UpdateOutputs as a plain tuple): the
+    epoch's white variances of one SD per signal from the noise estimates (white_variances_cp), then
+    measurement_update with them and mp_mult (x, P, amb_last_t_s in place). The box "measurement update" in one
+    compiled call (each call from Python costs ~1.5 us of dispatch, ~1 % of the filter's time).
+
+    Specification: gnssatt.attitude.reference_update.white_variances, then reference_update.measurement_update.
+    """
+    (est_var_code_m2, est_var_phase_m2, est_n, floor_code_m2, floor_phase_m2, min_epochs, estimate, gamma,
+     cn0_growth, elevation_weighting, mp_model, mp_sigma_m) = noise
+    var_code_m2, var_phase_m2 = white_variances_cp(est_var_code_m2, est_var_phase_m2, est_n, floor_code_m2,
+                                                   floor_phase_m2, min_epochs, estimate)
+    model: VarianceModel = (var_code_m2, var_phase_m2, gamma, cn0_growth, elevation_weighting, mp_model, mp_sigma_m,
+                            mp_mult)
+    return var_code_m2, var_phase_m2, measurement_update(x, P, rows, layout, obs, model, fix, amb_last_t_s, t_s,
+                                                         joseph_ratio)
+
+
+@njit(cache=True, nogil=True)
+def store_outputs(x, P, k, status: EpochStatus, settings: OutputSettings, out: OutputBuffers):
+    """(n_bl,) fixed_now = ever_fixed & (n_fixed_used >= fixed_min_sats), and row k of the output buffers written:
+    b_ecef_m = the baselines (n_bl, 3) of x, P_b_m2 = their joint covariance, omega_ecef_rad_s = omega (dynamic
+    mode; else left NaN), ok = baseline_ok & (n_used >= 3), fixed = fixed_now & ok, n_sats = n_used. Records:
+    gnssatt.attitude.update_records.
+
+    Specification: gnssatt.attitude.reference_update.epoch_outputs (seed 000 Fig. 2 "output").
+    """
+    baseline_ok, n_used, ever_fixed, n_fixed_used = status
+    all_b_idx, dynamic, fixed_min_sats = settings
+    b_ecef_m, P_b_m2, omega_ecef_rad_s, ok, fixed, n_sats = out
     nb = all_b_idx.size
     for a in range(nb):
-        out_b[k, a // 3, a % 3] = x[all_b_idx[a]]
+        b_ecef_m[k, a // 3, a % 3] = x[all_b_idx[a]]
         for c in range(nb):
-            out_P[k, a, c] = P[all_b_idx[a], all_b_idx[c]]
+            P_b_m2[k, a, c] = P[all_b_idx[a], all_b_idx[c]]
     if dynamic:
         for a in range(3):
-            out_w[k, a] = x[a]
-    n_bl = pa.size
+            omega_ecef_rad_s[k, a] = x[a]
+    n_bl = baseline_ok.size
     fixed_now = np.empty(n_bl, np.bool_)
     for j in range(n_bl):
-        ok = pa[j] and n_used[j] >= 3
+        ok_j = baseline_ok[j] and n_used[j] >= 3
         fixed_now[j] = ever_fixed[j] and n_fixed_used[j] >= fixed_min_sats
-        out_ok[k, j] = ok
-        out_fixed[k, j] = fixed_now[j] and ok
-        out_n[k, j] = n_used[j]
+        ok[k, j] = ok_j
+        fixed[k, j] = fixed_now[j] and ok_j
+        n_sats[k, j] = n_used[j]
     return fixed_now
 
 
@@ -404,33 +460,50 @@ def quest_dcm(b_ref, b_body, w):
 
 
 def warm_up() -> None:
-    """Compile (or load from the cache) every kernel once on tiny inputs with the array layouts of run_filter
-    (index arrays from np.nonzero are strided views)."""
-    use = np.zeros((1, 3, 2), np.bool_)
+    """Compile (or load from the cache) every kernel once on tiny inputs with the record and array layouts of
+    run_filter: np.nonzero's index arrays are strided views (numba layout A), but contiguous (C) when they hold at
+    most one row, so the code and the phase rows of UsedRows come in four layout combinations; the SD block's
+    baseline_ok may be a strided view too."""
+    use, use1 = np.zeros((1, 3, 2), np.bool_), np.zeros((1, 3, 2), np.bool_)
     use[0, :2, 0] = True
-    jc, sc, fc = np.nonzero(use)
-    td = np.ones((1, 3, 2))
-    cn0 = np.full((1, 3, 2), 45.0)
-    x, P = np.zeros(10), np.eye(10)
-    b_idx = np.arange(3, dtype=np.int64).reshape(1, 3)
-    amb = np.full((1, 3, 2), -1, np.int64)
-    amb[0, 0, 0], amb[0, 1, 0] = 8, 9
-    amb_key = np.array([[0, 0, 0], [0, 1, 0]], np.int64)
-    amb_fixed = np.array([True, False])
-    vc_f, vp_f = white_variances_cp(np.ones(2), np.ones(2), np.zeros(2), 1.0, 1.0, 10, True)
-    out = measurement_update(
-        x, P, jc, sc, fc, jc, sc, fc, b_idx, np.eye(3), np.ones(3), np.array([3], np.int64),
-        np.array([[4, 5]], np.int64), np.array([[-1, 6]], np.int64), amb, np.ones(2), td, td, td, vc_f, vp_f, cn0,
-        np.ones((2, 2)), True, np.ones((1, 3)), False, np.ones((1, 3)), True, np.ones(4), 1.0, amb_fixed, 8,
-        np.zeros(2), 0.0, 1e3, amb_key, 1, 3)
-    cols, post = out[0], out[5]
-    phase_row_stats(jc, sc, cols, 2, amb_fixed, 8, post, 1, 3)
-    idx_j, sig_j = np.array([8, 9], np.int64), np.zeros(2, np.int64)
-    round_newcomers_rows(x, P, amb_key, amb_fixed.copy(), 8, idx_j, sig_j, np.ones(2), 2, 0, 0.1, 0.2)
-    fix_newcomers(x, P, amb_key, amb_fixed.copy(), 8, cols, 2, jc, sc, fc, np.ones(3), 2, 0, 0.1, 0.2, 1e-6)
+    use1[0, 1, 0] = True
+    for use_c, use_p in ((use1, use1), (use1, use), (use, use1), (use, use)):
+        _warm_up_update(UsedRows(*np.nonzero(use_c), *np.nonzero(use_p)))
     quest_dcm(np.eye(3)[:2].copy(), np.eye(3)[:2].copy(), np.ones(2))
     two, n2 = np.ones(2, np.bool_), np.zeros(2, np.int64)
-    for pa in (two, np.ones((2, 2), np.bool_)[:, 0]):           # the SD block's pa[i] is a strided view
-        store_outputs(x, P, np.arange(6, dtype=np.int64), 0, np.zeros((1, 2, 3)), np.zeros((1, 6, 6)),
-                      np.zeros((1, 3)), True, pa, n2, two, n2, 4, np.zeros((1, 2), np.bool_),
-                      np.zeros((1, 2), np.bool_), np.zeros((1, 2), np.int64))
+    x, P = np.zeros(10), np.eye(10)
+    settings = tuple(OutputSettings(all_b_idx=np.arange(6, dtype=np.int64), dynamic=True, fixed_min_sats=4))
+    buffers = tuple(OutputBuffers(b_ecef_m=np.zeros((1, 2, 3)), P_b_m2=np.zeros((1, 6, 6)),
+                                  omega_ecef_rad_s=np.zeros((1, 3)), ok=np.zeros((1, 2), np.bool_),
+                                  fixed=np.zeros((1, 2), np.bool_), n_sats=np.zeros((1, 2), np.int64)))
+    for baseline_ok in (two, np.ones((2, 2), np.bool_)[:, 0]):
+        status = EpochStatus(baseline_ok=baseline_ok, n_used=n2, ever_fixed=two, n_fixed_used=n2)
+        store_outputs(x, P, 0, tuple(status), settings, buffers)
+
+
+def _warm_up_update(rows: UsedRows) -> None:
+    """update_epoch (so measurement_update), phase_row_stats, round_newcomers_rows and fix_newcomers with the
+    layouts of `rows`."""
+    td = np.ones((1, 3, 2))
+    el = np.ones((1, 3))
+    x, P = np.zeros(10), np.eye(10)
+    amb = np.full((1, 3, 2), -1, np.int64)
+    amb[0, 0, 0], amb[0, 1, 0] = 8, 9
+    layout = StateLayout(b_idx=np.arange(3, dtype=np.int64).reshape(1, 3), clk=np.array([3], np.int64),
+                         pclk=np.array([[4, 5]], np.int64), bias=np.array([[-1, 6]], np.int64), amb_index=amb,
+                         n_fixed_part=8)
+    obs = UpdateObs(u=np.eye(3), clock_factor=np.ones(3), wavelength_m=np.ones(2), sdc_c_m=td, sdp_c_m=td, pcv_m=td,
+                    cn0_dbhz=np.full((1, 3, 2), 45.0), el_e_rad=el, el_w_rad=el)
+    noise = NoiseModel(est_var_code_m2=np.ones(2), est_var_phase_m2=np.ones(2), est_n=np.zeros(2), floor_code_m2=1.0,
+                       floor_phase_m2=1.0, min_epochs=10, estimate=True, gamma=np.ones((2, 2)), cn0_growth=True,
+                       elevation_weighting=False, mp_model=True, mp_sigma_m=np.ones(4))
+    fix = FixState(amb_fixed=np.array([True, False]), amb_key=np.array([[0, 0, 0], [0, 1, 0]], np.int64))
+    _, _, res = update_epoch(x, P, tuple(rows), tuple(layout), tuple(obs), tuple(noise), 1.0, tuple(fix), np.zeros(2),
+                             0.0, 1e3)
+    out = UpdateOutputs._make(res)
+    phase_row_stats(rows.jp, rows.sp, out.cols, rows.jc.size, fix.amb_fixed, 8, out.post_m, 1, 3)
+    limits = tuple(RoundingLimits(max_sigma_cyc=0.1, max_frac_cyc=0.2, var_cyc2=1e-6))
+    fix_copy = (fix.amb_fixed.copy(), fix.amb_key)
+    round_newcomers_rows(x, P, fix_copy, 8, np.array([8, 9], np.int64), np.zeros(2, np.int64), np.ones(2), 2, 0,
+                         limits)
+    fix_newcomers(x, P, fix_copy, 8, out.cols, tuple(rows), np.ones(3), 2, 0, limits)

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from gnssatt.attitude import kernels as K, qc_kernels as QK, qc_records as QR, update_kernels as UK
+from gnssatt.attitude import (kernels as K, qc_kernels as QK, qc_records as QR, update_kernels as UK,
+                              update_records as UR)
 from gnssatt.attitude.reference_noise import NoiseEstimates, NoiseSettings
 from gnssatt.attitude.reference_qc import (AmbiguityBook, AntennaView, ClockState, PreviousEpoch, QcLimits, SdEpoch,
                                            TripleDifferences)
@@ -86,9 +87,7 @@ def call_count_pairs_masked(first, second, mask, n_first, n_second):
 
 def call_measurement_rows(rows: UsedRows, layout: StateLayout, obs: UpdateObs):
     """(cols, coef, z)."""
-    return K.measurement_rows(rows.jc, rows.sc, rows.fc, rows.jp, rows.sp, rows.fp, layout.b_idx, obs.u,
-                              obs.clock_factor, layout.clk, layout.pclk, layout.bias, layout.amb_index,
-                              obs.wavelength_m, obs.sdc_c_m, obs.sdp_c_m, obs.pcv_m)
+    return K.measurement_rows(_rows(rows), _layout(layout), _obs(obs))
 
 
 def call_cn0_growth(td: TripleDifferences, ln_factor, wavelength_m, est: NoiseEstimates, settings: NoiseSettings):
@@ -260,12 +259,43 @@ def call_grow_square(P, k, var):
 
 # --- gnssatt.attitude.update_kernels -----------------------------------------------------------------------------
 
+def _rows(rows: UsedRows) -> tuple:
+    """The kernel record (update_records.UsedRows, as a plain tuple) of the reference's UsedRows."""
+    return tuple(UR.UsedRows(jc=rows.jc, sc=rows.sc, fc=rows.fc, jp=rows.jp, sp=rows.sp, fp=rows.fp))
+
+
+def _layout(layout: StateLayout) -> tuple:
+    return tuple(UR.StateLayout(b_idx=layout.b_idx, clk=layout.clk, pclk=layout.pclk, bias=layout.bias,
+                                amb_index=layout.amb_index, n_fixed_part=int(layout.n_fixed_part)))
+
+
+def _obs(obs: UpdateObs) -> tuple:
+    return tuple(UR.UpdateObs(u=obs.u, clock_factor=obs.clock_factor, wavelength_m=obs.wavelength_m,
+                              sdc_c_m=obs.sdc_c_m, sdp_c_m=obs.sdp_c_m, pcv_m=obs.pcv_m,
+                              cn0_dbhz=np.ascontiguousarray(obs.cn0_dbhz), el_e_rad=np.ascontiguousarray(obs.el_e_rad),
+                              el_w_rad=np.ascontiguousarray(obs.el_w_rad)))
+
+
+def _model(model: VarianceModel) -> tuple:
+    return tuple(UR.VarianceModel(var_code_m2=model.var_code_m2, var_phase_m2=model.var_phase_m2, gamma=model.gamma,
+                                  cn0_growth=bool(model.cn0_growth),
+                                  elevation_weighting=bool(model.elevation_weighting), mp_model=bool(model.mp_model),
+                                  mp_sigma_m=model.mp_sigma_m, mp_mult=float(model.mp_mult)))
+
+
+def _fix(fix: FixState, amb_fixed=None) -> tuple:
+    """update_records.FixState of fix, with amb_fixed in place of fix.amb_fixed if given (a copy to update)."""
+    return tuple(UR.FixState(amb_fixed=fix.amb_fixed if amb_fixed is None else amb_fixed, amb_key=fix.amb_key))
+
+
+def _limits(limits: RoundingLimits) -> tuple:
+    return tuple(UR.RoundingLimits(max_sigma_cyc=float(limits.max_sigma_cyc), max_frac_cyc=float(limits.max_frac_cyc),
+                                   var_cyc2=float(limits.var_cyc2)))
+
+
 def call_measurement_variances(rows: UsedRows, obs: UpdateObs, model: VarianceModel):
     """(var, v_white, v_mp)."""
-    return UK.measurement_variances(rows.jc, rows.sc, rows.fc, rows.jp, rows.sp, rows.fp, model.var_code_m2,
-                                    model.var_phase_m2, obs.cn0_dbhz, model.gamma, model.cn0_growth, obs.el_e_rad,
-                                    model.elevation_weighting, obs.el_w_rad, model.mp_model, model.mp_sigma_m,
-                                    model.mp_mult)
+    return UK.measurement_variances(_rows(rows), _obs(obs), _model(model))
 
 
 def call_white_variances(est_var_m2, est_n, floor_var_m2, min_epochs, estimate):
@@ -275,18 +305,32 @@ def call_white_variances(est_var_m2, est_n, floor_var_m2, min_epochs, estimate):
 def call_measurement_update(x, P, rows: UsedRows, layout: StateLayout, obs: UpdateObs, model: VarianceModel,
                             fix: FixState, amb_last_t_s, t_s: float, joseph_ratio: float, n_bl: int,
                             n_sat: int) -> dict:
-    """measurement_update on copies of x, P, amb_last_t; outputs by the names of reference_update.UpdateResult."""
+    """measurement_update on copies of x, P, amb_last_t; outputs by the names of update_records.UpdateOutputs
+    (those of reference_update.UpdateResult); n_bl, n_sat: the kernel reads them off layout.amb_index."""
+    assert layout.amb_index.shape[:2] == (n_bl, n_sat)
     x1, P1, last_t = x.copy(), P.copy(), amb_last_t_s.copy()
-    out = UK.measurement_update(x1, P1, rows.jc, rows.sc, rows.fc, rows.jp, rows.sp, rows.fp, layout.b_idx, obs.u,
-                                obs.clock_factor, layout.clk, layout.pclk, layout.bias, layout.amb_index,
-                                obs.wavelength_m, obs.sdc_c_m, obs.sdp_c_m, obs.pcv_m, model.var_code_m2,
-                                model.var_phase_m2, obs.cn0_dbhz, model.gamma, model.cn0_growth, obs.el_e_rad,
-                                model.elevation_weighting, obs.el_w_rad, model.mp_model, model.mp_sigma_m,
-                                model.mp_mult, fix.amb_fixed, layout.n_fixed_part, last_t, t_s, joseph_ratio,
-                                fix.amb_key, n_bl, n_sat)
-    names = ("cols", "coef", "z", "var_m2", "v_mp_m2", "post_m", "good", "mp_num", "mp_den", "n_mp", "n_used",
-             "n_fixed_used", "n_unfixed", "n_fix_rows", "ms_fix_m2", "has_fix")
-    return dict(zip(names, out), x=x1, P=P1, amb_last_t_s=last_t)
+    out = UR.UpdateOutputs(*UK.measurement_update(x1, P1, _rows(rows), _layout(layout), _obs(obs), _model(model),
+                                                  _fix(fix), last_t, float(t_s), float(joseph_ratio)))
+    return dict(out._asdict(), x=x1, P=P1, amb_last_t_s=last_t)
+
+
+def call_update_epoch(x, P, rows: UsedRows, layout: StateLayout, obs: UpdateObs, model: VarianceModel, est: dict,
+                      fix: FixState, amb_last_t_s, t_s: float, joseph_ratio: float) -> dict:
+    """update_epoch on copies of x, P, amb_last_t: the white variances from the estimator state `est`
+    (est_var_code_m2, est_var_phase_m2, est_n, floor_code_m2, floor_phase_m2, min_epochs, estimate; model's own
+    var_code_m2 / var_phase_m2 are not used), then the update; outputs as call_measurement_update's plus
+    var_code_m2, var_phase_m2."""
+    x1, P1, last_t = x.copy(), P.copy(), amb_last_t_s.copy()
+    noise = UR.NoiseModel.plain(
+        est_var_code_m2=est["est_var_code_m2"], est_var_phase_m2=est["est_var_phase_m2"], est_n=est["est_n"],
+        floor_code_m2=float(est["floor_code_m2"]), floor_phase_m2=float(est["floor_phase_m2"]),
+        min_epochs=int(est["min_epochs"]), estimate=bool(est["estimate"]), gamma=model.gamma,
+        cn0_growth=bool(model.cn0_growth), elevation_weighting=bool(model.elevation_weighting),
+        mp_model=bool(model.mp_model), mp_sigma_m=model.mp_sigma_m)
+    vc, vp, res = UK.update_epoch(x1, P1, _rows(rows), _layout(layout), _obs(obs), noise, float(model.mp_mult),
+                                  _fix(fix), last_t, float(t_s), float(joseph_ratio))
+    return dict(UR.UpdateOutputs._make(res)._asdict(), x=x1, P=P1, amb_last_t_s=last_t, var_code_m2=vc,
+                var_phase_m2=vp)
 
 
 def call_phase_row_stats(rows: UsedRows, cols, fix: FixState, post_m, n_fixed_part, n_bl, n_sat) -> dict:
@@ -298,8 +342,8 @@ def call_round_newcomers_rows(x, P, fix: FixState, n_fixed_part, idx_j, sig_j, e
                               limits: RoundingLimits):
     """(new, ref, integers, amb_fixed) with amb_fixed a copy updated by the kernel."""
     amb_fixed = fix.amb_fixed.copy()
-    new, ref, val = UK.round_newcomers_rows(x, P, fix.amb_key, amb_fixed, n_fixed_part, idx_j, sig_j, el_j, n_sig, j,
-                                            limits.max_sigma_cyc, limits.max_frac_cyc)
+    new, ref, val = UK.round_newcomers_rows(x, P, _fix(fix, amb_fixed), n_fixed_part, idx_j, sig_j, el_j, n_sig, j,
+                                            _limits(limits))
     return new, ref, val, amb_fixed
 
 
@@ -307,9 +351,8 @@ def call_fix_newcomers(x, P, fix: FixState, n_fixed_part, cols, rows: UsedRows, 
                        limits: RoundingLimits):
     """(x, P, new, ref, integers, amb_fixed) on copies; the phase rows of the update as the filter passes them."""
     x1, P1, amb_fixed = x.copy(), P.copy(), fix.amb_fixed.copy()
-    new, ref, val = UK.fix_newcomers(x1, P1, fix.amb_key, amb_fixed, n_fixed_part, cols, rows.n_code, rows.jp,
-                                     rows.sp, rows.fp, el_loc_rad, n_sig, j, limits.max_sigma_cyc,
-                                     limits.max_frac_cyc, limits.var_cyc2)
+    new, ref, val = UK.fix_newcomers(x1, P1, _fix(fix, amb_fixed), n_fixed_part, cols, _rows(rows), el_loc_rad, n_sig,
+                                     j, _limits(limits))
     return x1, P1, new, ref, val, amb_fixed
 
 
@@ -319,6 +362,10 @@ def call_quest_dcm(b_ref, b_body, w):
 
 def call_store_outputs(x, P, all_b_idx, k, out: dict, dynamic, baseline_ok, n_used, ever_fixed, n_fixed_used,
                        fixed_min_sats):
-    """store_outputs into out's arrays (b_m, P_b_m2, omega_rad_s, ok, fixed, n_sats) at row k; returns fixed_now."""
-    return UK.store_outputs(x, P, all_b_idx, k, out["b_m"], out["P_b_m2"], out["omega_rad_s"], dynamic, baseline_ok,
-                            n_used, ever_fixed, n_fixed_used, fixed_min_sats, out["ok"], out["fixed"], out["n_sats"])
+    """store_outputs into out's arrays (b_m, P_b_m2, omega_rad_s, ok, fixed, n_sats: the keys of
+    reference_update.epoch_outputs) at row k; returns fixed_now."""
+    status = UR.EpochStatus(baseline_ok=baseline_ok, n_used=n_used, ever_fixed=ever_fixed, n_fixed_used=n_fixed_used)
+    settings = UR.OutputSettings(all_b_idx=all_b_idx, dynamic=bool(dynamic), fixed_min_sats=int(fixed_min_sats))
+    buffers = UR.OutputBuffers(b_ecef_m=out["b_m"], P_b_m2=out["P_b_m2"], omega_ecef_rad_s=out["omega_rad_s"],
+                               ok=out["ok"], fixed=out["fixed"], n_sats=out["n_sats"])
+    return UK.store_outputs(x, P, int(k), tuple(status), tuple(settings), tuple(buffers))

@@ -10,6 +10,8 @@ amplified by); residuals in metres, counts and flags exactly.
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -20,8 +22,8 @@ from gnssatt.estimation.ekf_reference import joseph_update, sparse_rows_to_dense
 from gnssatt.gnss import rotations as rot
 from tests.attitude._kernel_calls import (call_fix_newcomers, call_measurement_update, call_measurement_variances,
                                           call_phase_row_stats, call_quest_dcm, call_round_newcomers_rows,
-                                          call_sequential_update, call_store_outputs, call_white_variances, close,
-                                          same)
+                                          call_sequential_update, call_store_outputs, call_update_epoch,
+                                          call_white_variances, close, same)
 
 EPS = np.finfo(float).eps
 
@@ -299,6 +301,34 @@ def test_measurement_update_equals_rows_variances_batch_update_and_postfit(reali
         for name in ("n_used", "n_fixed_used", "n_unfixed", "n_fix_rows"):
             same(stats[name], out[name], name)
         close(stats["ms_fix_m2"], out["ms_fix_m2"], rtol=1e-15, what="ms_fix: the same kernel code")
+
+
+def test_update_epoch_is_white_variances_then_measurement_update():
+    """The filter's one call (update_epoch) = reference_update.white_variances of code and phase from the estimator
+    state, then measurement_update with them: the white variances relative 1e-15 (selections of given values);
+    everything else within 4 eps relative (the same compiled arithmetic, reached through a second kernel), with
+    and without noise estimation, estimates below and above the floors."""
+    rng = np.random.default_rng(9)
+    for trial in range(20):
+        x, P, rows, layout, obs, model, fix, last_t = _filter_epoch(rng, realistic=bool(trial % 2))
+        n_sig = model.gamma.shape[1]
+        est = dict(est_var_code_m2=rng.uniform(0.01, 0.2, n_sig), est_var_phase_m2=rng.uniform(1e-6, 3e-5, n_sig),
+                   est_n=rng.choice([3.0, 10.0, 50.0], n_sig), floor_code_m2=0.09, floor_phase_m2=1e-5,
+                   min_epochs=10, estimate=bool(trial % 4 < 2))
+        vc = RU.white_variances(est["est_var_code_m2"], est["est_n"], est["floor_code_m2"], 10, est["estimate"])
+        vp = RU.white_variances(est["est_var_phase_m2"], est["est_n"], est["floor_phase_m2"], 10, est["estimate"])
+        n_bl, n_sat = obs.el_w_rad.shape
+        ref = call_measurement_update(x, P, rows, layout, obs, dataclasses.replace(model, var_code_m2=vc,
+                                                                                  var_phase_m2=vp),
+                                      fix, last_t, 7.0, 1e3, n_bl, n_sat)
+        out = call_update_epoch(x, P, rows, layout, obs, model, est, fix, last_t, 7.0, 1e3)
+        close(out["var_code_m2"], vc, rtol=1e-15, what="white code variance (m^2)")
+        close(out["var_phase_m2"], vp, rtol=1e-15, what="white phase variance (m^2)")
+        for name, value in ref.items():
+            if np.asarray(value).dtype.kind in "biu":
+                same(out[name], value, name)
+            else:
+                close(out[name], value, rtol=4 * EPS, atol=1e-300, what=name)
 
 
 def test_phase_row_stats_equal_numpy_counts():

@@ -17,6 +17,7 @@ from gnssatt.attitude.fastops import clip as _clip
 from gnssatt.attitude.filter_state import (DEG, OMEGA_RESET_TURN_DEG, PSEUDO_VAR_CYC2, EpochData, FilterRun,
                                            FilterState)
 from gnssatt.attitude.update_kernels import fix_newcomers
+from gnssatt.attitude.update_records import FixState
 from gnssatt.estimation.ekf import joseph_update_sparse
 
 
@@ -107,10 +108,10 @@ def _reset_omega(run: FilterRun, k: int, j: int, turn_deg: float) -> None:
 def _fix_newcomers(run: FilterRun, ep: EpochData, j: int) -> None:
     """Newcomers on a fixed baseline: DD to the fixed reference of their signal rounded (compiled) and constrained
     in place (DD pseudo-measurements as in pseudo_update, as scalar Joseph updates)."""
-    s, st, k = run.s, run.st, ep.k
-    nw, rf, vals = fix_newcomers(st.x, st.P, st.amb_key, st.amb_fixed, st.n_fixed_part, ep.cols, ep.mc_n, ep.jp,
-                                 ep.sp, ep.fp, ep.el_loc, run.n_sig, j, s.ambiguity.new_amb_round_sigma_cyc,
-                                 s.ambiguity.new_amb_round_frac_cyc, PSEUDO_VAR_CYC2)
+    st, k = run.st, ep.k
+    fix = FixState.plain(amb_fixed=st.amb_fixed, amb_key=st.amb_key)      # (st.x, st.P may have been replaced)
+    nw, rf, vals = fix_newcomers(st.x, st.P, fix, st.n_fixed_part, ep.cols, ep.rows, ep.el_loc, run.n_sig, j,
+                                 run.rounding_limits)
     if nw.size:
         ep.ar_changed = True
         run.fix_rows.extend(zip([k] * nw.size, st.amb_arc[nw - st.n_fixed_part].tolist(),

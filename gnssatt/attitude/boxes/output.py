@@ -14,6 +14,7 @@ from gnssatt.attitude.filter_state import EpochData, FilterResult, FilterRun
 from gnssatt.attitude.qc_kernels import record_epoch
 from gnssatt.attitude.qc_records import output_epoch, post_fit
 from gnssatt.attitude.update_kernels import store_outputs
+from gnssatt.attitude.update_records import EpochStatus
 
 
 def output(run: FilterRun, ep: EpochData) -> None:
@@ -21,9 +22,9 @@ def output(run: FilterRun, ep: EpochData) -> None:
     out_n = n_used, fixed_now = ever_fixed & (n_fixed_used >= fixed_min_sats); the mask attitude once every baseline
     is fixed; the residual rows; the previous-epoch memory."""
     st, k = run.st, ep.k
-    fixed_now = store_outputs(st.x, st.P, run.all_b_idx, k, run.out_b, run.out_P, run.out_w, run.dynamic, ep.pa,
-                              ep.n_used, run.ever_fixed, ep.n_fixed_used, run.s.ambiguity.fixed_min_sats, run.out_ok,
-                              run.out_fixed, run.out_n)
+    status = EpochStatus.plain(baseline_ok=ep.pa, n_used=ep.n_used, ever_fixed=run.ever_fixed,
+                               n_fixed_used=ep.n_fixed_used)
+    fixed_now = store_outputs(st.x, st.P, k, status, run.output_settings, run.output_buffers)
     if run.record:
         run.sm_xf[k], run.sm_Pf[k] = st.x[run.sub_w_b], st.P[run.ix_sub]
     if run.attitude_fn is not None and k % (1 if run.pcv_tables else 10) == 0 and fixed_now.all():
