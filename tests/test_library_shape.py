@@ -12,6 +12,7 @@ from tests.conftest import REPO_ROOT
 MAX_LINES = 150
 MAX_PARAMS = 12
 
+
 def _offenders() -> list[str]:
     out = []
     for path in sorted((REPO_ROOT / "gnssatt").rglob("*.py")):
