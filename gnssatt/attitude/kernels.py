@@ -9,8 +9,10 @@ from it in the last bit for ~1 value in 1000).
 Transcendental functions of arrays (log, exp) stay in numpy. tests/attitude/test_attitude_kernels.py compares
 every kernel with the numpy code it replaces on random inputs.
 
-Implements: nothing new (seed 000 Table 2 triple-difference editing and the noise model of docs/attitude.md);
-each kernel names the filter code it replaces.
+Specification: the readable numpy form in gnssatt.attitude.reference_noise (white-noise and C/N0-growth
+estimators: update_white_noise, update_cn0_growth; docs/attitude.md noise model) and reference_update
+(measurement_rows: seed 000 eq. 1 in sparse-row form); tests/attitude/test_attitude_kernels.py and the
+reference tests check each kernel against them with tolerances in physical units.
 """
 from __future__ import annotations
 
