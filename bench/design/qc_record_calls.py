@@ -3,7 +3,7 @@
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/design/qc_record_calls.py
 
 1. Building one 9-field per-epoch record from attributes: `tuple(Record(f=...))` (namedtuple by keyword, then a
-   plain tuple), the keyword-only builder of qc_records.plain_tuple_builder, and a bare tuple display (no names:
+   plain tuple), the keyword-only builder of record_tuples.plain_tuple_builder, and a bare tuple display (no names:
    an order mix-up would pass silently).
 2. Calling a do-nothing kernel with 30 arrays: positional, as 5 plain tuples of 6, as 5 namedtuples of 6 (numba
    types a namedtuple through Python, a plain tuple by its C fingerprint), and as 5 plain tuples carrying 10
@@ -25,7 +25,7 @@ from numba import njit
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))
 
-from gnssatt.attitude.qc_records import plain_tuple_builder  # noqa: E402
+from gnssatt.attitude.record_tuples import plain_tuple_builder  # noqa: E402
 
 
 class Six(NamedTuple):

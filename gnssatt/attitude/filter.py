@@ -33,8 +33,7 @@ from gnssatt.attitude.boxes.measurement_update import measurement_update
 from gnssatt.attitude.boxes.output import filter_result, output
 from gnssatt.attitude.boxes.propagate import propagate
 from gnssatt.attitude.boxes.quality_control import quality_control
-from gnssatt.attitude.filter_state import (REASONS, EpochData, FilterResult, FilterRun, FilterState,
-                                           cn0_factor as _cn0_factor, mp_var as _mp_var)
+from gnssatt.attitude.filter_state import REASONS, EpochData, FilterResult, FilterRun, FilterState
 from gnssatt.attitude.settings import AttitudeSettings
 
 __all__ = ["FilterResult", "run_filter", "REASONS"]

@@ -148,14 +148,6 @@ def cn0_factor(cn0_dbhz: np.ndarray) -> np.ndarray:
     return _clip(10.0 ** ((45.0 - _nz(cn0_dbhz, 45.0)) / 10.0), 0.25, 16.0)
 
 
-def mp_var(off_boresight_rad: np.ndarray, sigma_boresight_m: float, sigma_horizon_m: float) -> np.ndarray:
-    """Variance (m^2) of the time-correlated error of one SD: sigma grows from the boresight value with the square
-    of the off-boresight angle, reaching sigma_horizon_m at the antenna horizon (90 deg); capped at 120 deg.
-    (The filter uses the compiled update_kernels.mp_var; this is its numpy reference in the tests.)"""
-    x = _clip(_nz(off_boresight_rad, np.pi / 2) / (np.pi / 2), 0.0, 4.0 / 3.0)
-    return (sigma_boresight_m + (sigma_horizon_m - sigma_boresight_m) * x * x) ** 2
-
-
 class EpochData:
     """One epoch's intermediate arrays, filled box by box (names as in the boxes' docstrings)."""
 

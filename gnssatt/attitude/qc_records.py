@@ -22,13 +22,15 @@ as numpy gives them), so each kernel compiles the few signatures its warm_up cov
 """
 from __future__ import annotations
 
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 
+from gnssatt.attitude.record_tuples import plain_tuple_builder
+
 __all__ = ["QcLimits", "SdBlockQc", "SdBlockFlags", "AntennaView", "EpochStep", "EpochMemory", "EpochClock",
            "QcWork", "AmbiguityBook", "TripleDifferences", "WhiteNoise", "OutputEpoch", "PostFit", "ResidualBuffers",
-           "plain_tuple_builder", "antenna_view", "epoch_step", "ambiguity_book", "output_epoch", "post_fit"]
+           "antenna_view", "epoch_step", "ambiguity_book", "output_epoch", "post_fit"]
 
 
 class QcLimits(NamedTuple):
@@ -172,20 +174,6 @@ class ResidualBuffers(NamedTuple):
     ints: np.ndarray                # (6, cap) int64 epoch, bl, sat, sig, kind (0 code, 1 phase), reason
     floats: np.ndarray              # (4, cap) el_ant_deg, az_ant_deg, cn0_dbhz, residual_m
     lookup: np.ndarray              # (2, bl, sat, sig) work: the residual of each code / phase observation, m
-
-
-def plain_tuple_builder(record: type) -> Callable[..., tuple]:
-    """A function taking `record`'s fields by keyword only (all of them, no others) and returning them as a plain
-    tuple in field order: what tuple(record(...)) gives, in a third of the time (no namedtuple in between).
-    Generated from record._fields as collections.namedtuple generates its __new__."""
-    fields = record._fields
-    name = "".join("_" + c.lower() if c.isupper() else c for c in record.__name__).lstrip("_")
-    namespace: dict = {}
-    exec(f"def {name}(*, {', '.join(fields)}):\n    return ({', '.join(fields)},)\n", namespace)
-    fn = namespace[name]
-    fn.__module__ = __name__
-    fn.__doc__ = f"The plain tuple of a {record.__name__} ({', '.join(fields)}), fields by keyword."
-    return fn
 
 
 antenna_view = plain_tuple_builder(AntennaView)

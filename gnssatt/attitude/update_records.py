@@ -24,9 +24,11 @@ update", "ambiguity resolution", "output").
 """
 from __future__ import annotations
 
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
+
+from gnssatt.attitude.record_tuples import plain_tuple_builder
 
 __all__ = ["UsedRows", "StateLayout", "UpdateObs", "VarianceModel", "NoiseModel", "FixState", "RoundingLimits",
            "UpdateOutputs", "OutputSettings", "OutputBuffers", "EpochStatus", "RECORDS"]
@@ -158,17 +160,5 @@ RECORDS = (UsedRows, StateLayout, UpdateObs, VarianceModel, NoiseModel, FixState
            OutputSettings, OutputBuffers, EpochStatus)
 
 
-def _plain_builder(record: type) -> Callable[..., tuple]:
-    """f(**fields) -> the plain tuple of `record`'s fields in order; every field by keyword, none missing. Generated
-    from record._fields (as collections.namedtuple generates its __new__), so it cannot disagree with the layout."""
-    names = ", ".join(record._fields)
-    namespace: dict = {}
-    exec(f"def plain(*, {names}):\n    return ({names},)", namespace)          # noqa: S102 (field names only)
-    fn = namespace["plain"]
-    fn.__qualname__ = f"{record.__name__}.plain"
-    fn.__doc__ = f"The plain tuple ({names}) of a {record.__name__}, as the kernels take it."
-    return fn
-
-
 for _record in RECORDS:
-    _record.plain = staticmethod(_plain_builder(_record))
+    _record.plain = staticmethod(plain_tuple_builder(_record, "plain"))
