@@ -50,9 +50,10 @@ class Nine(NamedTuple):
 
 
 @njit(nogil=True)
-def positional(a0, a1, a2, a3, a4, a5, a6, a7, a8, a9, a10, a11, a12, a13, a14, a15, a16, a17, a18, a19, a20, a21,
-               a22, a23, a24, a25, a26, a27, a28, a29):
-    return a0.size
+def positional(*arrays):
+    """The former calling convention: every array its own argument (the dispatcher types each one as it did the
+    kernels' 13-38 parameters; numba packs them into a tuple only after that)."""
+    return arrays[0].size
 
 
 @njit(nogil=True)
