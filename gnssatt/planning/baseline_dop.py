@@ -63,15 +63,14 @@ def euler_sigma_from_dops(hdop, vdop, sigma_phase_m, baseline_m) -> Table4Row:
     return Table4Row(sh, sv, np.degrees(np.arcsin(sh / b)), np.degrees(np.arcsin(sv / b)))
 
 
-def snapshot_euler_sigma_deg(baselines_body_m, q_frame, sigma_phase_m) -> np.ndarray:
-    """(..., 3) expected 1-sigma (deg) of the small rotation about body x (roll), y (pitch), z (yaw) from all
-    baselines at once, the body near the reference frame (q_frame's frame), as a least-squares snapshot.
+def snapshot_covariance_rad2(baselines_body_m, q_frame, sigma_phase_m) -> np.ndarray:
+    """(..., 3, 3) covariance (rad^2) of the small rotation dtheta (about the frame's x, y, z) from all
+    baselines at once, as a least-squares snapshot, the baselines given in that frame.
 
-    Each baseline k measured in the frame with covariance C = sigma_Phi^2 Q: b_frame = b_body +
-    dtheta x b_body, so the design block is -[b_body x] and the information J = sum_k [b_k x]^T C^-1 [b_k x].
-    baselines_body_m: (k, 3); q_frame: (..., 3, 3) unit-sigma covariance of one baseline (the same for all
-    baselines of one epoch: they see the same satellites). NaN where J is singular (one baseline: the
-    rotation about it is unobservable).
+    Each baseline k measured with covariance C = sigma_Phi^2 Q: b_meas = b + dtheta x b, so the design block
+    is -[b x] and the information J = sum_k [b_k x]^T C^-1 [b_k x]. baselines_body_m: (k, 3); q_frame:
+    (..., 3, 3) unit-sigma covariance of one baseline (the same for all baselines of one epoch: they see the
+    same satellites). NaN where J is singular (one baseline: the rotation about it is unobservable).
     """
     bl = np.asarray(baselines_body_m, dtype=np.float64)
     Q = np.asarray(q_frame, dtype=np.float64) * sigma_phase_m ** 2
@@ -83,5 +82,11 @@ def snapshot_euler_sigma_deg(baselines_body_m, q_frame, sigma_phase_m) -> np.nda
         J = J + X.T @ Ci @ X
     good = ok & (np.linalg.cond(J) < 1e12)
     P = np.linalg.inv(np.where(good[..., None, None], J, np.eye(3)))
-    sig = np.degrees(np.sqrt(np.diagonal(P, axis1=-2, axis2=-1)))
-    return np.where(good[..., None], sig, np.nan)
+    return np.where(good[..., None, None], P, np.nan)
+
+
+def snapshot_euler_sigma_deg(baselines_body_m, q_frame, sigma_phase_m) -> np.ndarray:
+    """(..., 3) 1-sigma (deg) about x (roll), y (pitch), z (yaw) of `snapshot_covariance_rad2`, body near
+    the frame (small Euler angles)."""
+    P = snapshot_covariance_rad2(baselines_body_m, q_frame, sigma_phase_m)
+    return np.degrees(np.sqrt(np.diagonal(P, axis1=-2, axis2=-1)))
