@@ -134,7 +134,9 @@ def plan_series(track: Track, sat_positions: SatPositions, platform: PlanPlatfor
     bl = np.array([np.subtract(platform.positions_m[b], platform.positions_m[a]) for a, b in platform.baselines],
                   dtype=float)
     length = np.linalg.norm(bl, axis=-1)
-    row = euler_sigma_from_dops(dop_ref.hdop[:, None], dop_ref.vdop[:, None], settings.sigma_phase_m, length[None])
+    shape = (len(dop_ref.hdop), len(length))
+    row = euler_sigma_from_dops(np.broadcast_to(dop_ref.hdop[:, None], shape),
+                                np.broadcast_to(dop_ref.vdop[:, None], shape), settings.sigma_phase_m, length[None])
     a = adop(e_body, use)
     snr = 10 ** (settings.cn0_dbhz / 10) * settings.integration_s
     cos_t = np.einsum("nmi,ki->nmk", e_body, bl / length[:, None])
