@@ -1,7 +1,8 @@
 """A differentiating filter of configurable bandwidth for GNSS velocity, and the matching low-pass for the
 body-frame sensors, with the noise gain of each.
 
-Per segment without gaps (steps within 1.5 times the median step): a zero-phase Butterworth low-pass of
+Per segment without gaps (steps within 1.5 times the median step), less its least-squares quadratic (added
+back exactly afterwards): a zero-phase Butterworth low-pass of
 order 2 (applied forward and back, so |H|^2 of order 4 and no delay) at `bandwidth_hz`, then the central
 difference (np.gradient, second order) in time. A bandwidth at or above the Nyquist frequency skips the
 low-pass. The white-noise gain is the 2-norm of the filter's impulse response (sigma_out = gain sigma_in).
@@ -73,8 +74,17 @@ def filter_series(t_s: np.ndarray, x: np.ndarray, bandwidth_hz: float, derivativ
         if n < 16:                       # too short for the filter's initial conditions and a derivative
             edge[seg] = True
             continue
-        y = _lowpass(x[seg], fs, bandwidth_hz)
-        out[seg] = np.gradient(y, t_s[seg], axis=0) if derivative else y
         tt = t_s[seg]
+        # a quadratic per axis is taken out before the filter and added back exactly (its derivative
+        # analytically): the filter's start-up transients then scale with the residual, not with a LEO's
+        # 8 m/s^2 turning velocity
+        u = tt - tt.mean()
+        coef = np.polynomial.polynomial.polyfit(u, x[seg], 2)              # (3, n_axes)
+        trend = np.polynomial.polynomial.polyval(u, coef).T
+        y = _lowpass(x[seg] - trend, fs, bandwidth_hz)
+        if derivative:
+            out[seg] = np.gradient(y, tt, axis=0) + (coef[1] + 2 * coef[2] * u[:, None])
+        else:
+            out[seg] = y + trend
         edge[seg] = (tt - tt[0] < EDGE_TIME_CONSTANTS / bandwidth_hz) | (tt[-1] - tt < EDGE_TIME_CONSTANTS / bandwidth_hz)
     return Filtered(out, edge, _gain(fs, bandwidth_hz, derivative))
