@@ -223,3 +223,26 @@ def _estimate_bias(acc_corrected: np.ndarray, f_ecef: np.ndarray, R: np.ndarray,
     resid = acc_corrected[good] - f_body
     bias = resid.mean(0)
     return bias, float(np.std(resid - bias, axis=0).max() / np.sqrt(good.sum())), None
+
+
+def check_units(inp: AccMagInputs, s: AccMagSettings = AccMagSettings()) -> None:
+    """ParseError naming the file, first data line and column when a log's magnitudes disagree with physics
+    by more than a factor 3 in the median: the accelerometer against the GNSS-derived specific force (where it
+    exceeds 1 m/s^2; catches g for m/s^2), the magnetometer against the model field (catches uT, gauss, pT)."""
+    from gnssatt.gnss.io.errors import ParseError
+
+    f_ecef, _, _, _ = gnss_specific_force(inp, s)
+    acc, _ = sample_at(inp.accelerometer, inp.time, s.bandwidth_hz)
+    mag, _ = sample_at(inp.magnetometer, inp.time, s.bandwidth_hz)
+    checks = ((inp.accelerometer, acc, f_ecef, 1.0, "m/s^2 (as the GNSS-derived specific force)"),
+              (inp.magnetometer, mag, inp.b_model_ecef_nT, 0.0, "nT (as the geomagnetic model)"))
+    for log, meas, ref, floor, unit in checks:
+        ref_n = np.linalg.norm(ref, axis=-1)
+        m = np.isfinite(meas).all(-1) & (ref_n > floor) & np.isfinite(ref_n)
+        if m.sum() < 3:
+            continue
+        ratio = float(np.median(np.linalg.norm(meas[m], axis=-1) / ref_n[m]))
+        if not 1 / 3 <= ratio <= 3:
+            line = int(log.line_no[0]) if len(log.line_no) else 2
+            raise ParseError(log.name, line, f"{log.kind} values in {unit}; their magnitudes are {ratio:.4g} times "
+                             "the expected ones (wrong unit?)", f"median ratio {ratio:.4g}", column=1)
