@@ -45,8 +45,9 @@ class PlanPlatform:
 @dataclass(frozen=True)
 class PlanSettings:
     """Attitude profile (reference 'orbital' or 'ned' and fixed yaw/pitch/roll offsets, deg), masks (deg),
-    constellations (system letters), the single-difference phase sigma (m) and the C/N0 (dB-Hz) and
-    integration time (s) that set the SNR of eq. 4."""
+    constellations (system letters), the single-difference phase sigma (m), the C/N0 (dB-Hz) and integration
+    time (s) that set the SNR of eq. 4, and the receiver's channels (max_sats: the highest in the first
+    antenna's frame are kept; None: all)."""
 
     reference: str = "orbital"
     yaw_deg: float = 0.0
@@ -58,6 +59,7 @@ class PlanSettings:
     sigma_phase_m: float = 0.003
     cn0_dbhz: float = 45.0
     integration_s: float = 1.0
+    max_sats: int | None = None
 
 
 @dataclass
@@ -115,6 +117,11 @@ def _visible(track: Track, r_sat: np.ndarray, R_body_from_ecef: np.ndarray, R_re
     for ant, bore in platform.boresight.items():
         bore = np.asarray(bore, float) / np.linalg.norm(bore)
         use &= np.degrees(np.arcsin(np.clip(e_body @ bore, -1, 1))) >= s.antenna_mask_deg
+    if s.max_sats is not None:
+        bore = np.asarray(next(iter(platform.boresight.values())), float)
+        el = np.where(use, e_body @ (bore / np.linalg.norm(bore)), -np.inf)
+        rank = np.argsort(np.argsort(-el, axis=1), axis=1)
+        use &= rank < s.max_sats
     return use, e_body
 
 
