@@ -14,12 +14,13 @@ def _fmt(x: float, digits: int) -> str:
 
 def plan_csv(s: PlanSeries) -> str:
     """plan.csv: time_gps, gps_week, gps_sow, n_sats, hdop, vdop, pdop, adop, sigma_yaw_deg, sigma_pitch_deg,
-    sigma_roll_deg (snapshot, all baselines), then per baseline B: B_sigma_h_mm, B_sigma_v_mm, B_sigma_yaw_deg,
+    sigma_roll_deg (snapshot, all baselines), filter_sigma_yaw/pitch/roll_deg (the filter's steady state), then per baseline B: B_sigma_h_mm, B_sigma_v_mm, B_sigma_yaw_deg,
     B_sigma_tilt_deg (seed 000 eq. 3-4), B_sigma_r_eq5_deg (seed 001 eq. 5), B_crlb_deg (eq. 4)."""
     week, sow = s.time.week_sow()
     iso = s.time.iso()
     head = ["time_gps", "gps_week", "gps_sow", "n_sats", "hdop", "vdop", "pdop", "adop", "sigma_yaw_deg",
-            "sigma_pitch_deg", "sigma_roll_deg"]
+            "sigma_pitch_deg", "sigma_roll_deg", "filter_sigma_yaw_deg", "filter_sigma_pitch_deg",
+            "filter_sigma_roll_deg"]
     for b in s.baselines:
         head += [f"{b}_{c}" for c in ("sigma_h_mm", "sigma_v_mm", "sigma_yaw_deg", "sigma_tilt_deg",
                                       "sigma_r_eq5_deg", "crlb_deg")]
@@ -28,6 +29,7 @@ def plan_csv(s: PlanSeries) -> str:
         r = [iso[i], str(int(week[i])), f"{sow[i]:.3f}", str(int(s.n_sats[i]))]
         r += [_fmt(v, 3) for v in (s.hdop[i], s.vdop[i], s.pdop[i], s.adop[i])]
         r += [_fmt(v, 4) for v in s.sigma_euler_deg[i]]
+        r += [_fmt(v, 4) for v in s.sigma_filter_deg[i]]
         for k in range(len(s.baselines)):
             r += [_fmt(s.sigma_h_m[i, k] * 1e3, 3), _fmt(s.sigma_v_m[i, k] * 1e3, 3), _fmt(s.sigma_yaw_deg[i, k], 4),
                   _fmt(s.sigma_tilt_deg[i, k], 4), _fmt(s.sigma_r_eq5_deg[i, k], 4), _fmt(s.crlb_deg[i, k], 5)]
@@ -54,6 +56,7 @@ def plan_summary(s: PlanSeries, settings: PlanSettings, platform_name: str) -> d
         "n_sats": _stats(s.n_sats.astype(float)), "hdop": _stats(s.hdop), "vdop": _stats(s.vdop),
         "adop": _stats(s.adop),
         "sigma_deg": {k: _stats(s.sigma_euler_deg[:, i]) for i, k in enumerate(("yaw", "pitch", "roll"))},
+        "filter_sigma_deg": {k: _stats(s.sigma_filter_deg[:, i]) for i, k in enumerate(("yaw", "pitch", "roll"))},
         "baselines": [{"baseline": b, "length_m": float(s.baseline_m[k]),
                        "sigma_h_mm": _stats(s.sigma_h_m[:, k] * 1e3), "sigma_v_mm": _stats(s.sigma_v_m[:, k] * 1e3),
                        "sigma_yaw_deg_eq4": _stats(s.sigma_yaw_deg[:, k]),

@@ -23,6 +23,7 @@ from gnssatt.gnss.frames import R_ned_from_ecef, R_orbital_from_ecef, ecef_to_ge
 from gnssatt.gnss.rotations import Rx, Ry, euler321_to_dcm
 from gnssatt.gnss.time import GpsTime
 from gnssatt.planning.baseline_dop import baseline_dop, euler_sigma_from_dops, snapshot_covariance_rad2
+from gnssatt.planning.filter_steady_state import filtered_sigma_deg
 from gnssatt.planning.bounds import L1_WAVELENGTH_M, adop, crlb_aoa_var_rad2
 from gnssatt.planning.trajectory import Track
 
@@ -47,7 +48,8 @@ class PlanSettings:
     """Attitude profile (reference 'orbital' or 'ned' and fixed yaw/pitch/roll offsets, deg), masks (deg),
     constellations (system letters), the single-difference phase sigma (m), the C/N0 (dB-Hz) and integration
     time (s) that set the SNR of eq. 4, and the receiver's channels (max_sats: the highest in the first
-    antenna's frame are kept; None: all)."""
+    antenna's frame are kept; None: all), and the filter's epoch interval and angular-velocity random walk
+    (seed 000 Table 1: 0.03 deg/s per 1 s) for its steady-state sigma."""
 
     reference: str = "orbital"
     yaw_deg: float = 0.0
@@ -60,13 +62,17 @@ class PlanSettings:
     cn0_dbhz: float = 45.0
     integration_s: float = 1.0
     max_sats: int | None = None
+    interval_s: float = 1.0
+    sigma_omega_deg_s: float = 0.03
+    tau_omega_s: float = 1.0
 
 
 @dataclass
 class PlanSeries:
     """Per epoch (n,): n_sats, hdop, vdop, pdop, adop; per baseline (n, k): sigma_h_m, sigma_v_m, sigma_yaw_deg,
     sigma_tilt_deg (eq. 3-4), sigma_r_eq5_deg, crlb_deg; snapshot sigma (n, 3) of (yaw, pitch, roll) in
-    sigma_euler_deg; baseline names and lengths."""
+    sigma_euler_deg, and the filter's steady state of it (gnssatt.planning.filter_steady_state) in
+    sigma_filter_deg; baseline names and lengths."""
 
     time: GpsTime
     n_sats: np.ndarray
@@ -83,6 +89,7 @@ class PlanSeries:
     sigma_r_eq5_deg: np.ndarray
     crlb_deg: np.ndarray
     sigma_euler_deg: np.ndarray
+    sigma_filter_deg: np.ndarray
     notes: list = field(default_factory=list)
 
 
@@ -155,7 +162,9 @@ def plan_series(track: Track, sat_positions: SatPositions, platform: PlanPlatfor
     return PlanSeries(track.time, use.sum(1), dop_ref.hdop, dop_ref.vdop, dop_ref.pdop, a,
                       [f"{x}>{y}" for x, y in platform.baselines], length, row.sigma_h_m, row.sigma_v_m,
                       row.sigma_yaw_deg, row.sigma_tilt_deg,
-                      np.degrees(a[:, None] * settings.sigma_phase_m / length[None]), crlb, sig_euler)
+                      np.degrees(a[:, None] * settings.sigma_phase_m / length[None]), crlb, sig_euler,
+                      filtered_sigma_deg(sig_euler, settings.interval_s, settings.sigma_omega_deg_s,
+                                         settings.tau_omega_s))
 
 
 def _euler_sigma(bl: np.ndarray, q_body: np.ndarray, s: PlanSettings) -> np.ndarray:

@@ -49,6 +49,8 @@ def test_plan_over_an_orbit(tmp_path, orbit):
     assert 6 <= summary["n_sats"]["mean"] <= 16
     assert 0.02 < summary["sigma_deg"]["pitch"]["mean"] < 0.5
     assert summary["fraction_with_attitude"] == 1.0
+    # the filter averages epochs: its steady-state sigma is below the snapshot's
+    assert summary["filter_sigma_deg"]["pitch"]["mean"] < summary["sigma_deg"]["pitch"]["mean"]
     assert set(rows[0]) >= {"time_gps", "n_sats", "hdop", "vdop", "adop", "sigma_yaw_deg",
                             "GPS-2>GPS-0_sigma_h_mm", "GPS-2>GPS-1_crlb_deg"}
     assert get_job_type("plan").pipeline == "worker.jobs.plan:run"

@@ -78,6 +78,12 @@ class PlanConfig(BaseModel):
     cn0_dbhz: float = Field(45.0, ge=20, le=60, description="C/N0 for the SNR of the eq. 4 CRLB (dB-Hz).")
     integration_s: float = Field(1.0, gt=0, le=100, description="Integration time of one measurement for eq. 4 "
                                                                 "(s): SNR = C/N0 x integration time.")
+    max_sats: int | None = Field(None, ge=2, le=100, description="Receiver channels: the satellites highest in the "
+                                                                 "antenna frame are kept; null: all in view.")
+    filter_interval_s: float = Field(1.0, gt=0, le=600, description="The attitude filter's epoch interval (s).")
+    sigma_omega_deg_s: float = Field(0.03, ge=0, le=100, description="The filter's angular-velocity random walk "
+                                     "per tau (deg/s; seed 000 Table 1: 0.03), for its steady-state sigma.")
+    tau_omega_s: float = Field(1.0, gt=0, le=3600, description="Tau of that random walk (s; Table 1: 1).")
 
 
 JOB_TYPE = JobType(
@@ -198,7 +204,9 @@ def run(ctx: JobContext, config: PlanConfig) -> None:
         pitch_deg=config.attitude.pitch_deg, roll_deg=config.attitude.roll_deg,
         horizon_mask_deg=config.horizon_mask_deg if config.horizon_mask_deg is not None else (10.0 if ground else -90.0),
         antenna_mask_deg=config.antenna_mask_deg, systems=tuple(config.systems),
-        sigma_phase_m=config.sigma_phase_m, cn0_dbhz=config.cn0_dbhz, integration_s=config.integration_s)
+        sigma_phase_m=config.sigma_phase_m, cn0_dbhz=config.cn0_dbhz, integration_s=config.integration_s,
+        max_sats=config.max_sats, interval_s=config.filter_interval_s, sigma_omega_deg_s=config.sigma_omega_deg_s,
+        tau_omega_s=config.tau_omega_s)
     ctx.progress(0.2, "geometry")
     series = plan_series(track, positions, plan_platform, settings)
     series.notes.append(f"GNSS orbits: {source}")
