@@ -5,7 +5,7 @@ Usage:
     .venv/bin/python bench/bench_plan_vs_attitude.py [--passes 3] [--duration 1800] [--out table.md]
 
 Inputs: `--passes` Earth-pointing CASSIOPE-like passes of the simulator (preset earth-pointing, seeds 0, 1, 2, ...,
-starts 6 h apart), L1 only, white phase noise of 3 mm per antenna (so 4.24 mm in a single difference), no PCV,
+starts 6 h apart, mean anomaly 20 + 110 k deg, node 40 + 35 k deg, constellation seed 2018 + k), L1 only, white phase noise of 3 mm per antenna (so 4.24 mm in a single difference), no PCV,
 no multipath, no C/N0-dependent noise: the conditions the plan's model assumes. The attitude job's science
 (gnssatt.attitude.api.solve, preset seed000) runs on each set; the achieved sigma is the standard deviation of
 its Euler-angle errors against the simulator's truth over the fixed epochs after the first 300 s. The plan's
@@ -45,8 +45,11 @@ def _wrap(x):
 
 def one_pass(k: int, duration_s: float, work: Path) -> dict:
     start = GpsTime.from_iso("2018-06-06T12:20:00") + 6 * 3600.0 * k
-    s = simulate_set("earth-pointing", work / f"pass{k}", seed=k, duration_s=duration_s,
-                     start_gps=start.iso(), **CLEAN)
+    # the simulator's constellation is laid out relative to the start, so each pass also gets its own orbit
+    # phase, node and constellation seed (else the three passes would share one geometry)
+    s = simulate_set("earth-pointing", work / f"pass{k}", seed=k, duration_s=duration_s, start_gps=start.iso(),
+                     mean_anomaly_deg=20.0 + 110.0 * k, raan_deg=40.0 + 35.0 * k, constellation_seed=2018 + k,
+                     **CLEAN)
     sol = solve(s.files)
     truth = {r["time_gps"][:19]: r for r in csv.DictReader(open(s.truth_dir / "attitude.csv"))}
     iso = sol.time.iso()
