@@ -80,3 +80,32 @@ def test_accelerometer_in_g_is_refused_naming_the_file(tmp_path):
     with pytest.raises(ParseError) as info:
         run(ctx, SingleAntennaConfig(method="acceleration-magnetometer"))
     assert info.value.path == "accelerometer.csv" and info.value.line_no == 2 and "wrong unit" in str(info.value)
+
+
+def test_static_set_with_doppler_velocity_from_rinex(tmp_path):
+    """The velocity from the set's RINEX Doppler (library SPP) instead of velocity.csv: a static ground set,
+    so every steady epoch is flagged gravity-only and the attitude is the tilt-compass one."""
+    from gnssatt.sim.api import simulate_set
+    from gnssatt.sim.inertial import static_truth
+
+    s = simulate_set("ground-static", tmp_path / "sim", seed=1, duration_s=300.0, interval_s=1.0)
+    truth = static_truth(GpsTime.from_iso("2024-06-24T03:00:00"), 300.0, lat_deg=35.15, lon_deg=136.97, h_m=60.0,
+                         yaw_deg=30.0, truth_rate_hz=10.0)
+    logs, paths = _write(tmp_path, truth)
+    files = [s.obs["ANT1"], s.nav, paths["accelerometer"], paths["magnetometer"]]
+    kinds = ["rinex_obs", "rinex_nav", "csv", "csv"]
+
+    def store(path):
+        data = path.read_bytes()
+        return hashlib.sha256(data).hexdigest(), len(data)
+    ctx = JobContext(job_id="j", attempt=1, workdir=tmp_path, _store_blob=store,
+                     sets=[InputSet("set", "sim", [InputFile(p.name, k, p, {}) for p, k in zip(files, kinds)], {})])
+    ctx._flush_progress = lambda f, stage: None
+    run(ctx, SingleAntennaConfig(method="acceleration-magnetometer"))
+    summary = json.loads(ctx.product_path("summary.json").read_text())
+    assert summary["velocity_source"].startswith("single point positioning")
+    assert summary["observability"].startswith("gravity only"), summary
+    rows = list(csv.DictReader(io.StringIO(ctx.product_path("attitude.csv").read_text())))
+    yaw = np.array([float(r["yaw_deg"]) for r in rows])
+    # heading 30 deg from the magnetometer and the model (140/200 nT model error at ~46 uT: ~0.5 deg)
+    assert len(rows) > 200 and abs(np.median(yaw) - 30.0) < 2.0
