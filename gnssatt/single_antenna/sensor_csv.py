@@ -105,20 +105,27 @@ def _header(spec: SensorSpec, line: str, name: str) -> tuple[list[str], list[int
     return head, list(range(k)), list(range(k, k + 3))
 
 
-def _time(fields: list[str], n_time: int, name: str, ln: int, line: str) -> GpsTime:
+def _time_fields(fields: list[str], n_time: int, name: str, ln: int, line: str) -> tuple:
+    """(year, month, day, hour, minute, second) of an ISO time, or (week, sow) of gps_week,gps_sow."""
     if n_time == 1:
         m = _ISO.match(fields[0].strip())
         if not m:
             raise ParseError(name, ln, "time_gps as ISO 8601 GPS time, e.g. 2018-06-06T12:20:00.000", line, column=1)
-        y, mo, d, hh, mi = (int(m.group(i)) for i in range(1, 6))
-        return GpsTime.from_calendar(y, mo, d, hh, mi, float(m.group(6)))
+        return (*(int(m.group(i)) for i in range(1, 6)), float(m.group(6)))
     try:
         week, sow = int(fields[0]), float(fields[1])
     except ValueError as exc:
         raise ParseError(name, ln, "gps_week (integer) and gps_sow (seconds) numbers", line, column=1) from exc
     if not (0 <= sow < 604800.0 and np.isfinite(sow)):
         raise ParseError(name, ln, "gps_sow in [0, 604800)", line, column=_char_col(line, 1))
-    return GpsTime.from_week_sow(week, sow)
+    return week, sow
+
+
+def _times(parts: list[tuple], n_time: int) -> GpsTime:
+    a = list(zip(*parts))
+    if n_time == 1:
+        return GpsTime.from_calendar(*(np.array(x) for x in a))
+    return GpsTime.from_week_sow(np.array(a[0]), np.array(a[1]))
 
 
 def read_sensor_csv(source: str | Path | bytes, kind: str, name: str | None = None) -> SensorLog:
@@ -138,8 +145,7 @@ def read_sensor_csv(source: str | Path | bytes, kind: str, name: str | None = No
         raise ParseError(name, 1, "a header line " + _layout(spec), "an empty file", column=1)
     head, tcols, vcols = _header(spec, lines[0], name)
     n_cols = len(head)
-    times_s, times_f, values, extra, line_nos = [], [], [], {c: [] for c in head[len(tcols) + 3:]}, []
-    prev = None
+    parts, values, extra, line_nos, texts = [], [], {c: [] for c in head[len(tcols) + 3:]}, [], []
     for ln, line in enumerate(lines[1:], start=2):
         if not line.strip():
             continue
@@ -147,15 +153,7 @@ def read_sensor_csv(source: str | Path | bytes, kind: str, name: str | None = No
         if len(fields) != n_cols:
             raise ParseError(name, ln, f"{n_cols} comma-separated fields as in the header ({','.join(head)})",
                              line, column=_char_col(line, min(len(fields), n_cols)))
-        t = _time(fields, len(tcols), name, ln, line)
-        if prev is not None:
-            dt = float(t - prev)
-            if dt == 0.0:
-                raise ParseError(name, ln, "a time later than the previous row's (duplicate time)", line, column=1)
-            if dt < 0.0:
-                raise ParseError(name, ln, "times in increasing order (this row is earlier than the previous)",
-                                 line, column=1)
-        prev = t
+        parts.append(_time_fields(fields, len(tcols), name, ln, line))
         row = []
         for j in vcols + list(range(len(tcols) + 3, n_cols)):
             try:
@@ -166,21 +164,27 @@ def read_sensor_csv(source: str | Path | bytes, kind: str, name: str | None = No
                 raise ParseError(name, ln, f"a finite number in column {head[j]!r}", line, column=_char_col(line, j))
             row.append(x)
         vec = np.array(row[:3])
-        norm = float(np.linalg.norm(vec))
+        norm = float(np.sqrt(vec @ vec))
         if not spec.min_norm <= norm <= spec.max_norm:
             j = vcols[int(np.argmax(np.abs(vec)))]
             hint = spec.hint_low if norm < spec.min_norm else spec.hint_high
             raise ParseError(name, ln, f"{spec.kind} values in {spec.unit} (magnitude {spec.min_norm:g} to "
                              f"{spec.max_norm:g}); this row's magnitude is {norm:.6g}"
                              + (f": written in {hint}?" if hint else ""), line, column=_char_col(line, j))
-        times_s.append(int(t.s))
-        times_f.append(float(t.frac))
         values.append(vec)
         for c, x in zip(extra, row[3:]):
             extra[c].append(x)
         line_nos.append(ln)
+        texts.append(line)
     if not values:
         raise ParseError(name, 2, "at least one data row after the header", "no data rows", column=1)
-    time = GpsTime(np.array(times_s), np.array(times_f))
+    time = _times(parts, len(tcols))
+    dt = np.diff(np.asarray(time - time[0], dtype=np.float64))
+    bad = np.flatnonzero(dt <= 0.0)
+    if len(bad):
+        i = int(bad[0]) + 1
+        what = "a time later than the previous row's (duplicate time)" if dt[i - 1] == 0.0 else \
+            "times in increasing order (this row is earlier than the previous)"
+        raise ParseError(name, line_nos[i], what, texts[i], column=1)
     return SensorLog(name, kind, time, np.asarray(time - time[0], dtype=np.float64), np.array(values),
                      {c: np.array(v) for c, v in extra.items()}, np.array(line_nos))

@@ -70,8 +70,8 @@ def test_leo_job_reports_free_fall(tmp_path):
 
 
 def test_accelerometer_in_g_is_refused_naming_the_file(tmp_path):
-    truth = airborne_truth(T0, truth_rate_hz=20.0)
-    logs, paths = _write(tmp_path, truth)
+    from gnssatt.sim.inertial import static_truth
+    logs, paths = _write(tmp_path, static_truth(T0, 120.0, truth_rate_hz=10.0))
     text = paths["accelerometer"].read_text().splitlines()
     scaled = [text[0]] + [",".join([r.split(",")[0]] + [f"{float(x) / 9.80665:.6f}" for x in r.split(",")[1:]])
                           for r in text[1:]]
