@@ -1,5 +1,6 @@
 """The platform's trajectory for a plan: ECEF position and velocity at given GPS times, from a TLE (SGP4),
-Keplerian elements (two-body with the J2 secular drift), an SP3 file of the platform, or a ground position.
+Keplerian elements (two-body with the J2 secular drift), an SP3 file of the platform, a ground position, or a
+sampled trajectory (e.g. a vehicle's velocity.csv with its position columns).
 
 Implements: SGP4 (Vallado et al. 2006, AIAA 2006-6753, via the sgp4 package) with TEME -> ECEF by the GMST
 1982 rotation (Vallado 2013 sec. 3.7, erfa.gmst82, UT1 = UTC); Kepler's equation by Newton; the J2 secular
@@ -117,3 +118,16 @@ def track_ground(lat_deg: float, lon_deg: float, h_m: float, t: GpsTime) -> Trac
     r = np.asarray(geodetic_to_ecef(np.radians(lat_deg), np.radians(lon_deg), h_m), dtype=np.float64)
     n = len(np.atleast_1d(np.asarray(t.s)))
     return Track(t, np.tile(r, (n, 1)), np.zeros((n, 3)), "terrestrial")
+
+
+def track_from_samples(t_samples: GpsTime, r_ecef_m: np.ndarray, v_ecef_m_s: np.ndarray, t: GpsTime,
+                       kind: str = "terrestrial") -> Track:
+    """A ground (or any) trajectory given as samples: positions by cubic Hermite interpolation with the sampled
+    velocities, velocities linearly; NaN outside the samples' span."""
+    from scipy.interpolate import CubicHermiteSpline
+
+    x = np.asarray(t_samples - t_samples[0], dtype=np.float64)
+    xi = np.atleast_1d(np.asarray(t - t_samples[0], dtype=np.float64))
+    r = CubicHermiteSpline(x, r_ecef_m, v_ecef_m_s, axis=0, extrapolate=False)(xi)
+    v = np.stack([np.interp(xi, x, v_ecef_m_s[:, k], left=np.nan, right=np.nan) for k in range(3)], -1)
+    return Track(t, r, v, kind)

@@ -87,3 +87,28 @@ def test_plan_from_a_sets_sp3_nav_and_platform(tmp_path):
     # for ADOP 1 and 3 mm over 10 cm); with 12 channels all epochs have an attitude
     assert 0.5 < summary["sigma_deg"]["pitch"]["mean"] < 5.0 and summary["fraction_with_attitude"] == 1.0
     assert summary["n_sats"]["max"] <= 12
+
+
+def test_plan_along_a_ground_trajectory(tmp_path):
+    import numpy as np
+
+    from gnssatt.gnss.time import GpsTime
+    from gnssatt.sim.inertial import SensorLogs, airborne_truth, write_sensor_csvs
+    from worker.context import InputFile, InputSet
+
+    truth = airborne_truth(GpsTime.from_iso("2018-06-06T12:20:00"), truth_rate_hz=10.0)
+    i = np.arange(0, len(truth.r_ecef_m), 10)
+    logs = SensorLogs(truth.time[i], np.zeros((len(i), 3)) + 9.8, truth.time[i], np.zeros((len(i), 3)) + 4e4,
+                      truth.time[i], truth.r_ecef_m[i], truth.v_ecef_m_s[i], i)
+    paths = write_sensor_csvs(logs, tmp_path / "traj")
+    ctx = _ctx(tmp_path)
+    ctx.sets.append(InputSet("set", "t", [InputFile("velocity.csv", "csv", paths["velocity"], {})], {}))
+    run(ctx, PlanConfig(start="2018-06-06T12:21:00", duration_s=600, step_s=60, platform=PLATFORM,
+                        orbit={"kind": "trajectory"}, attitude={"reference": "ned"}))
+    summary = json.loads(ctx.product_path("summary.json").read_text())
+    assert summary["n_epochs"] == 11 and summary["settings"]["horizon_mask_deg"] == 10.0
+    late = _ctx(tmp_path)
+    late.sets.extend(ctx.sets)
+    with pytest.raises(JobInputError, match="inside"):      # the trajectory ends at 12:39
+        run(late, PlanConfig(start="2018-06-06T13:00:00", duration_s=600, step_s=60, platform=PLATFORM,
+                             orbit={"kind": "trajectory"}))

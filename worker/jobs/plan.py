@@ -34,7 +34,9 @@ class GroundPosition(BaseModel):
 
 class PlanOrbit(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    kind: Literal["tle", "keplerian", "sp3", "ground"] = Field(..., description="Where the platform is.")
+    kind: Literal["tle", "keplerian", "sp3", "ground", "trajectory"] = Field(
+        ..., description="Where the platform is; trajectory: the set's velocity.csv with its x/y/z_ecef_m columns "
+                         "(docs/formats/inertial_csv.md), e.g. a ground vehicle's track.")
     tle: list[str] | None = Field(None, min_length=2, max_length=3, description="Two-line elements (an optional "
                                                                                 "name line first), for kind tle.")
     keplerian: KeplerianElements | None = Field(None, description="For kind keplerian.")
@@ -44,7 +46,8 @@ class PlanOrbit(BaseModel):
 
     @model_validator(mode="after")
     def _given(self):
-        need = {"tle": self.tle, "keplerian": self.keplerian, "sp3": self.sp3_satellite, "ground": self.ground}
+        need = {"tle": self.tle, "keplerian": self.keplerian, "sp3": self.sp3_satellite, "ground": self.ground,
+                "trajectory": True}
         if need[self.kind] is None:
             raise ValueError(f"orbit.kind {self.kind} needs orbit.{'sp3_satellite' if self.kind == 'sp3' else self.kind}")
         return self
@@ -134,9 +137,34 @@ def _track(ctx: JobContext, config: PlanConfig, t):
             return tr.track_from_keplerian(el, t)
         if o.kind == "ground":
             return tr.track_ground(o.ground.lat_deg, o.ground.lon_deg, o.ground.h_m, t)
+        if o.kind == "trajectory":
+            return _trajectory(ctx, t)
         return tr.track_from_sp3(_sp3(ctx), o.sp3_satellite, t)
     except ValueError as exc:
         raise JobInputError("Invalid orbit", str(exc), field="config.orbit") from exc
+
+
+def _trajectory(ctx: JobContext, t):
+    """The track of the set's velocity.csv (positions and velocities), interpolated to the plan's epochs."""
+    import numpy as np
+
+    from gnssatt.planning.trajectory import track_from_samples
+    from gnssatt.single_antenna.sensor_csv import read_sensor_csv
+
+    files = [f for s in ctx.sets for f in s.files if f.kind == "velocity" or f.name.lower().endswith("velocity.csv")]
+    if not files:
+        raise JobInputError("No trajectory", "orbit.kind trajectory needs velocity.csv in the set",
+                            field="config.orbit")
+    log = read_sensor_csv(files[0].path, "velocity", files[0].name)
+    cols = ("x_ecef_m", "y_ecef_m", "z_ecef_m")
+    if not all(c in log.extra for c in cols) or len(log.t_s) < 2:
+        raise JobInputError("No trajectory", f"{files[0].name}: x_ecef_m, y_ecef_m, z_ecef_m columns and two rows "
+                            "at least are needed", file=files[0].name, line=1)
+    track = track_from_samples(log.time, np.stack([log.extra[c] for c in cols], 1), log.values, t)
+    if not np.isfinite(track.r_ecef_m).all():
+        raise JobInputError("Plan outside the trajectory", f"{files[0].name} spans {log.time[0].iso()} to "
+                            f"{log.time[-1].iso()}: start and duration must lie inside", field="config.start")
+    return track
 
 
 def _sp3(ctx: JobContext):
