@@ -55,6 +55,7 @@ class AccMagSettings:
     velocity_sigma_m_s: float = 0.005
     iterations: int = 3
     filter_in_ecef: bool = True
+    gravity_only_attitude: bool = True
 
 
 @dataclass(frozen=True)
@@ -197,7 +198,8 @@ def solve_acc_mag(inp: AccMagInputs, s: AccMagSettings = AccMagSettings()) -> Ac
                 flags |= FLAG_BIAS_UNOBSERVABLE
                 estimate = False
     out_flags = (flags | np.where(usable, sol.flags, 0)).astype(np.int64)
-    bad = (out_flags & NO_ATTITUDE) != 0
+    refused = NO_ATTITUDE | (0 if s.gravity_only_attitude else FLAG_GRAVITY_ONLY)
+    bad = (out_flags & refused) != 0
     R = np.where(bad[:, None, None], np.nan, sol.R_body_from_ref)
     return AccMagSolution(inp.time, R, np.where(bad[:, None], np.nan, sol.q_body_from_ref),
                           np.where(bad[:, None, None], np.nan, sol.cov_body_rad2), out_flags, f_ecef, f_body, bias,

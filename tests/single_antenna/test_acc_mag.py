@@ -73,6 +73,9 @@ def test_static_user_is_a_tilt_compass_and_says_so(field):
     assert ((sol.flags & FLAG_BIAS_UNOBSERVABLE) != 0).all() and any("not observable" in n for n in sol.notes)
     # the attitude is still the gravity + field one, as good as the bias and the model error allow (< 2 deg)
     assert np.isfinite(err[steady]).all() and np.max(err[steady]) < 2.0
+    # or, asked for a GNSS-referenced attitude only, none at all
+    strict, err_strict = _solve(truth, SensorParams(), field, bandwidth_hz=0.1, gravity_only_attitude=False)
+    assert np.isnan(err_strict[steady]).all()
 
 
 def test_leo_free_fall_reports_unobservable_not_an_attitude(field):

@@ -35,6 +35,9 @@ class Settings(BaseModel):
                                            "(nT; seed 001: 140 N/E, 200 down).")
     velocity_sigma_m_s: float | None = Field(None, gt=0.0, le=10.0, description="GNSS velocity sigma per axis "
                                              "(m/s); null: velocity.csv's sigma_m_s, else 0.005.")
+    gravity_only_attitude: bool = Field(True, description="Where the GNSS sees no kinematic acceleration (static or "
+                                        "unaccelerated), give the accelerometer-tilt + magnetometer-heading attitude "
+                                        "(flagged gravity-only); false: no attitude there.")
     iterations: int = Field(3, ge=1, le=10, description="Passes (rates, ECEF filtering and bias from the previous "
                                                         "pass).")
 
@@ -129,7 +132,8 @@ def run(ctx, config) -> None:
         accelerometer_noise_m_s2=st.accelerometer_noise_m_s2,
         accelerometer_bias_sigma_m_s2=st.accelerometer_bias_sigma_m_s2, magnetometer_noise_nT=st.magnetometer_noise_nT,
         magnetic_model_sigma_nT=st.magnetic_model_sigma_nT,
-        velocity_sigma_m_s=st.velocity_sigma_m_s or sig_csv or 0.005, iterations=st.iterations)
+        velocity_sigma_m_s=st.velocity_sigma_m_s or sig_csv or 0.005, iterations=st.iterations,
+        gravity_only_attitude=st.gravity_only_attitude)
     inp = acc_mag.AccMagInputs(t, r, v, logs["accelerometer"], logs["magnetometer"], b_model, lever, logs["gyro"])
     ctx.progress(0.4, "attitude")
     acc_mag.check_units(inp, settings)
