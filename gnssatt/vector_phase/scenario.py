@@ -80,12 +80,17 @@ class PhaseObservations:
 
 @dataclass
 class Truth:
-    """position_ecef_m (3,), R_body_from_ecef (n_ep, 3, 3), clock_cyc (n_ep,), R_ned_from_ecef (3, 3)."""
+    """position_ecef_m (3,), R_body_from_ecef (n_ep, 3, 3), clock_cyc (n_ep,), R_ned_from_ecef (3, 3); the
+    constellation (gnssatt.sim.constellation.Constellation), the first epoch t0 (GpsTime) and the chosen
+    satellite indices, to write the set as files (gnssatt.sim.vector_phase_set)."""
 
     position_ecef_m: np.ndarray
     R_body_from_ecef: np.ndarray
     clock_cyc: np.ndarray
     R_ned_from_ecef: np.ndarray
+    constellation: object = None
+    t0: object = None
+    sat_index: np.ndarray | None = None
 
 
 def _emission_positions(const, t_rx_s, r_rx, n_iter: int = 3):
@@ -142,4 +147,4 @@ def simulate(spec: ScenarioSpec) -> tuple[PhaseObservations, Truth, AntennaMount
     arc[0] = True
     obs = PhaseObservations(t_gps, [const.sats[i] for i in chosen], phase, r_sat, x_s, y_s, arc,
                             spec.sigma_phase_cyc)
-    return obs, Truth(r_rx, R_body, clock, R_ned), mount
+    return obs, Truth(r_rx, R_body, clock, R_ned, const, t0, chosen), mount
