@@ -13,7 +13,11 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from worker.context import JobContext
 from worker.jobs.registry import JobType
-from worker.jobs.single_antenna import acceleration_magnetometer, cn0_boresight, vector_phase
+# aliased: with postponed annotations a field named like its module (vector_phase: vector_phase.Settings) would
+# resolve the annotation to the field's own default (pydantic: 'FieldInfo' object has no attribute 'Settings')
+from worker.jobs.single_antenna import acceleration_magnetometer as _acceleration_magnetometer
+from worker.jobs.single_antenna import cn0_boresight as _cn0_boresight
+from worker.jobs.single_antenna import vector_phase as _vector_phase
 
 #: method name -> the module that runs it
 METHODS = {
@@ -29,12 +33,13 @@ class SingleAntennaConfig(BaseModel):
         ..., description="acceleration-magnetometer: GNSS-derived acceleration + accelerometer + magnetometer, "
                          "Wahba by SVD (seed 001 sec. V-VI); cn0-boresight: antenna boresight from C/N0 (seed 001 "
                          "sec. IV); vector-phase: carrier phase of one antenna's vector effective length (seed 003).")
-    acceleration_magnetometer: acceleration_magnetometer.Settings = Field(
-        default_factory=acceleration_magnetometer.Settings, description="Settings of method acceleration-magnetometer.")
-    cn0_boresight: cn0_boresight.Settings = Field(
-        default_factory=cn0_boresight.Settings, description="Settings of method cn0-boresight.")
-    vector_phase: vector_phase.Settings = Field(
-        default_factory=vector_phase.Settings, description="Settings of method vector-phase.")
+    acceleration_magnetometer: _acceleration_magnetometer.Settings = Field(
+        default_factory=_acceleration_magnetometer.Settings,
+        description="Settings of method acceleration-magnetometer.")
+    cn0_boresight: _cn0_boresight.Settings = Field(
+        default_factory=_cn0_boresight.Settings, description="Settings of method cn0-boresight.")
+    vector_phase: _vector_phase.Settings = Field(
+        default_factory=_vector_phase.Settings, description="Settings of method vector-phase.")
 
 
 JOB_TYPE = JobType(
