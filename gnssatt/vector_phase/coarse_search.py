@@ -17,7 +17,12 @@ from gnssatt.gnss.rotations import euler321_to_dcm
 from gnssatt.vector_phase.ekf import EkfOptions, ekf_solve
 from gnssatt.vector_phase.phase_model import ReceiverState
 
-__all__ = ["CoarseResult", "coarse_search"]
+__all__ = ["CoarseResult", "coarse_search", "AMBIGUITY_RATIO"]
+
+#: a search is ambiguous when a candidate more than two steps from the best scores within this factor of it: the
+#: m = 2 patch's 180 deg twin scores within 1 % (tests/vector_phase/test_coarse_search.py), a wrong start of the
+#: m = 1 patch 1.5x worse
+AMBIGUITY_RATIO = 1.2
 
 
 @dataclass(frozen=True)
@@ -30,6 +35,11 @@ class CoarseResult:
     score: float
     second_score: float
     n_candidates: int
+
+    @property
+    def ambiguous(self) -> bool:
+        """Another start, far from the best, fits about as well (AMBIGUITY_RATIO)."""
+        return bool(self.second_score < AMBIGUITY_RATIO * self.score)
 
 
 def _score(obs, mount, position, R0, n_epochs: int, min_sats: int, step_deg: float) -> float:

@@ -112,3 +112,23 @@ def test_eq26_matrix_is_a_rotation_with_the_papers_third_row():
     # z-y-z: D = Rz(g) Ry(b) Rz(a) as frame rotations
     from gnssatt.gnss.rotations import Ry, Rz
     assert np.allclose(D, Rz(g) @ Ry(b) @ Rz(a), atol=1e-14)
+
+
+def test_pattern_file_round_trip_and_errors():
+    import pytest
+
+    from gnssatt.gnss.io.errors import ParseError
+    from gnssatt.vector_phase.pattern_file import antenna_pattern_doc, parse_antenna_pattern
+
+    table = table_of(AsymmetricPatch(), theta_step_deg=10.0, phi_step_deg=30.0, theta_max_deg=90.0)
+    back = parse_antenna_pattern(antenna_pattern_doc(table))
+    assert np.max(np.abs(back.h_theta_m - table.h_theta_m)) < 1e-11
+    assert parse_antenna_pattern('{"model": "short-dipole"}').name == "short-dipole"
+    with pytest.raises(ParseError) as err:
+        parse_antenna_pattern('{"model": "table",\n "theta_deg": [0, 90,]}', name="pat.json")
+    assert err.value.line_no == 2 and "pat.json, line 2" in str(err.value)
+    with pytest.raises(ParseError, match='"model" one of'):
+        parse_antenna_pattern('{"model": "helix"}')
+    with pytest.raises(ParseError, match="uniform grid covering 360"):
+        parse_antenna_pattern({"model": "table", "theta_deg": [0, 90], "phi_deg": [0, 100, 200],
+                               "h_theta_m": [[[1, 0]] * 3] * 2, "h_phi_m": [[[0, 1]] * 3] * 2})
