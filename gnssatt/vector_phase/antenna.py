@@ -71,8 +71,9 @@ class ShortDipole:
 class RhcpPatch:
     """Ideal right-hand circularly polarised antenna: h = L (1 + cos t)/2 e^{-j p} (a_theta - j a_phi).
 
-    This is exactly L/2 (D + j k x D)-type crossed dipoles with D = x - k (k . x) + k x y (Wu et al. 1993), so its
-    phase against an RHCP field is the Wu wind-up angle (tests/vector_phase/test_phase_model.py).
+    Its transverse part is |D|/2 (D^ + j k x D^) with D = x - k (k . x) + k x y the receiver's effective dipole of
+    Wu et al. 1993 (k = -s), so its phase against an RHCP field is the Wu wind-up angle
+    (tests/vector_phase/test_phase_model.py).
     """
 
     length_m: float = 0.1
