@@ -97,6 +97,9 @@ class SimParams:
     vtec_tecu: float = 20.0
     troposphere: bool = True                     # terrestrial only
     windup: bool = True
+    # None: the ideal crossed-dipole wind-up (Wu et al. 1993); an antenna_pattern.json object (docs/formats/
+    # antenna_vector_length.md): that antenna's vector-phase wind-up, seed 003 eq. 32 (gnssatt/sim/vector_windup.py)
+    windup_antenna: dict | None = None
     multipath: bool = True
     mp_tau_s: float = 60.0
     mp_code_m: list = field(default_factory=lambda: [0.1, 0.6, 1.5])     # zenith, horizon, cap

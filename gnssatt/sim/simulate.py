@@ -296,7 +296,11 @@ def _antenna_geometry(ctx: _SetContext, A: dict, sat_axes: tuple) -> dict:
     az = np.mod(np.degrees(np.arctan2(e_ant[..., 1], e_ant[..., 0])), 360.0)
     x_r = np.einsum("nij,j->ni", R_e_b, A["R_a_b"][0])
     y_r = np.einsum("nij,j->ni", R_e_b, A["R_a_b"][1])
-    w = ob.windup_cycles(e, x_r, y_r, x_s, y_s) if p.windup else np.zeros((n_ep, n_sv))
+    if p.windup and p.windup_antenna is not None:      # a real antenna's wind-up (seed 003 eq. 32)
+        from gnssatt.sim.vector_windup import vector_windup_cycles
+        w = vector_windup_cycles(p.windup_antenna, e, R_e_b, A["R_a_b"], x_s, y_s)
+    else:
+        w = ob.windup_cycles(e, x_r, y_r, x_s, y_s) if p.windup else np.zeros((n_ep, n_sv))
     blocked = (ob.earth_blocked(r_ant, e, rho, p.earth_block_height_km * 1e3) if p.kind == "spacecraft"
                else np.zeros((n_ep, n_sv), bool))   # terrestrial: the local elevation mask decides
     return dict(k_jump=k_jump, dtr=dtr, t_true=t_true, r_ant=r_ant, rho=rho, e=e, dt_sv=dt_sv, tau=tau,

@@ -1,0 +1,90 @@
+"""Job type single-antenna-attitude, method vector-phase, on a small simulated single-antenna set (files written
+by gnssatt.sim.vector_phase_set and read back through the set validation), and its bad-input errors."""
+import csv
+import io
+import json
+
+import numpy as np
+import pytest
+
+from gnssatt.sim.vector_phase_set import write_vector_phase_set
+from gnssatt.vector_phase.antenna import AsymmetricPatch
+from gnssatt.vector_phase.scenario import ScenarioSpec
+from worker.errors import JobInputError
+from worker.local import local_set, run_job_locally
+
+
+def _set(tmp_path, n_sats=8, include_pattern=True, n_epochs=40):
+    paths, obs, truth, mount = write_vector_phase_set(tmp_path / "set", ScenarioSpec(
+        AsymmetricPatch(), n_epochs=n_epochs, n_sats=n_sats, sigma_phase_cyc=5e-3), include_pattern=include_pattern)
+    return local_set(paths, "vp"), truth
+
+
+def _run(tmp_path, obs_set, **vp):
+    config = {"method": "vector-phase", "vector_phase": vp}
+    return run_job_locally("single-antenna-attitude", [obs_set], config, tmp_path / "out", progress=None)
+
+
+def test_vector_phase_job_products(tmp_path):
+    obs_set, truth = _set(tmp_path)
+    out = _run(tmp_path, obs_set, initial_position_ecef_m=truth.position_ecef_m.tolist(), sigma_phase_mm=0.951)
+    assert {"attitude.csv", "observability.csv", "residuals.csv", "summary.json", "attitude.png",
+            "observability.png", "residuals.png", "report.html"} <= set(out)
+    rows = list(csv.DictReader(io.StringIO(out["attitude.csv"].read_text())))
+    assert len(rows) == 40
+    for col in ("time_gps", "gps_week", "gps_sow", "qe_w", "qi_z", "yaw_deg", "pitch_deg", "roll_deg",
+                "sigma_yaw_deg", "sigma_pitch_deg", "sigma_roll_deg", "fixed", "n_sats"):
+        assert col in rows[0]
+    assert all(r["rank"] == "7" and r["yaw_determined"] == "1" for r in rows)
+    summary = json.loads(out["summary.json"].read_text())
+    comp = summary["reference_comparison"]
+    # 1 mm noise, 8 satellites, 40 s: degrees of error (docs/vector_phase.md); consistent with the sigma
+    for angle in ("yaw", "pitch", "roll"):
+        assert comp[angle]["rms_error_deg"] < 10.0
+        # one 40 s run has few independent errors: only an upper bound here (the 0.8-1.25 band is tested over
+        # many runs in test_estimators.py)
+        assert comp[angle]["rms_error_over_sigma"] < 2.0
+    q = np.array([[float(r[c]) for c in ("qe_w", "qe_x", "qe_y", "qe_z")] for r in rows])
+    assert np.allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-9) and (q[:, 0] >= 0).all()
+    obs_rows = list(csv.DictReader(io.StringIO(out["observability.csv"].read_text())))
+    assert len(obs_rows) == 40 and obs_rows[5]["observability"] == "all seven unknowns observable"
+
+
+def test_cylindrically_symmetric_antenna_job_leaves_yaw_empty(tmp_path):
+    obs_set, truth = _set(tmp_path, n_epochs=15)
+    out = _run(tmp_path, obs_set, initial_position_ecef_m=truth.position_ecef_m.tolist(), antenna_model="rhcp-patch")
+    rows = list(csv.DictReader(io.StringIO(out["attitude.csv"].read_text())))
+    assert all(r["yaw_deg"] == "" and r["sigma_yaw_deg"] == "" and r["yaw_determined"] == "0" for r in rows)
+    assert all(r["qe_w"] == "" for r in rows)            # the full attitude is not determined: no quaternion
+    assert all(r["boresight_tilt_deg"] != "" for r in rows)
+    summary = json.loads(out["summary.json"].read_text())
+    assert any("antenna boresight" in k and "clock" in k for k in summary["observability"])
+
+
+def test_too_few_satellites_is_a_clear_error(tmp_path):
+    obs_set, truth = _set(tmp_path, n_sats=6, n_epochs=5)
+    with pytest.raises(JobInputError) as err:
+        _run(tmp_path, obs_set)
+    assert err.value.title == "Too few satellites" and "needs >= 7" in err.value.detail
+    assert err.value.file == "ANT.rnx"
+
+
+def test_missing_antenna_pattern_is_a_clear_error(tmp_path):
+    obs_set, _ = _set(tmp_path, include_pattern=False, n_epochs=5)
+    with pytest.raises(JobInputError) as err:
+        _run(tmp_path, obs_set)
+    assert err.value.title == "Missing antenna pattern" and err.value.file == "platform.json"
+    assert err.value.field == 'antennas["ANT"].antenna_pattern'
+
+
+def test_bad_antenna_table_names_the_key(tmp_path):
+    obs_set, _ = _set(tmp_path, n_epochs=5)
+    plat = next(f for f in obs_set.files if f.kind == "platform")
+    doc = json.loads(plat.path.read_text())
+    doc["antennas"]["ANT"]["antenna_pattern"] = {"model": "table", "theta_deg": [0, 90], "phi_deg": [0, 180],
+                                                 "h_theta_m": [[[1, 0]]], "h_phi_m": [[[0, 1]], [[0, 1]]]}
+    plat.path.write_text(json.dumps(doc))
+    with pytest.raises(JobInputError) as err:
+        _run(tmp_path, obs_set)
+    assert err.value.title == "Unusable antenna pattern" and "h_theta_m" in err.value.detail
+    assert "shape 2 x 2 x 2" in err.value.detail
