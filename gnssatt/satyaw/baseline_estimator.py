@@ -71,7 +71,7 @@ class PcvMap:
 class BaselineEstimate:
     """baseline_body_m (3,), sigma_m (3,), covariance_m2 (3, 3); offsets_m (n_groups,); residual_m (n,);
     sigma0; ar1_factor; dcb_m (mean code-group constant, aux minus main code) and dcb_sigma_m; pcv (PcvMap
-    or None); n_rows, n_stations, n_epochs."""
+    or None); n_rows, n_stations, n_epochs; warnings (text)."""
 
     baseline_body_m: np.ndarray
     sigma_m: np.ndarray
@@ -86,6 +86,7 @@ class BaselineEstimate:
     n_rows: int
     n_stations: int
     n_epochs: int
+    warnings: list[str]
 
 
 def unobservable_basis(nadir_deg, azimuth_deg) -> np.ndarray:
@@ -191,8 +192,16 @@ def estimate_baseline(obs: DiffObs, geom: SatGeometry, yaw_deg, options: Baselin
     weight = np.where(node_p >= 0, weight, 0.0)
     NN, AA = np.meshgrid(nc, ac, indexing="ij")
     full_ring = np.repeat((count.reshape(len(nc), len(ac)) >= opts.min_count).all(axis=1), len(ac))[used]
-    basis_c = (unobservable_basis(NN.ravel()[used], AA.ravel()[used]).T * full_ring if full_ring.sum() > 2 * len(ac)
-               else np.zeros((0, len(used))))
+    warnings: list[str] = []
+    if with_map and full_ring.sum() < 3 * len(ac):
+        warnings.append(f"PCV map not estimated: {int(full_ring.sum() // len(ac))} nadir ring(s) observed at every "
+                        f"{opts.azimuth_step_deg:g} deg of azimuth, 3 needed (more days, stations or yaw motion)")
+        with_map = False
+        used = np.zeros(0, dtype=np.int64)
+        weight = np.zeros_like(weight)
+        node_p = np.zeros_like(node_p)
+        full_ring = np.zeros(0, dtype=bool)
+    basis_c = unobservable_basis(NN.ravel()[used], AA.ravel()[used]).T * full_ring
     x, C, off, r = _solve(obs, H, obs.value_m, w, (np.maximum(node_p, 0), weight), basis_c)
     dof = max(len(r) - 3 - len(used) + basis_c.shape[0] - obs.n_groups, 1)
     sigma0 = float(np.sqrt(np.sum(w * r * r) / dof))
@@ -211,4 +220,4 @@ def estimate_baseline(obs: DiffObs, geom: SatGeometry, yaw_deg, options: Baselin
     dcb_sd = (float(np.std(off[code_groups]) / np.sqrt(max(code_groups.sum(), 1))) if code_groups.any()
               else float("nan"))
     return BaselineEstimate(x[:3], np.sqrt(np.diag(cov)[:3]), cov[:3, :3], off, r, sigma0, ar1, dcb, dcb_sd, pcv,
-                            len(r), len(np.unique(obs.station)), len(np.unique(obs.epoch)))
+                            len(r), len(np.unique(obs.station)), len(np.unique(obs.epoch)), warnings)
