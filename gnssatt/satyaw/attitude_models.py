@@ -25,7 +25,10 @@ __all__ = ["OrbitAngles", "orbit_angles", "nominal_yaw_deg", "nominal_yaw_rate_d
 #: QZS-2/-4 maximum yaw rate (seed 004 sec. 2.4, from SPI-QZS2-B): pseudo-yaw steering above it.
 QZSS_YAW_RATE_LIMIT_DEG_S = 0.055
 #: Attitude model names of satellites.json (CONVENTIONS.md).
-MODELS = ("yaw-steering", "orbit-normal", "qzss-pseudo-yaw-steering")
+#: "qzs1-yaw-steering" (QZS-1, seed 004 sec. 1): yaw steering, orbit normal while |beta| < 20 deg.
+MODELS = ("yaw-steering", "orbit-normal", "qzss-pseudo-yaw-steering", "qzs1-yaw-steering")
+#: |beta| below which QZS-1 flies orbit normal (seed 004 sec. 1; the real switch can lag by hours)
+QZS1_ORBIT_NORMAL_BETA_DEG = 20.0
 
 
 def wrap_deg(angle_deg) -> np.ndarray:
@@ -153,8 +156,14 @@ def pseudo_yaw_steering_deg(t_s, nominal_yaw_deg_, nominal_rate_deg_s=None, *,
 
 
 def model_yaw_deg(model: str, t_s, nominal_yaw_deg_, nominal_rate_deg_s=None, *,
-                  rate_limit_deg_s: float = QZSS_YAW_RATE_LIMIT_DEG_S) -> np.ndarray:
-    """The yaw (n,) of one of MODELS from the nominal yaw series (deg) at times t_s (s)."""
+                  rate_limit_deg_s: float = QZSS_YAW_RATE_LIMIT_DEG_S, beta_deg=None) -> np.ndarray:
+    """The yaw (n,) of one of MODELS from the nominal yaw series (deg) at times t_s (s); beta_deg (n,) is
+    needed by "qzs1-yaw-steering"."""
+    if model == "qzs1-yaw-steering":
+        if beta_deg is None:
+            raise ValueError("qzs1-yaw-steering needs beta_deg")
+        on = np.abs(np.asarray(beta_deg)) < QZS1_ORBIT_NORMAL_BETA_DEG
+        return np.where(on, 180.0, wrap_deg(nominal_yaw_deg_))
     if model == "yaw-steering":
         return wrap_deg(nominal_yaw_deg_)
     if model == "orbit-normal":
