@@ -38,4 +38,5 @@ def satellite_states(ephemeris, sat: str, t: GpsTime) -> tuple[np.ndarray, np.nd
     Neglects: the signal's light time (0.12 s; at 3 km/s the line of sight turns by < 1e-5 rad).
     """
     st = ephemeris.state(np.full(len(t), sat), t)
-    return st.r_ecef_m, st.v_ecef_m_s, st.valid
+    valid = np.all(np.isfinite(st.r_ecef_m), axis=-1) & np.all(np.isfinite(st.v_ecef_m_s), axis=-1)
+    return st.r_ecef_m, st.v_ecef_m_s, valid   # the clock is not needed (an SP3 may leave it blank)

@@ -85,6 +85,7 @@ class SatPairTruth:
     sf: object
     tf: object
     components: dict[str, np.ndarray] = field(default_factory=dict)
+    orbit: tuple[float, float, float] = (0.0, 0.0, 0.0)   # raan, inclination, u0 (rad)
 
 
 def pcv_truth_mm(nadir_deg, azimuth_deg, amplitude_mm: float = 2.0) -> np.ndarray:
@@ -294,7 +295,8 @@ def simulate_satellite_pair(scenario: SatPairScenario | None = None) -> SatPairT
     names, comp = _rows(sc, rng, geom, yaw, stations, t)
     c = table2_coefficients()
     sf, tf = _diff_obs(sc, names, comp, (c.k1, c.k2, c.k5))
-    return SatPairTruth(sc, time, geom, yaw, r, v, stations, events, sf, tf, comp)
+    return SatPairTruth(sc, time, geom, yaw, r, v, stations, events, sf, tf, comp,
+                        (raan, np.radians(sc.inclination_deg), u0))
 
 
 def write_satellite_pair_set(truth: SatPairTruth, out_dir) -> dict[str, Path]:
@@ -339,10 +341,13 @@ def write_satellite_pair_set(truth: SatPairTruth, out_dir) -> dict[str, Path]:
                                                      antenna_type="SIM", approx_position_ecef_m=truth.stations[name],
                                                      interval_s=sc.interval_s))
         paths[name] = p
-    step = max(1, int(round(300.0 / sc.interval_s)))
-    idx = np.arange(0, len(truth.time), step)
-    paths["orbit.sp3"] = write_sp3(out / "orbit.sp3", truth.time[idx], [sc.sat], truth.r_sat_ecef_m[idx][:, None, :],
-                                   file_type="J")
+    t_nodes = np.arange(-3600.0, sc.duration_s + 3600.0, 300.0)   # 5-min SP3 with an hour either side
+    t0 = truth.time[0]
+    time_nodes = GpsTime(t0.s + t_nodes.astype(np.int64), np.zeros(len(t_nodes)))
+    raan, inc, u0 = truth.orbit
+    r_nodes, _ = _to_ecef(time_nodes, *_orbit_gcrf(t_nodes, raan, inc, u0))
+    paths["orbit.sp3"] = write_sp3(out / "orbit.sp3", time_nodes, [sc.sat], r_nodes[:, None, :],
+                                   clock_us=np.zeros((len(t_nodes), 1)), file_type="J")
     stations = {"stations": {k: {"position_ecef_m": [float(x) for x in v], "observation_file": f"{k}.rnx"}
                              for k, v in truth.stations.items()}}
     (out / "stations.json").write_text(json.dumps(stations, indent=1))
