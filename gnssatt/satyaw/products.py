@@ -17,6 +17,10 @@ __all__ = ["yaw_csv", "yaw_orbex", "events_csv", "yaw_residuals_csv", "yaw_summa
            "baseline_residuals_csv"]
 
 
+#: a yaw whose sigma exceeds this is reported as not observable (no agreement verdict): +-90 deg is no information
+OBSERVABLE_SIGMA_DEG = 90.0
+
+
 def _f(v, nd=4):
     return "" if v is None or not np.isfinite(v) else f"{v:.{nd}f}"
 
@@ -83,7 +87,8 @@ def yaw_residuals_csv(run) -> str:
 
 
 def yaw_summary(run) -> dict:
-    """Per satellite: the mean estimated yaw, its sigma, the model's and whether they agree within 2 sigma."""
+    """Per satellite: the mean estimated yaw, its sigma, the model's and whether they agree within 2 sigma
+    (None when the sigma exceeds OBSERVABLE_SIGMA_DEG: the data do not constrain the yaw)."""
     sats = {}
     for sat, s in run.satellites.items():
         e = s.estimate
@@ -98,13 +103,16 @@ def yaw_summary(run) -> dict:
                      mean_yaw_deg=float(np.degrees(np.angle(np.mean(np.exp(1j * np.radians(e.yaw_deg[ok])))))),
                      rms_sigma_yaw_deg=sig, mean_minus_model_deg=float(np.mean(dev)),
                      rms_minus_model_deg=float(np.sqrt(np.mean(dev ** 2))),
-                     agrees_with_model=bool(abs(np.mean(dev)) <= 2.0 * sig),
+                     observable=bool(sig < OBSERVABLE_SIGMA_DEG),
+                     agrees_with_model=bool(abs(np.mean(dev)) <= 2.0 * sig) if sig < OBSERVABLE_SIGMA_DEG else None,
                      sigma0=e.sigma0, ar1_factor=e.ar1_factor, events=[ev.to_dict() for ev in s.events])
             if s.triple is not None:
                 okt = np.isfinite(s.triple.yaw_deg)
                 dt = wrap_deg(s.triple.yaw_deg[okt] - s.model_yaw_deg[okt])
-                d.update(triple_rms_minus_model_deg=float(np.sqrt(np.mean(dt ** 2))),
-                         triple_rms_sigma_deg=float(np.sqrt(np.mean(s.triple.sigma_yaw_deg[okt] ** 2))))
+                st = float(np.sqrt(np.mean(s.triple.sigma_yaw_deg[okt] ** 2)))
+                d.update(triple_rms_minus_model_deg=float(np.sqrt(np.mean(dt ** 2))) if st < OBSERVABLE_SIGMA_DEG
+                         else None, triple_rms_sigma_deg=st if st < OBSERVABLE_SIGMA_DEG else None,
+                         triple_observable=bool(st < OBSERVABLE_SIGMA_DEG))
         sats[sat] = d
     return {"satellites": sats, "orbit": run.orbit_source, "stations": [st.name for st in run.network.stations],
             "n_epochs": int(len(run.network.time)), "time_first": run.network.time[0].iso(3),

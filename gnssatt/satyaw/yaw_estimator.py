@@ -113,7 +113,23 @@ def _normal(obs: DiffObs, r, J, w, blk, n_blocks, prior_w):
     return D, (m_blk, m_grp, m_val), naa, rt, ra
 
 
-def _schur(D, coup, naa, rt, ra):
+def _inverse(S, need_inverse: bool):
+    """S^-1 (dense) when needed, else a solver; Cholesky, or the pseudo-inverse when S is singular (a
+    constant the data cannot separate from the yaw, e.g. one station with per-epoch yaw)."""
+    from scipy.linalg import LinAlgError, cho_factor, cho_solve
+
+    try:
+        f = cho_factor(S, lower=True, check_finite=False)
+        if np.min(np.abs(np.diag(f[0]))) ** 2 < 1e-12 * np.max(np.abs(np.diag(S))):
+            raise LinAlgError("near singular")
+        if need_inverse:
+            return cho_solve(f, np.eye(len(S)), check_finite=False)
+        return lambda b: cho_solve(f, b, check_finite=False)
+    except (LinAlgError, ValueError):
+        return np.linalg.pinv(S, rcond=1e-12, hermitian=True)
+
+
+def _schur(D, coup, naa, rt, ra, need_inverse: bool = False):
     """Solve for (d_theta, d_A); returns them with S^-1 (dense), 1/D and M = sqrt(1/D) N_tA (sparse)."""
     from scipy import sparse
 
@@ -123,8 +139,8 @@ def _schur(D, coup, naa, rt, ra):
     M = sparse.csr_matrix((m_val * np.sqrt(Dinv[m_blk]), (m_blk, m_grp)), shape=(len(D), n_g))
     S = np.diag(naa) - (M.T @ M).toarray()                      # S = N_AA - N_At N_tt^-1 N_tA
     rhs = ra - M.T @ (np.sqrt(Dinv) * rt)
-    S_inv = np.linalg.pinv(S, rcond=1e-12, hermitian=True)
-    dA = S_inv @ rhs
+    S_inv = _inverse(S, need_inverse)
+    dA = S_inv(rhs) if callable(S_inv) else S_inv @ rhs
     dth = Dinv * rt - np.sqrt(Dinv) * (M @ dA)                  # N_tt^-1 (r_t - N_tA dA)
     return dth, dA, S_inv, Dinv, M
 
@@ -171,17 +187,17 @@ def estimate_yaw(obs: DiffObs, geom: SatGeometry, baseline_body_m, model_yaw_deg
         J = -a2 * np.sin(theta[blk]) + b2 * np.cos(theta[blk])
         D, coup, naa, rt, ra = _normal(obs, r, J, w, blk, n_blocks, prior_w)
         rt = rt - prior_w * (theta - theta_prior)
-        dth, dA, S_inv, Dinv, packed = _schur(D, coup, naa, rt, ra)
+        dth, dA, _, _, _ = _schur(D, coup, naa, rt, ra)
         theta = theta + np.clip(dth, -0.5, 0.5)
         off = off + dA
-        if np.nanmax(np.abs(dth), initial=0.0) < 1e-9:
+        if np.nanmax(np.abs(dth), initial=0.0) < 1e-7:       # 6e-6 deg
             break
     f = a2 * np.cos(theta[blk]) + b2 * np.sin(theta[blk]) + c
     r = y - f - off[obs.group]
     J = -a2 * np.sin(theta[blk]) + b2 * np.cos(theta[blk])
     D, coup, naa, rt, ra = _normal(obs, r, J, w, blk, n_blocks, prior_w)
-    _, _, S_inv, Dinv, packed = _schur(D, coup, naa, rt, ra)
-    var = _theta_variance(Dinv, S_inv, packed)
+    _, _, S_inv, Dinv, M = _schur(D, coup, naa, rt, ra, need_inverse=True)
+    var = _theta_variance(Dinv, S_inv, M)
     n_par = n_blocks + obs.n_groups
     dof = max(len(r) - n_par, 1)
     sigma0 = float(np.sqrt(np.sum(w * r * r) / dof))
