@@ -109,3 +109,13 @@ def test_baseline_and_pcv_map():
     assert ok.sum() > 150
     # the DCB (aux minus main code) is recovered to its receiver spread (0.5 m / sqrt(n))
     assert be.dcb_m == pytest.approx(sc.dcb_m, abs=0.4)
+    # the published map is a valid CONVENTIONS map and reads back into the same correction
+    from gnssatt.gnss.io.pcv_map import parse_pcv_map
+    from gnssatt.satyaw.products import pcv_map_doc
+    from worker.jobs.satellite_baseline import pcv_map_of_doc
+
+    doc = pcv_map_doc("J02", p)
+    parse_pcv_map(doc, "J02 aux-main L1")
+    back = pcv_map_of_doc(doc)
+    nad, az = np.array([0.5, 4.2, 8.3]), np.array([10.0, 200.0, 359.0])
+    np.testing.assert_allclose(back.lookup_m(nad, az), p.lookup_m(nad, az), atol=1e-7)   # JSON keeps 4 decimals (mm)
