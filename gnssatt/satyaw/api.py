@@ -32,7 +32,8 @@ class SatYawOptions:
     """satellites: ids to process (None: every satellite with the auxiliary signal; those without a baseline
     get the model only); yaw_mode: "auto" (one yaw offset from the model over the span when fewer than 3
     stations see an epoch on median or the span is under 1 h, else per epoch), "per-epoch" or "offset";
-    smooth: also a yaw-rate-limited smoothed series; triple: also the triple-frequency combination."""
+    smooth: also a yaw-rate-limited smoothed series; triple: also the triple-frequency combination;
+    systematic_m: see gnssatt.satyaw.yaw_estimator.YawOptions (offset mode only)."""
 
     satellites: tuple[str, ...] | None = None
     yaw_mode: str = "auto"
@@ -42,6 +43,7 @@ class SatYawOptions:
     smooth: bool = False
     triple: bool = False
     pcv_maps: dict[str, PcvMap] = field(default_factory=dict)
+    systematic_m: float = 0.0003
 
 
 @dataclass
@@ -174,7 +176,7 @@ def _one_yaw(net, eph, sat, desc, opts: SatYawOptions) -> SatelliteYaw:
     obs = differential_rows(net, sat, desc, geom, ro)
     warnings += obs.warnings
     mode = _mode(opts, obs, geom)
-    yo = YawOptions(block_s=None if mode == "per-epoch" else 0.0)
+    yo = YawOptions(block_s=None if mode == "per-epoch" else 0.0, systematic_m=opts.systematic_m)
     est = estimate_yaw(obs, geom, desc.aux_antenna_m, model, yo, pcv_m=_pcv_rows(opts, sat, geom, obs, model))
     smoothed = (smooth_yaw(geom.t_s, est.yaw_deg, est.sigma_yaw_deg, desc.yaw_rate_limit_deg_s)
                 if opts.smooth and mode == "per-epoch" else None)

@@ -27,7 +27,12 @@ class YawOptions:
     """block_s: None = one yaw per epoch; float = one yaw offset from the model per block of that length
     (s); 0 = a single offset over the whole span (short spans, seed 004's 'known model' check).
     prior_sigma_deg: sigma of a prior on theta (per-epoch: towards the model; None = no prior).
-    iterations: Gauss-Newton iterations; grid_step_deg: initial grid search step."""
+    iterations: Gauss-Newton iterations; grid_step_deg: initial grid search step.
+    systematic_m: RMS of slowly varying differential errors (residual multipath, the change of unmodelled PCV,
+    inter-signal bias drift) that a yaw offset over a short block cannot be told from; added to the sigma of
+    offset blocks as systematic_m / RMS(dd/dyaw about its arc means). 0.3 mm: same-frequency differential
+    multipath nearly cancels (seed 004 sec. 3.2), and in simulations with 0.3 mm RMS of it the sigma then
+    bounds the error (tests/satyaw/test_estimators.py). Per-epoch yaw averages such errors over stations."""
 
     block_s: float | None = None
     prior_sigma_deg: float | None = None
@@ -35,6 +40,7 @@ class YawOptions:
     grid_step_deg: float = 1.0
     alternations: int = 4
     min_stations: int = 1
+    systematic_m: float = 0.0003
 
 
 @dataclass
@@ -203,6 +209,14 @@ def estimate_yaw(obs: DiffObs, geom: SatGeometry, baseline_body_m, model_yaw_deg
     sigma0 = float(np.sqrt(np.sum(w * r * r) / dof))
     ar1 = 1.0 if per_epoch else ar1_inflation(r, obs.group, obs.epoch)
     sig = np.degrees(np.sqrt(np.maximum(var, 0.0))) * sigma0 * ar1
+    if not per_epoch and opts.systematic_m > 0:
+        ph = ~obs.is_code
+        Jc = J[ph] - (np.bincount(obs.group[ph], J[ph], obs.n_groups) /
+                      np.maximum(np.bincount(obs.group[ph], None, obs.n_groups), 1))[obs.group[ph]]
+        g = np.sqrt(np.bincount(blk[ph], Jc ** 2, n_blocks) / np.maximum(np.bincount(blk[ph], None, n_blocks), 1))
+        with np.errstate(divide="ignore"):
+            sys_deg = np.degrees(np.where(g > 0, opts.systematic_m / g, np.inf))
+        sig = np.sqrt(sig ** 2 + sys_deg ** 2)
     yaw = wrap_deg(np.degrees(base + theta[blk_t]))
     n_sta = _stations_per_epoch(obs, T)
     R_eb = R_ecef_from_body(geom.R_orbital_from_ecef[obs.epoch], yaw[obs.epoch])

@@ -42,12 +42,13 @@ def test_every_satellite_reported(real_run):
         assert np.isfinite(s["rms_sigma_yaw_deg"])
         if s["observable"]:
             assert s["agrees_with_model"] == (abs(s["mean_minus_model_deg"]) <= 2 * s["rms_sigma_yaw_deg"])
-    # J02 (beta 42 deg, nominal yaw changing) is constrained to a few degrees; J03 (beta -4 deg, slow yaw in
-    # 6 min) is not constrained at all: the honest sigma says so
-    assert sats["J02"]["rms_sigma_yaw_deg"] < 15.0
-    assert sats["J02"]["agrees_with_model"] and sats["J01"]["agrees_with_model"]
-    assert sats["J03"]["rms_sigma_yaw_deg"] > 90.0
-    assert sats["J03"]["observable"] is False and sats["J03"]["agrees_with_model"] is None
+    # J02 (beta 42 deg) is constrained to ~20 deg (5.7 deg of white noise and the 0.3 mm allowance for slowly
+    # varying differential errors); J01 and J03 are not constrained by 6 minutes of one station, and say so
+    assert 10.0 < sats["J02"]["rms_sigma_yaw_deg"] < 40.0
+    assert sats["J02"]["observable"] and sats["J02"]["agrees_with_model"]
+    for sat in ("J01", "J03"):
+        assert sats[sat]["rms_sigma_yaw_deg"] > 90.0
+        assert sats[sat]["observable"] is False and sats[sat]["agrees_with_model"] is None
     rows = np.genfromtxt(out["yaw.csv"], delimiter=",", names=True, dtype=None, encoding="ascii")
     assert len(rows) == 4 * 360
     assert out["yaw.obx"].read_text().count(" ATT J07") == 360

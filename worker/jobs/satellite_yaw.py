@@ -27,6 +27,8 @@ class SatelliteYawConfig(BaseModel):
     elevation_mask_deg: float = Field(10.0, ge=0.0, le=60.0, description="Station elevation mask.")
     phase_sigma_m: float = Field(0.002, gt=0.0, le=0.1, description="A priori sigma of one phase signal.")
     code_sigma_m: float = Field(0.5, gt=0.0, le=20.0, description="A priori sigma of one code signal.")
+    systematic_mm: float = Field(0.3, ge=0.0, le=20.0, description="RMS of slowly varying differential errors "
+                                 "added to the sigma of offset-mode yaw (gnssatt.satyaw.yaw_estimator.YawOptions).")
     smooth: bool = Field(False, description="Also a yaw-rate-limited (satellite's limit) smoothed series.")
     triple_frequency: bool = Field(False, description="Also the triple-frequency (aux L1, main L2, L5) "
                                    "combination's yaw (seed 004 sec. 3).")
@@ -57,7 +59,8 @@ def run(ctx: JobContext, config) -> None:
     opts = SatYawOptions(satellites=tuple(config.satellite_ids) if config.satellite_ids else None,
                          yaw_mode=config.yaw_mode, elevation_mask_deg=config.elevation_mask_deg,
                          phase_sigma_m=config.phase_sigma_m, code_sigma_m=config.code_sigma_m,
-                         smooth=config.smooth, triple=config.triple_frequency, pcv_maps=maps)
+                         smooth=config.smooth, triple=config.triple_frequency, pcv_maps=maps,
+                         systematic_m=config.systematic_mm * 1e-3)
     try:
         result = estimate_satellite_yaw(files, stations=config.stations or None,
                                         satellites=config.satellites or None, options=opts, progress=ctx.progress)
