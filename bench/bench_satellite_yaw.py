@@ -43,7 +43,8 @@ def scenario(days: float, stations: int, interval_s: float) -> SatPairScenario:
     """beta -4 deg at the start rising through 0 about mid-month (eclipse season: pseudo-yaw steering turns
     whenever |beta| < 4.3 deg, where the nominal rate at noon/midnight exceeds 0.055 deg/s),
     an orbit-normal manoeuvre 07:00-19:00 on day 25 and a 360 deg turn of ~2 h on day 3."""
-    on = (24 * DAY + 7 * 3600.0, 24 * DAY + 19 * 3600.0) if days > 25 else (0.6 * days * DAY, 0.6 * days * DAY + 6 * 3600.0)
+    on = ((24 * DAY + 7 * 3600.0, 24 * DAY + 19 * 3600.0) if days > 25
+          else (0.6 * days * DAY, 0.6 * days * DAY + 6 * 3600.0))
     turn = (2 * DAY + 10 * 3600.0, 6545.0, 1) if days > 3 else (0.2 * days * DAY, 6545.0, 1)
     return SatPairScenario(start="2017-12-01T00:00:00", duration_s=days * DAY, interval_s=interval_s,
                            n_stations=stations, beta_deg=-4.0, midnight_s=6 * 3600.0,
@@ -107,8 +108,8 @@ def run(days: float, stations: int, interval_s: float, repeats: int, figures: Pa
     c = table2_coefficients()
     rms = lambda a: float(np.sqrt(np.nanmean(a ** 2)))  # noqa: E731
     rec = {
-        "command": f"python -m bench.bench_satellite_yaw --days {days:g} --stations {stations} --interval {interval_s:g}"
-                   f" --repeats {repeats}",
+        "command": f"python -m bench.bench_satellite_yaw --days {days:g} --stations {stations} "
+                   f"--interval {interval_s:g} --repeats {repeats}",
         "machine": f"{_platform.machine()} {os.cpu_count()} cpu, {_platform.python_implementation()} "
                    f"{_platform.python_version()}",
         "rows_single_frequency": int(len(sf.value_m)), "groups": int(sf.n_groups), "epochs": int(len(g.t_s)),

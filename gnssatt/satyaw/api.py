@@ -126,8 +126,8 @@ def _sats_with_aux(net: Network, descs: dict[str, SatelliteDescription]) -> list
     for st in net.stations:
         for sat in st.obs.sats:
             d = descs.get(sat, SatelliteDescription(sat, None))
-            if st.obs.code_index(d.aux_signals[1], sat[0]) is not None and \
-                    np.isfinite(st.obs.values[:, st.obs.sats.index(sat), st.obs.code_index(d.aux_signals[1], sat[0])]).any():
+            k = st.obs.code_index(d.aux_signals[1], sat[0])
+            if k is not None and np.isfinite(st.obs.values[:, st.obs.sats.index(sat), k]).any():
                 found.add(sat)
     return sorted(found)
 

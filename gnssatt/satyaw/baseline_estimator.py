@@ -9,7 +9,8 @@ group, so the A_g are eliminated exactly (N - S^T W^-1 S with S the per-group su
 a diagonal block). A binned map also holds functions the constants and the baseline already explain
 (1, cos(nadir), sin(nadir) cos(az), sin(nadir) sin(az)): four constraints keep the map orthogonal to them
 (equal weight per node of the nadir rings observed at every azimuth node: a pattern orthogonal to them over
-full circles of azimuth is then left to the map whatever the sampling), solved with the normal equations as one KKT system. So b is the baseline
+full circles of azimuth is then left to the map whatever the sampling), solved with the normal equations as
+one KKT system. So b is the baseline
 whose residual pattern has none of those parts, and its covariance includes the trade-off with the map
 (z trades against cos(nadir), nearly constant over 0-9 deg: seed 004's 18-27 mm). This is the converged
 result of seed 004's alternation between baseline and map. Sigmas: formal, times the a posteriori unit
@@ -24,7 +25,8 @@ import numpy as np
 from gnssatt.satyaw.differential import DiffObs, SatGeometry, body_los, nadir_azimuth_deg
 from gnssatt.satyaw.yaw_estimator import ar1_inflation
 
-__all__ = ["BaselineOptions", "BaselineEstimate", "PcvMap", "estimate_baseline", "unobservable_basis", "bilinear_weights"]
+__all__ = ["BaselineOptions", "BaselineEstimate", "PcvMap", "estimate_baseline", "unobservable_basis",
+           "bilinear_weights"]
 
 
 @dataclass(frozen=True)

@@ -211,7 +211,8 @@ def _station_rows(st: StationData, sat: str, desc: SatelliteDescription, ep: np.
         if l2 is None or l5 is None:
             return None
         c = table2_coefficients()
-        phase = c.k1 * aux_l[0] * lam + c.k2 * l2[0] * 299792458.0 / _BAND_HZ["2"] + c.k5 * l5[0] * 299792458.0 / _BAND_HZ["5"]
+        lam2, lam5 = 299792458.0 / _BAND_HZ["2"], 299792458.0 / _BAND_HZ["5"]
+        phase = c.k1 * aux_l[0] * lam + c.k2 * l2[0] * lam2 + c.k5 * l5[0] * lam5      # eq. 5, metres
         lli = np.maximum(np.maximum(aux_l[1], l2[1]), l5[1])
         code = np.full(len(ep), np.nan)
     else:
@@ -265,7 +266,8 @@ def differential_rows(net: Network, sat: str, desc: SatelliteDescription, geom: 
     n = len(ep)
     names = [st.name for st in net.stations]
     obs = DiffObs(np.r_[ep, ep[has_code]], np.r_[sta, sta[has_code]], np.r_[arc, arc[has_code] + n_arc],
-                  np.r_[phase, code[has_code]], np.r_[np.full(n, sp), np.full(has_code.sum(), np.sqrt(2) * o.code_sigma_m)],
+                  np.r_[phase, code[has_code]],
+                  np.r_[np.full(n, sp), np.full(has_code.sum(), np.sqrt(2) * o.code_sigma_m)],
                   np.r_[np.zeros(n, bool), np.ones(has_code.sum(), bool)], np.r_[los, los[has_code]], names,
                   np.r_[arc_sta, arc_sta], np.r_[np.zeros(n_arc, bool), np.ones(n_arc, bool)], k, warnings)
     return obs.select(np.ones(len(obs.epoch), dtype=bool))

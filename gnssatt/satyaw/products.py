@@ -198,7 +198,8 @@ def pcv_map_doc(sat: str, pm) -> dict:
     return {"platform": sat, "pair": [f"{sat}-main", f"{sat}-aux"], "frequency": "L1",
             "azimuth_deg": d["azimuth_deg"], "elevation_deg": [float(90.0 - pm.nadir_deg[i]) for i in order],
             "nadir_deg": [float(pm.nadir_deg[i]) for i in order],
-            "values_mm": [d["values_mm"][i] for i in order], "count": [[int(round(c)) for c in d["count"][i]] for i in order],
+            "values_mm": [d["values_mm"][i] for i in order],
+            "count": [[int(round(c)) for c in d["count"][i]] for i in order],
             "sigma_mm": [d["sigma_mm"][i] for i in order],
             "grid": "satellite body frame: elevation_deg = 90 - nadir angle; bilinear between nodes"}
 

@@ -263,7 +263,8 @@ def _diff_obs(sc: SatPairScenario, names, comp, tf_coeffs):
     sf_code = comp["proj"] + sc.dcb_m + comp["dcb_rx"] + comp["code_mp"] + comp["c1z"] - comp["c1c"]
     k1, k2, k5 = tf_coeffs
     l1z = comp["proj"] + comp["pcv"] + comp["mp1"] + comp["mp_diff"] + comp["n1z"] + comp["amb1z"]
-    tf_phase = k1 * l1z + k2 * (comp["mp2"] + comp["n2"] + comp["amb2"]) + k5 * (comp["mp5"] + comp["n5"] + comp["amb5"])
+    tf_phase = (k1 * l1z + k2 * (comp["mp2"] + comp["n2"] + comp["amb2"])
+                + k5 * (comp["mp5"] + comp["n5"] + comp["amb5"]))
     ep, st, los = comp["epoch"], comp["station"], comp["los"]
     sig_p = np.full(n, np.sqrt(2) * sc.phase_sigma_m)
     sig_c = np.full(n, np.sqrt(2) * sc.code_sigma_m)

@@ -43,7 +43,8 @@ def test_midnight_turn_at_rate_limit(midnight):
     assert np.sqrt(np.nanmean(err[turning] ** 2)) < 1.0
     ratio = np.sqrt(np.nanmean((err / est.sigma_yaw_deg) ** 2))
     assert 0.8 < ratio < 1.25                       # honest sigma
-    assert np.all((est.observability[np.isfinite(est.yaw_deg)] > 0) & (est.observability <= 1)[np.isfinite(est.yaw_deg)])
+    seen = np.isfinite(est.yaw_deg)
+    assert np.all((est.observability[seen] > 0) & (est.observability[seen] <= 1))
     # against the model it flew, no mode switch; against nominal the turn is a departure
     ev = detect_mode_switches(tr.geometry.t_s, est.yaw_deg, est.sigma_yaw_deg, model)
     assert not ev
