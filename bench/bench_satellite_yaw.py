@@ -141,6 +141,25 @@ def run(days: float, stations: int, interval_s: float, repeats: int, figures: Pa
     return rec
 
 
+def baseline_seeds(n: int, days: float, stations: int, interval_s: float) -> dict:
+    """RMS over n independent simulations (seeds 1..n, nominal yaw steering at beta 20 deg) of the baseline's
+    error / sigma per component: the honesty of the baseline sigmas, which one month gives one sample of."""
+    from dataclasses import replace
+
+    ratios, errors = [], []
+    for seed in range(1, n + 1):
+        sc = replace(scenario(days, stations, interval_s), profile="yaw-steering", beta_deg=20.0,
+                     orbit_normal_windows=(), turns_360=(), seed=seed)
+        tr = simulate_satellite_pair(sc)
+        be = estimate_baseline(tr.sf, tr.geometry, tr.yaw_deg, BaselineOptions())
+        err = be.baseline_body_m - np.array(sc.baseline_body_m)
+        ratios.append(err / be.sigma_m)
+        errors.append(err)
+    r, e = np.array(ratios), np.array(errors)
+    return {"runs": n, "days": days, "rms_error_over_sigma": np.sqrt(np.mean(r ** 2, axis=0)).round(3).tolist(),
+            "rms_error_mm": (np.sqrt(np.mean(e ** 2, axis=0)) * 1e3).round(3).tolist()}
+
+
 def _figures(out: Path, tr, model, ye, y3, be) -> None:
     from gnssatt.plots.common import figure_png, new_figure
     from gnssatt.satyaw.products import pcv_plot
@@ -181,7 +200,13 @@ def main() -> None:
     ap.add_argument("--interval", type=float, default=30.0)
     ap.add_argument("--repeats", type=int, default=1)
     ap.add_argument("--figures", type=Path, default=None)
+    ap.add_argument("--baseline-seeds", type=int, default=0,
+                    help="also N independent shorter runs (--seed-days) of the baseline for its error/sigma")
+    ap.add_argument("--seed-days", type=float, default=5.0)
     a = ap.parse_args()
+    if a.baseline_seeds:
+        print(json.dumps(baseline_seeds(a.baseline_seeds, a.seed_days, a.stations, 60.0), indent=1))
+        return
     print(json.dumps(run(a.days, a.stations, a.interval, a.repeats, a.figures), indent=1))
 
 
