@@ -44,6 +44,14 @@ def test_satellite_yaw_job_through_midnight_turn(yaw_set, tmp_path):
     assert summary["satellites"]["J02"]["agrees_with_model"]
     att = read_orbex(out["yaw.obx"])
     assert len(att.time) == np.isfinite(rows["yaw_deg"]).sum()
+    # the ORBEX quaternions are the yaw of yaw.csv: body +x (row 0 of R_body_from_ecef) in the orbital frame
+    from gnssatt.gnss.rotations import quat_to_dcm
+
+    k = np.flatnonzero(np.isfinite(rows["yaw_deg"]))[: len(att.time)]
+    x_b = quat_to_dcm(att.q_body_from_ecef)[:, 0, :]
+    R_o = tr.geometry.R_orbital_from_ecef[k]
+    yaw_q = np.degrees(np.arctan2(np.einsum("ni,ni->n", x_b, R_o[:, 1]), np.einsum("ni,ni->n", x_b, R_o[:, 0])))
+    np.testing.assert_allclose(wrap_deg(yaw_q - rows["yaw_deg"][k]), 0.0, atol=1e-3)   # CSV keeps 4 decimals
     # the rate-limited smoother is no worse than the epoch-wise yaw, and its sigma is smaller
     err_s = wrap_deg(rows["smoothed_yaw_deg"] - tr.yaw_deg[: len(rows)])
     assert np.sqrt(np.nanmean(err_s ** 2)) <= np.sqrt(np.nanmean(err ** 2)) * 1.05
