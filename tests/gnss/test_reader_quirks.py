@@ -1,0 +1,98 @@
+"""Quirks of real files that the readers read with a structured warning instead of refusing them
+(docs/reader_policy.md), each on the third-party file where it was found and, where cheap, on a minimal edit of a
+valid file so the test does not depend on one file. Broken variants next to each quirk still raise ParseError."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gnssatt.gnss.io.antex import read_antex
+from gnssatt.gnss.io.errors import ParseError
+from gnssatt.gnss.io.rinex_clock import read_rinex_clock
+from tests.corpus.third_party import third_party_file
+
+GEORUST = "georust+rinex/test_resources/"
+
+
+def _codes(warnings) -> set[str]:
+    return {w.code for w in warnings}
+
+
+# --- ANTEX ---------------------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("rel, n_declared, n_blocks", [
+    (GEORUST + "ATX/V1/ROULAR25.24__LEIT_2020_09_24.atx", 26, 2),
+    (GEORUST + "ATX/V1/TROSAR25.R4__LEIT_2020_09_23.atx", 26, 3),
+])
+def test_antex_frequency_count_disagreeing_with_blocks(rel, n_declared, n_blocks):
+    warns: list = []
+    (ant,) = read_antex(third_party_file(rel), warnings=warns)
+    assert len(ant.frequencies) == n_blocks
+    (w,) = warns
+    assert w.code == "FREQUENCY_COUNT_MISMATCH" and f"says {n_declared}" in w.message
+
+
+def test_antex_dazi_without_azimuth_rows_uses_noazi():
+    """RTKLIB's gnssant_ext.atx: DAZI 5.0 but only NOAZI rows in some antennas (73 rows implied)."""
+    path = third_party_file("rtklibexplorer+RTKLIB/data/ant/gnssant_ext.atx")
+    warns: list = []
+    pats = read_antex(path, warnings=warns)
+    assert "AZIMUTH_ROWS_MISSING" in _codes(warns)
+    no_rows = [f for p in pats if p.dazi_deg > 0 for f in p.frequencies if f.pcv_mm is None]
+    assert no_rows and all(len(f.noazi_mm) == 19 for f in no_rows)   # ZEN1/ZEN2/DZEN 0/90/5
+    # the NOAZI row is the raw line's numbers (line 337 of the file: ANN_MB_00_C G01)
+    line = path.read_text().splitlines()[336]
+    assert line.startswith("   NOAZI")
+    raw = [float(line[8 + 8 * k:16 + 8 * k]) for k in range(19)]
+    ann = next(p for p in pats if p.antenna_type.startswith("ANN_MB_00_C"))
+    np.testing.assert_array_equal(ann.frequencies[0].noazi_mm, raw)
+
+
+def test_antex_partial_azimuth_rows_still_refused():
+    """Some but not all azimuth rows is ambiguous (which sector is missing?): an error, not a quirk."""
+    path = third_party_file("tomojitakasu+RTKLIB/data/igs05.atx")
+    lines = path.read_text().splitlines(keepends=True)
+    k = next(i for i, ln in enumerate(lines) if ln.startswith("   355.0"))
+    with pytest.raises(ParseError, match="azimuth rows"):
+        read_antex("".join(lines[:k] + lines[k + 2:]).encode(), name="cut.atx")
+
+
+def test_antex_missing_end_of_antenna_closed_at_next_start():
+    warns: list = []
+    pats = read_antex(third_party_file(GEORUST + "ATX/V1/igs14_small.atx.gz"), warnings=warns)
+    assert "MISSING_END_OF_ANTENNA" in _codes(warns)
+    assert len(pats) == 6 and {p.antenna_type.split()[0] for p in pats} >= {"BLOCK", "EML_REACH_RS2", "GALILEO-2"}
+
+
+# --- RINEX clock -----------------------------------------------------------------------------------------
+
+def test_rinex_clock_304_wide_first_line():
+    """RINEX clock 3.04 labels in columns 66-85, A9 clock names (COD's MGEX product): values as the raw line says;
+    the 3.04 example file also puts its second value one column right: read by tokens with a warning, never cut."""
+    cod = read_rinex_clock(third_party_file("Stanford-NavLab+gnss_lib_py/data/unit_test/clk/"
+                                            "COD0MGXFIN_20211180000_01D_30S_CLK.CLK"))
+    assert cod.version == 3.04 and cod.warnings == [] and len(cod.time) > 0
+    # 'AS E01       2021 04 28 19 30  0.000000  2   -0.109666757011E-02  0.188030325505E-10'
+    e01 = cod.sats.index("E01")
+    assert cod.clock_s[0, e01] == -0.109666757011e-02 and cod.sigma_s[0, e01] == 0.188030325505e-10
+    path = third_party_file(GEORUST + "CLK/V3/example1.txt")
+    clk = read_rinex_clock(path)
+    assert clk.version == 3.04 and _codes(clk.warnings) == {"MISPLACED_VALUES"}
+    assert "AREQ00USA" in [r.decode().strip() if isinstance(r, bytes) else str(r).strip()
+                           for r in clk.receivers]
+    g16 = clk.sats.index("G16")
+    # 'AS G16       1994 07 14 20 59  0.000000  2   -0.123456789012E+00  -0.123456789012E-01'
+    assert clk.clock_s[0, g16] == -0.123456789012 and clk.sigma_s[0, g16] == -0.0123456789012
+
+
+def test_rinex_clock_labels_in_66_85_refused_before_304():
+    text = third_party_file(GEORUST + "CLK/V3/example1.txt").read_bytes().replace(b"3.04     ", b"3.02     ", 1)
+    with pytest.raises(ParseError, match="only from RINEX clock 3.04"):
+        read_rinex_clock(text, name="x.clk")
+
+
+def test_rinex_clock_304_identified_by_the_upload_sniffer():
+    from gnssatt.gnss.io.sniff import identify
+
+    kind, summary = identify(third_party_file(GEORUST + "CLK/V3/example2.txt"), "example2.txt")
+    assert kind == "rinex_clock" and summary["version"] == 3.04
