@@ -104,7 +104,7 @@ def identify(path: Path, name: str) -> tuple[str, dict]:
 
         return "reference_attitude", summarize_reference_attitude(_read_all(path, name, 512 * 1024 * 1024), name)
     label = first[60:80].strip()
-    if not label and first[65:85].strip() == "RINEX VERSION / TYPE" and first[21:22] == "C":   # clock 3.04 layout
+    if first[65:85].strip() == "RINEX VERSION / TYPE" and first[21:22] == "C":   # RINEX clock 3.04 layout
         return "rinex_clock", _summarize_with("rinex_clock", "summarize_rinex_clock", path, name)
     if label.startswith("CRINEX VERS"):
         data = _decompress_hatanaka(_read_all(path, name, limit=None), name)
