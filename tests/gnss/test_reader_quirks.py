@@ -96,3 +96,84 @@ def test_rinex_clock_304_identified_by_the_upload_sniffer():
 
     kind, summary = identify(third_party_file(GEORUST + "CLK/V3/example2.txt"), "example2.txt")
     assert kind == "rinex_clock" and summary["version"] == 3.04
+
+
+# --- SP3 ---------------------------------------------------------------------------------------------------
+
+def _raw_p(path, sat: str, k: int = 0) -> tuple[float, float, float, float]:
+    """x, y, z (km) and clock (us) of the k-th 'P' record of `sat`, re-read from the raw line (3F14.6, F14.6)."""
+    import gzip
+
+    data = path.read_bytes()
+    text = (gzip.decompress(data) if data[:2] == b"\x1f\x8b" else data).decode("latin-1")
+    recs = [ln for ln in text.splitlines() if ln.startswith("P") and
+            (ln[1:4] == sat or (ln[1] == " " and sat == f"G{int(ln[2:4]):02d}"))]
+    ln = recs[k]
+    return tuple(float(ln[4 + 14 * i:18 + 14 * i]) for i in range(4))
+
+
+def test_sp3c_satellite_missing_from_plus_lines():
+    from gnssatt.gnss.io.sp3 import read_sp3
+
+    path = third_party_file("SGL-UT+gnsstk-data/test_input_SP3c_mgex3.sp3")
+    sp3 = read_sp3(path)
+    assert {"UNLISTED_SATELLITE", "LISTED_WITHOUT_RECORDS"} <= _codes(sp3.warnings)
+    assert "C07" in sp3.sats and "C02" not in sp3.sats   # C02 listed, C07 in the body: never swapped
+    x, y, z, c = _raw_p(path, "C07")
+    j = sp3.sats.index("C07")
+    np.testing.assert_array_equal(sp3.position_ecef_m[0, j], np.array([x, y, z]) * 1000.0)
+    assert sp3.clock_s[0, j] == c * 1e-6
+
+
+def test_sp3d_listed_satellites_without_records_dropped():
+    from gnssatt.gnss.io.sp3 import read_sp3
+
+    path = third_party_file(GEORUST + "SP3/sp3d.txt")
+    sp3 = read_sp3(path)
+    (w,) = [w for w in sp3.warnings if w.code == "LISTED_WITHOUT_RECORDS"]
+    assert w.line_no == 3 and "C02" in w.message
+    body_sats = {ln[1:4] for ln in path.read_text().splitlines() if ln.startswith("P")}
+    assert set(sp3.sats) == body_sats and np.isfinite(sp3.position_ecef_m).all(axis=2).any(axis=0).all()
+
+
+@pytest.mark.parametrize("rel", ["example1.sp3a", "example1.sp3a.gz", "example2.sp3a"])
+def test_sp3a_elision_lines_skipped(rel):
+    from gnssatt.gnss.io.sp3 import read_sp3
+
+    path = third_party_file("geospace-code+georinex/src/georinex/tests/data/" + rel)
+    sp3 = read_sp3(path)
+    assert "ELISION_LINE" in _codes(sp3.warnings) and sp3.version == "a" and len(sp3.time) == 3
+    x, y, z, c = _raw_p(path, "G31", 2)
+    np.testing.assert_array_equal(sp3.position_ecef_m[2, sp3.sats.index("G31")], np.array([x, y, z]) * 1000.0)
+
+
+def test_oldest_sp3_without_version_letter():
+    from gnssatt.gnss.io.sp3 import read_sp3
+
+    path = third_party_file(GEORUST + "SP3/sio06492.sp3")
+    sp3 = read_sp3(path)
+    assert "NO_VERSION_LETTER" in _codes(sp3.warnings) and sp3.version == "a" and len(sp3.sats) == 17
+    assert sp3.time[0].iso(0).startswith("1992-06-15T08:37:29")
+    x, y, z, c = _raw_p(path, "G02")
+    np.testing.assert_array_equal(sp3.position_ecef_m[0, 0], np.array([x, y, z]) * 1000.0)
+    assert c == 999999.999999 and np.isnan(sp3.clock_s[0, 0])          # the 'bad or absent' clock
+
+
+def test_sp3_leading_blank_line_keeps_line_numbers():
+    from gnssatt.gnss.io.sp3 import read_sp3
+
+    path = third_party_file("geospace-code+georinex/src/georinex/tests/data/igs19362.sp3c")
+    sp3 = read_sp3(path)
+    assert {"LEADING_BLANK_LINES", "BLANK_LINE"} <= _codes(sp3.warnings) and len(sp3.sats) == 32
+    raw = path.read_bytes()
+    k = raw.index(b"\nPG01") + 1
+    with pytest.raises(ParseError) as info:   # an error still names the line of the file, blank line counted
+        read_sp3(raw[:k] + b"PG0x" + raw[k + 4:], name="b.sp3")
+    assert info.value.line_no == raw[:k].count(b"\n") + 1
+
+
+def test_oldest_sp3_identified_by_the_upload_sniffer():
+    from gnssatt.gnss.io.sniff import identify
+
+    kind, summary = identify(third_party_file(GEORUST + "SP3/sio06492.sp3"), "sio06492.sp3")
+    assert kind == "sp3" and "NO_VERSION_LETTER" in {w["code"] for w in summary["warnings"]}

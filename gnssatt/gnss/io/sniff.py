@@ -121,7 +121,8 @@ def identify(path: Path, name: str) -> tuple[str, dict]:
             return "rinex_clock", _summarize_with("rinex_clock", "summarize_rinex_clock", path, name)
         raise ParseError(name, 1, "RINEX file type O (observation), N/G/H (navigation) or C (clock) in column 21",
                          first)
-    if first.startswith("#") and len(first) > 2 and first[1] in "abcd" and first[2] in "PV":
+    if first.startswith("#") and len(first) > 3 and (first[1] in "abcd" and first[2] in "PV"
+                                                     or first[1:3] == "  " and first[3] in "12"):  # SP3 before 'a'
         return "sp3", _summarize_with("sp3", "summarize_sp3", path, name)
     if label == "ANTEX VERSION / SYST":
         return "antex", _summarize_with("antex", "summarize_antex", path, name)
