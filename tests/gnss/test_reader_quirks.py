@@ -177,3 +177,65 @@ def test_oldest_sp3_identified_by_the_upload_sniffer():
 
     kind, summary = identify(third_party_file(GEORUST + "SP3/sio06492.sp3"), "sio06492.sp3")
     assert kind == "sp3" and "NO_VERSION_LETTER" in {w["code"] for w in summary["warnings"]}
+
+
+# --- RINEX navigation ------------------------------------------------------------------------------------
+
+def _d(text: str) -> float:
+    return float(text.replace("D", "E"))
+
+
+@pytest.mark.parametrize("rel, system, sat, n_records, sqrt_a_text", [
+    # teqc's RINEX 2.12 Galileo ('E' in column 21, PRN I2, 3X orbit lines)
+    ("geospace-code+georinex/src/georinex/tests/data/ceda2100.18e", "E", "E05", 29, "5.440621961594D+03"),
+    # RTKLIB's Galileo 2.x ('L'; version written '2')
+    ("tomojitakasu+RTKLIB/util/simobs/sim/brdc0910.09l", "E", "E01", 27, "0.544070739886E+04"),
+    # RTKLIB's QZSS 2.12 ('N' with 'J' in column 41; 'J 1' ids, 4X orbit lines)
+    ("tomojitakasu+RTKLIB/test/data/tle/brdc3050.12q", "J", "J01", 96, "6.493972862244D+03"),
+])
+def test_rinex2_galileo_and_qzss_navigation(rel, system, sat, n_records, sqrt_a_text):
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+
+    path = third_party_file(rel)
+    nav = read_rinex_nav(path)
+    assert "RINEX2_EXTENSION" in _codes(nav.warnings) and list(nav.kepler) == [system]
+    eph = nav.kepler[system]
+    # as many records as record-start lines (non-blank columns 1-2 after the header)
+    lines = path.read_text().splitlines()
+    body = lines[next(i for i, ln in enumerate(lines) if "END OF HEADER" in ln) + 1:]
+    assert len(eph.sat) == sum(1 for ln in body if ln[:2].strip()) == n_records
+    assert eph.sat[0] == sat and eph.sqrt_a_sqrt_m[0] == _d(sqrt_a_text)
+
+
+def test_beidou_week_not_matching_the_epoch_taken_from_epoch():
+    """gnsstk's BDS D1 round-trip file writes week 1 in 2014 (BDT week 435, GPS week 1791): the week of toe
+    follows from toc and toe's seconds of week (RTKLIB's adjweek), with a warning; a GPS file is unaffected."""
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+
+    nav = read_rinex_nav(third_party_file("SGL-UT+gnsstk-data/rinnav_BDS_D1_test.14n"))
+    (w,) = [w for w in nav.warnings if w.code == "WEEK_FROM_EPOCH"]
+    assert "e.g. 1)" in w.message and "BDT" in w.message and w.line_no == 11
+    eph = nav.kepler["C"]
+    # toc 2014-05-10 00:00 BDT = BDT week 435, 518400 s; toe 1245 s of week is nearest in week 436
+    assert eph.week[0] == 436 and eph.toe_sow[0] == 1245.0
+    gps = read_rinex_nav(third_party_file("tomojitakasu+RTKLIB/test/data/rinex/brdc1820.10n"))
+    assert "WEEK_FROM_EPOCH" not in _codes(gps.warnings) and set(gps.kepler["G"].week) <= {1590, 1591}
+
+
+@pytest.mark.parametrize("rel", ["blank1st.10n", "blank3_1st.10n"])
+def test_navigation_leading_blank_lines(rel):
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+
+    nav = read_rinex_nav(third_party_file("geospace-code+georinex/src/georinex/tests/data/" + rel))
+    (w,) = nav.warnings
+    assert w.code == "LEADING_BLANK_LINES" and w.line_no == 2 and not nav.kepler
+
+
+def test_navigation_blank_inside_a_number_still_refused():
+    """georinex's galileo3.15n writes '. 000000000000D+00' (BGD E5b/E1): a blank inside a number is not a
+    misplaced number; refused with file, line and column (georinex returns NaN for it silently)."""
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+
+    with pytest.raises(ParseError) as info:
+        read_rinex_nav(third_party_file("geospace-code+georinex/src/georinex/tests/data/galileo3.15n"))
+    assert (info.value.line_no, info.value.column) == (29, 62) and "D19.12" in info.value.expected
