@@ -239,3 +239,92 @@ def test_navigation_blank_inside_a_number_still_refused():
     with pytest.raises(ParseError) as info:
         read_rinex_nav(third_party_file("geospace-code+georinex/src/georinex/tests/data/galileo3.15n"))
     assert (info.value.line_no, info.value.column) == (29, 62) and "D19.12" in info.value.expected
+
+
+# --- RINEX observation -----------------------------------------------------------------------------------
+
+GEORINEX = "geospace-code+georinex/src/georinex/tests/data/"
+
+
+def test_rinex211_truncated_last_epoch_reads_the_epochs_before():
+    """georust's rovn0010.21o ends 1 line into the records of its 7th epoch (20 satellites x 3 lines announced)."""
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+
+    path = third_party_file(GEORUST + "OBS/V2/rovn0010.21o")
+    obs = read_rinex_obs(path)
+    (w,) = [w for w in obs.warnings if w.code == "truncated-last-epoch"]
+    assert w.line_no == 512
+    assert len(obs.time) == sum(1 for ln in path.read_text().splitlines()
+                                if ln.startswith(" 21 01 01")) - 1 == 5
+    # the last whole epoch's first record, re-read from the raw line (F14.3 in columns 1-14)
+    lines = path.read_text().splitlines()
+    k = max(i for i, ln in enumerate(lines[:511]) if ln.startswith(" 21 01 01"))
+    first_sat = lines[k][32:35].replace(" ", "0")
+    n = int(lines[k][29:32])
+    assert obs.values[-1, obs.sats.index(first_sat), 0] == float(lines[k + 1 + (n - 1) // 12][0:14])
+
+
+@pytest.mark.parametrize("rel", ["demo.10o", "demo3.10o", "rinex2onesat.10o"])
+def test_approx_position_off_its_columns(rel):
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+
+    obs = read_rinex_obs(third_party_file(GEORINEX + rel))
+    assert {"approx-position-misplaced", "antenna-delta-misplaced"} <= _codes(obs.warnings)
+    # '   4789028.4701    176610.0133   4195017.0310' (each number one column right of its F14.4 field)
+    np.testing.assert_array_equal(obs.header.approx_position_ecef_m, [4789028.4701, 176610.0133, 4195017.0310])
+    np.testing.assert_array_equal(obs.header.antenna_delta_hen_m, [0.9030, 0.0, 0.0])
+
+
+def test_approx_position_in_columns_has_no_warning_and_garbage_is_refused():
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+
+    raw = third_party_file(GEORINEX + "demo.10o").read_bytes()
+    old = b"   4789028.4701    176610.0133   4195017.0310"
+    fixed = raw.replace(old, b"%14.4f%14.4f%14.4f" % (4789028.4701, 176610.0133, 4195017.0310) + b"   ", 1)
+    assert fixed != raw
+    obs = read_rinex_obs(fixed, name="fixed.10o")
+    assert "approx-position-misplaced" not in _codes(obs.warnings)
+    np.testing.assert_array_equal(obs.header.approx_position_ecef_m, [4789028.4701, 176610.0133, 4195017.0310])
+    with pytest.raises(ParseError, match="three F14.4 numbers") as info:
+        read_rinex_obs(raw.replace(b"176610.0133", b"176610.01x3", 1), name="bad.10o")
+    assert info.value.line_no == 13
+
+
+def test_rinex2_type_count_smaller_than_the_list():
+    """georinex's wrong_obs2_count.10o: '# / TYPES OF OBSERV' says 6 and lists 7; the body has 7 fields."""
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+
+    path = third_party_file(GEORINEX + "wrong_obs2_count.10o")
+    obs = read_rinex_obs(path)
+    assert "obs-type-count-mismatch" in _codes(obs.warnings)
+    assert obs.header.obs_types["G"] == ["L1", "L2", "P1", "P2", "C1", "S1", "S2"]
+    # G13's S2 is the 7th field: second record line, columns 17-30 ('        62.000          80.000')
+    assert obs.values[0, obs.sats.index("G13"), obs.codes.index("S2")] == 80.0
+
+
+@pytest.mark.parametrize("rel", ["blank1st.10o", "blank3_1st.10o"])
+def test_observation_leading_blank_lines(rel):
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+
+    obs = read_rinex_obs(third_party_file(GEORINEX + rel))
+    assert {"leading-blank-lines", "no-epochs"} <= _codes(obs.warnings)
+    (w,) = [w for w in obs.warnings if w.code == "leading-blank-lines"]
+    assert w.line_no == 2
+
+
+@pytest.mark.parametrize("rel, code", [
+    (GEORUST + "OBS/V2/rovn0010.21o", "truncated-last-epoch"),
+    (GEORINEX + "demo.10o", "approx-position-misplaced"),
+    (GEORINEX + "wrong_obs2_count.10o", "obs-type-count-mismatch"),
+    (GEORINEX + "blank1st.10n", "LEADING_BLANK_LINES"),
+    (GEORINEX + "igs19362.sp3c", "LEADING_BLANK_LINES"),
+    (GEORINEX + "ceda2100.18e", "RINEX2_EXTENSION"),
+])
+def test_quirks_reach_the_upload_summary(rel, code):
+    """The upload sniffer (the set's summary) reports the same quirk codes as the full readers."""
+    from gnssatt.gnss.io.sniff import identify
+
+    kind, summary = identify(third_party_file(rel), rel.rsplit("/", 1)[1])
+    assert code in {w["code"] for w in summary["warnings"]}
+    if kind == "rinex_obs" and code == "truncated-last-epoch":
+        assert summary["n_epochs"] == 5
