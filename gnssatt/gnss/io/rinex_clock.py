@@ -85,11 +85,20 @@ def _version_line(name: str, lines: list[bytes]) -> tuple[float, int]:
 def _header(name: str, lines: list[bytes]):
     version, label_col = _version_line(name, lines)
     time_system, ac, leap, types = "GPS", "", None, []
-    for i in range(1, len(lines)):
+    odd: list[tuple[str, str, int]] = []   # (code, message, line) of header quirks
+    for i in range(0, len(lines)):
         ln = lines[i].decode("latin-1")
         label = ln[label_col:].strip()
+        if len(ln) > label_col + 20 and ln[label_col + 20:].strip():
+            odd.append(("HEADER_TEXT_BEYOND_LABEL", f"text after column {label_col + 20} of a header line "
+                        "(ignored)", i + 1))
+            label = ln[label_col:label_col + 20].strip()
+        if "\t" in ln or not label:
+            odd.append(("HEADER_LINE_WITHOUT_LABEL", "a header line without a label (ignored)", i + 1))
         if label == "END OF HEADER" or ln[65:].strip() == "END OF HEADER":
-            return version, time_system, ac, leap, types, i
+            if not types:
+                odd.append(("MISSING_HEADER_RECORD", "no '# / TYPES OF DATA' header record", i + 1))
+            return version, time_system, ac, leap, types, i, odd
         if label == "TIME SYSTEM ID":
             time_system = ln[0:6].strip() or "GPS"
         elif label == "ANALYSIS CENTER":
@@ -237,7 +246,7 @@ def read_rinex_clock(source, *, name: str | None = None) -> ClockData:
     if lines and lines[-1] == b"":
         lines.pop()
     lines = [ln[:-1] if ln.endswith(b"\r") else ln for ln in lines]
-    version, time_system, ac, leap, types, end = _header(display, lines)
+    version, time_system, ac, leap, types, end, odd = _header(display, lines)
     shift = 5 if version >= 3.04 else 0
     body = lines[end + 1:]
     heads = [ln[:2] for ln in body]
@@ -261,7 +270,9 @@ def read_rinex_clock(source, *, name: str | None = None) -> ClockData:
         prev_n += 1
         raise ParseError(display, end + 2 + i, "a clock record (AR, AS, CR, DR, MS in columns 1-2) or the "
                          "continuation line of the record before it", ln.decode("latin-1"), 1)
-    warnings: list[ParseWarning] = []
+    warnings = [ParseWarning(code, msg, ln) for code, msg, ln in odd]
+    if not as_idx and not ar_idx:
+        warnings.append(ParseWarning("NO_RECORDS", "the file holds no AS or AR clock record", end + 1))
     base = end + 2  # 1-based line number of body[0]
     as_lines = np.array(as_idx, dtype=np.int64) + base
     ar_lines = np.array(ar_idx, dtype=np.int64) + base

@@ -348,6 +348,9 @@ def _v2_system(ctx: _Ctx, first: str, file_type: str, sys_char: str) -> str:
     return system
 
 _SUPPORTED_VERSIONS = ("2", "3", "4")
+# Navigation versions whose layouts are read: 2.00-2.12 (2.12: the drafts' Galileo/QZSS files), 3.00-3.05,
+# 4.00-4.02; any other (e.g. '3.33') is refused loudly, not read with a guessed layout (RINEX-QUIRKS).
+_NAV_VERSIONS = (2.0, 2.01, 2.1, 2.11, 2.12, 3.0, 3.01, 3.02, 3.03, 3.04, 3.05, 4.0, 4.01, 4.02)
 
 
 def _parse_header(ctx: _Ctx, lines: list[str]):
@@ -365,8 +368,9 @@ def _parse_header(ctx: _Ctx, lines: list[str]):
     except ValueError:
         raise ctx.error(h0 + 1, "the format version (F9.2) in columns 1-9", first, 1) from None
     major = int(version) if np.isfinite(version) else -1
-    if str(major) not in _SUPPORTED_VERSIONS:
-        raise ctx.error(h0 + 1, "RINEX navigation version 2.xx, 3.0x or 4.0x in columns 1-9", first, 1)
+    if str(major) not in _SUPPORTED_VERSIONS or round(version, 2) not in _NAV_VERSIONS:
+        raise ctx.error(h0 + 1, "a RINEX navigation version in " + ", ".join(f"{v:.2f}" for v in _NAV_VERSIONS)
+                        + " in columns 1-9 (other layouts are refused)", first, 1)
     file_type = first[20:21]
     sys_char = first[40:41]
     if major == 2:
@@ -385,9 +389,13 @@ def _parse_header(ctx: _Ctx, lines: list[str]):
     leap = None
     program = ""
     end = None
-    for i in range(h0 + 1, len(lines)):
+    for i in range(h0, len(lines)):
         ln = lines[i]
         label = ln[60:80].strip()
+        if ln[80:].strip():
+            ctx.warn_counted("HEADER_TEXT_BEYOND_80", "header lines with text after column 80 (ignored)", i + 1)
+        if i == h0:
+            continue
         if label == "END OF HEADER":
             end = i
             break
