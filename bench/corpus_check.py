@@ -228,6 +228,8 @@ def _raw_obs_v2(lines: list[str], end: int, default_sys: str):
 
 def _check_obs(text: str, obs) -> int:
     lines = text.split("\n")
+    if lines and lines[-1] == "":
+        lines.pop()   # the final newline ends the last line; it opens no empty line
     end = _header_end(lines)
     h0 = next(k for k, ln in enumerate(lines) if ln.strip())
     v3 = float(lines[h0][0:9]) >= 3
@@ -242,7 +244,7 @@ def _check_obs(text: str, obs) -> int:
         j = sat_idx.get(sat)
         assert j is not None, f"epoch {e}: {sat} has a record but is not among the satellites read"
         for c, v in vals.items():
-            k = code_idx.get(c) if v3 else code_idx.get(_v2_code(obs, sat[0], c))
+            k = code_idx.get(c)   # RINEX 2 codes are kept as written (C1, P2, L5, ...)
             if k is None:
                 continue
             _same(float(obs.values[e, j, k]), v, f"epoch {e} {sat} {c}")
@@ -251,13 +253,6 @@ def _check_obs(text: str, obs) -> int:
     assert seen == len(obs.time) or seen == 0 and len(obs.time) == 0, f"{seen} raw epochs, {len(obs.time)} read"
     assert n == int(np.count_nonzero(~np.isnan(obs.values))), "the reader holds values no raw record has"
     return n
-
-
-def _v2_code(obs, system: str, code: str) -> str:
-    from gnssatt.gnss.io.rinex_obs import rinex3_code
-
-    c3 = rinex3_code(system, code, 2.11)
-    return c3 if c3 in obs.codes else code
 
 
 _D19 = re.compile(r"[+-]?(?:\d+\.\d*|\.\d+)(?:[DdEe][+-]?\d+)?")
@@ -379,3 +374,103 @@ def raw_check(row: Row, result) -> int:
     text = decompressed_text(row.file)
     return {"obs": _check_obs, "nav": _check_nav, "sp3": _check_sp3, "clk": _check_clk,
             "atx": _check_atx}[row.kind](text, result)
+
+
+# --- the expectation of a row ---------------------------------------------------------------------------------
+
+def check_expectation(row: Row, out: Outcome) -> None:
+    """valid: read without warnings; quirk: read with exactly the manifest's warning codes; broken: a ParseError
+    at the manifest's line whose 'expected' starts with the manifest's text. AssertionError otherwise."""
+    from gnssatt.gnss.io.errors import ParseError
+
+    if row.label == "broken":
+        assert isinstance(out.error, ParseError), f"{row.path}: expected a ParseError, got {out.error!r}"
+        line, _, text = row.expect.partition(";")
+        want_line = None if line == "line=None" else int(line.removeprefix("line="))
+        assert out.error.line_no == want_line, f"{row.path}: error on line {out.error.line_no}, not {want_line}"
+        assert out.error.expected.startswith(text), f"{row.path}: {out.error.expected!r} vs {text!r}"
+        assert out.error.path == row.file.name, "the error names the file as the user knows it"
+        return
+    assert out.error is None, f"{row.path}: {row.label} file refused: {out.error}"
+    codes = warning_codes(row, out.result)
+    want = set(row.expect.split(";")) if row.expect else set()
+    assert codes == want, f"{row.path}: warnings {sorted(codes)}, manifest says {sorted(want)}"
+
+
+# --- the other readers ------------------------------------------------------------------------------------------
+
+def georinex_check(row: Row, obs) -> int:
+    """Values, LLI and SSI against georinex (bench.georinex_check.compare_with_georinex); values compared."""
+    from bench.georinex_check import compare_with_georinex, load_georinex
+
+    return compare_with_georinex(obs, load_georinex(row.file))
+
+
+def _rtklib_sat_id(rk, sat: int) -> str:
+    buf = rk.Arr1Dchar(8)
+    rk.satno2id(sat, buf)
+    return str(buf.ptr) if hasattr(buf, "ptr") else str(buf)
+
+
+def rtklib_nav_check(row: Row, nav, workdir: Path) -> int:
+    """Kepler records (A = sqrtA^2, e, toe seconds of week, af0) matched by satellite and toc against RTKLIB's
+    readrnx (which drops duplicates and unhealthy-but-kept records differently: only matched pairs compare)."""
+    import pyrtklib as rk
+
+    plain = workdir / (row.file.name.split(".gz")[0].split(".zip")[0] + ".plain")
+    plain.write_text(decompressed_text(row.file), encoding="latin-1")
+    obs, rnav, sta = rk.obs_t(), rk.nav_t(), rk.sta_t()
+    if rk.readrnx(str(plain), 1, "", obs, rnav, sta) != 1:
+        raise RuntimeError("RTKLIB readrnx refused the file")
+    theirs: dict = {}
+    for i in range(rnav.n):
+        e = rnav.eph[i]
+        theirs.setdefault((_rtklib_sat_id(rk, e.sat), round(e.toc.time + e.toc.sec)), []).append(e)
+    n = 0
+    gps0 = 315964800   # 1980-01-06 in Unix seconds (RTKLIB's gtime_t is Unix time in GPST)
+    for sys, eph in nav.kepler.items():
+        toc = eph.toc_gpst() if sys == "C" and hasattr(eph, "toc_gpst") else eph.toc
+        for r in range(len(eph.sat)):
+            cands = theirs.get((str(eph.sat[r]), int(toc.s[r]) + gps0 + int(round(float(toc.frac[r])))))
+            if not cands:
+                continue
+            # several records share a toc (Galileo I/NAV and F/NAV, retransmissions): ours equals one of them
+            same = [t for t in cands if t.e == eph.e[r] and t.f0 == eph.af0_s[r] and t.toes == eph.toe_sow[r]]
+            assert same, f"{eph.sat[r]} toc {toc[r].iso(0)}: e/af0/toe match none of RTKLIB's {len(cands)} records"
+            # A: RTKLIB squares sqrtA in its own expression; equal to 1 ulp (2.2e-16 relative)
+            assert abs(same[0].A - eph.sqrt_a_sqrt_m[r] ** 2) <= 4.5e-16 * same[0].A, f"{eph.sat[r]} A"
+            n += 4
+    return n
+
+
+def rtklib_sp3_check(row: Row, sp3, workdir: Path) -> int:
+    """Positions (m) against RTKLIB's readsp3 at every epoch and satellite both hold; 0 if RTKLIB reads none."""
+    import pyrtklib as rk
+
+    plain = workdir / (row.file.name.split(".gz")[0].split(".Z")[0] + ".sp3")
+    plain.write_text(decompressed_text(row.file), encoding="latin-1")
+    rnav = rk.nav_t()
+    rk.readsp3(str(plain), rnav, 0)
+    gps0 = 315964800
+    ours_t = {int(s) + gps0: k for k, s in enumerate(sp3.time.s)}
+    idx = {s: j for j, s in enumerate(sp3.sats)}
+    n = 0
+    for i in range(rnav.ne):
+        p = rnav.peph[i]
+        e = ours_t.get(int(p.time.time))
+        if e is None:
+            continue
+        for j_s, sat in enumerate(sp3.sats):
+            no = rk.satid2no(sat)
+            if no <= 0:
+                continue
+            x = [p.pos[(no - 1, a)] for a in range(3)]
+            if x == [0.0, 0.0, 0.0]:
+                continue
+            ours = sp3.position_ecef_m[e, idx[sat]]
+            if np.isnan(ours).any():
+                continue
+            assert np.all(np.abs(ours - np.array(x)) <= 1e-9 * np.abs(np.array(x)) + 1e-6), \
+                f"{sat} epoch {e}: {ours} vs RTKLIB {x}"
+            n += 3
+    return n
