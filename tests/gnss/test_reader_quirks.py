@@ -328,3 +328,13 @@ def test_quirks_reach_the_upload_summary(rel, code):
     assert code in {w["code"] for w in summary["warnings"]}
     if kind == "rinex_obs" and code == "truncated-last-epoch":
         assert summary["n_epochs"] == 5
+
+
+def test_blank_inside_epoch_seconds_is_refused():
+    """georinex's badtime.10o writes '0 .0000000' as the seconds of its first epoch: a blank inside a number is
+    an error (docs/reader_policy.md), not read as 0 s (gnssatt did before) nor dropped silently (georinex)."""
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+
+    with pytest.raises(ParseError) as info:
+        read_rinex_obs(third_party_file(GEORINEX + "badtime.10o"))
+    assert info.value.line_no == 5 and "epoch line" in info.value.expected

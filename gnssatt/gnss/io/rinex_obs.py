@@ -1112,6 +1112,8 @@ def _v2_epoch_fields(line: str, name: str, line_no: int):
         mo, d, h, mi = int(line[4:6]), int(line[7:9]), int(line[10:12]), int(line[13:15])
         whole, frac = line[15:26].split(".")
         frac = (frac.rstrip() + "0000000")[:7]
+        if whole != whole.rstrip() or " " in frac.rstrip():   # a blank inside the seconds ('0 .0000000')
+            raise ValueError
         if not (1 <= mo <= 12 and 1 <= d <= 31 and h <= 23 and mi <= 59 and frac.isdigit()):
             raise ValueError
         return (year, mo, d, h, mi, int(whole), int(frac)), flag, n
