@@ -270,7 +270,11 @@ def read_rinex_clock(source, *, name: str | None = None) -> ClockData:
         prev_n += 1
         raise ParseError(display, end + 2 + i, "a clock record (AR, AS, CR, DR, MS in columns 1-2) or the "
                          "continuation line of the record before it", ln.decode("latin-1"), 1)
-    warnings = [ParseWarning(code, msg, ln) for code, msg, ln in odd]
+    counted: dict[str, list] = {}
+    for code, msg, ln in odd:   # one warning per code, counted (first line kept)
+        counted.setdefault(code, [0, msg, ln])[0] += 1
+    warnings = [ParseWarning(code, f"{msg} ({n} time{'s' if n != 1 else ''})", ln)
+                for code, (n, msg, ln) in counted.items()]
     if not as_idx and not ar_idx:
         warnings.append(ParseWarning("NO_RECORDS", "the file holds no AS or AR clock record", end + 1))
     base = end + 2  # 1-based line number of body[0]
