@@ -6,7 +6,10 @@ alpha/beta, Galileo NeQuick ai), time-system corrections and leap seconds. `sele
 use for a satellite at a time.
 
 Implements:
-- RINEX 2.10/2.11 (Gurtner & Estey, IGS/RTCM), sec. 5 and Tables A3/A4 (GPS nav), A10/A11 (GLONASS nav).
+- RINEX 2.10/2.11 (Gurtner & Estey, IGS/RTCM), sec. 5 and Tables A3/A4 (GPS nav), A10/A11 (GLONASS nav); the
+  2.12 drafts' Galileo ('E', 'L') and QZSS ('J', 'Q', or 'N' with 'J' in column 41) files with the system's
+  RINEX 3 record, in the PRN (I2, 3X orbit lines) or letter-id (A1,I2, 4X) layout (warning RINEX2_EXTENSION).
+- Quirks read with a warning and errors: docs/reader_policy.md.
 - RINEX 3.02-3.05 (IGS/RTCM-SC104), sec. 5.4 and Tables A6-A17 (GPS, Galileo, GLONASS, QZSS, BDS records).
 - RINEX 4.00-4.02, sec. 5 and Tables A31ff.: records dispatched on the `> EPH sss TYPE` line; the record types
   read here are G/J LNAV, E INAV/FNAV, C D1/D2, R FDMA. Every other record type (CNAV, CNV1-3, L1NV, L1OC, SBAS,
@@ -652,7 +655,7 @@ def _sat_norm(text: str) -> str:
 
 def _week_from_epoch(ctx: _Ctx, sys: str, toc: GpsTime, toe_sow: np.ndarray, week: np.ndarray,
                      toc_week: np.ndarray, bad: np.ndarray, line_no: np.ndarray) -> np.ndarray:
-    """Weeks that are neither the epoch's week nor a 1024-rollover of it (gnsstk's BDS test files write 1253 in
+    """Weeks that are neither the epoch's week nor a 1024-rollover of it (gnsstk's BDS test files write week 1 in
     2014, BDT week 435): the week of toe follows from toc and toe's seconds of week, as RTKLIB's adjweek does."""
     toc_sow = toc.week_sow()[1]
     derived = toc_week + np.round((toc_sow - toe_sow) / SECONDS_PER_WEEK).astype(np.int64)
