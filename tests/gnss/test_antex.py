@@ -147,8 +147,6 @@ def test_round_trip_property(pats):
 
 
 @pytest.mark.parametrize("old, new, line, what", [
-    ("     2                                                      # OF FREQUENCIES",
-     "     3                                                      # OF FREQUENCIES", 38, "3 frequency blocks"),
     ("   240.0", "   250.0", 19, "azimuth row for 240"),
     ("   NOAZI" + ZEN, "   NOAZI" + ZEN[:-8], 16, "value 7 of 7"),
     ("  2024     1     1", "  2024    13     1", 11, "valid VALID FROM"),
@@ -161,3 +159,16 @@ def test_broken_antex_raise_parse_error(old, new, line, what):
     with pytest.raises(ParseError) as info:
         read_antex(text.replace(old, new, 1).encode(), name="b.atx")
     assert info.value.line_no == line and what in str(info.value)
+
+
+def test_frequency_count_disagreeing_with_blocks_is_a_quirk():
+    """'# OF FREQUENCIES' 3 over two blocks (ANTEX 1.4 files of georust/rinex say 26): the blocks are read, a
+    warning names the antenna (docs/reader_policy.md)."""
+    text = sample_text()
+    old = "     2                                                      # OF FREQUENCIES"
+    assert old in text
+    warns: list = []
+    pats = read_antex(text.replace(old, old.replace("2", "3", 1), 1).encode(), name="q.atx", warnings=warns)
+    assert pats == read_antex(text.encode(), name="s.atx")
+    assert [w.code for w in warns] == ["FREQUENCY_COUNT_MISMATCH"] and warns[0].line_no == 38
+    assert "says 3" in warns[0].message and "2 frequency blocks" in warns[0].message

@@ -323,20 +323,38 @@ def test_real_header_quirks():
 
 # --- errors ------------------------------------------------------------------------------------------
 
-def test_truncated_file_names_the_last_epoch_line():
+def _drop_last_epoch(lines: list[str], is_epoch) -> str:
+    last = max(i for i, ln in enumerate(lines) if is_epoch(ln))
+    return "\n".join(lines[:last]) + "\n", last
+
+
+@pytest.mark.parametrize("version", [3.04, 2.11])
+def test_truncated_last_epoch_is_a_quirk(version):
+    """A file cut inside its last epoch (georust's rovn0010.21o): the epochs before it are read exactly as in the
+    file without that epoch, and a warning names the epoch line (docs/reader_policy.md)."""
+    text = _text(small_obs(sats=V2_SATS), version) if version < 3 else _text()
+    lines = text.rstrip("\n").split("\n")
+    is_epoch = (lambda ln: ln.startswith(">")) if version >= 3 else (lambda ln: ln[:1] == " " and ln[3:4] == " "
+                                                                     and ln[26:29].strip() in ("0", "1")
+                                                                     and ln[29:32].strip().isdigit())
+    without, last = _drop_last_epoch(lines, is_epoch)
+    cut = _read("\n".join(lines[:-1]) + "\n")
+    ref = _read(without)
+    assert "truncated-last-epoch" in _codes(cut)
+    (w,) = [w for w in cut.warnings if w.code == "truncated-last-epoch"]
+    assert w.line_no == last + 1
+    np.testing.assert_array_equal(cut.values, ref.values)
+    assert cut.sats == ref.sats and len(cut.time) == len(ref.time) > 0
+
+
+def test_wrong_record_count_before_the_last_epoch_is_still_an_error():
     text = _text()
     lines = text.rstrip("\n").split("\n")
-    last_epoch = max(i for i, ln in enumerate(lines) if ln.startswith(">"))
-    with pytest.raises(ParseError, match="truncated") as err:
-        _read("\n".join(lines[:-2]) + "\n")
-    assert err.value.line_no == last_epoch + 1 and err.value.path == "t.rnx"
-
-
-def test_truncated_v2_file():
-    text = _text(small_obs(sats=V2_SATS), 2.11)
-    lines = text.rstrip("\n").split("\n")
-    with pytest.raises(ParseError, match="truncated"):
-        _read("\n".join(lines[:-1]) + "\n")
+    first = next(i for i, ln in enumerate(lines) if ln.startswith(">"))
+    lines[first] = lines[first][:32] + f"{int(lines[first][32:35]) + 1:3d}" + lines[first][35:]
+    with pytest.raises(ParseError, match="satellite records after this epoch line") as err:
+        _read("\n".join(lines) + "\n")
+    assert err.value.line_no == first + 1
 
 
 @pytest.mark.parametrize("n_cut", [5, 7, 21, 26])

@@ -95,18 +95,28 @@ def test_quirk_sp3d_more_than_85_satellites():
     assert sp3.position_ecef_m[1, 107, 0] == (20000.0 + 1070 + 1) * 1e3
 
 
-def test_quirk_body_satellite_not_in_header_is_refused():
-    """RINEX-QUIRKS SP3: 'A satellite in the body that the header does not list ...: refuse, never swap'."""
-    with pytest.raises(ParseError, match="listed in the header") as info:
-        read_sp3(sp3_text(SATS, 3, extra_body_sat="G09"), name="t.sp3")
-    assert info.value.line_no is not None and "G09" in info.value.found
+def test_quirk_body_satellite_not_in_header_is_read_under_its_own_id():
+    """A satellite in the body the '+' lines do not list (gnsstk's SP3c_mgex3 has C07): records carry their ids,
+    so it is added under that id with a warning; nothing is swapped (docs/reader_policy.md)."""
+    base = read_sp3(sp3_text(SATS, 3), name="t.sp3")
+    sp3 = read_sp3(sp3_text(SATS, 3, extra_body_sat="G09"), name="t.sp3")
+    assert sp3.sats == base.sats + ["G09"]
+    (w,) = [w for w in sp3.warnings if w.code == "UNLISTED_SATELLITE"]
+    assert "G09" in w.message and w.line_no is not None
+    np.testing.assert_array_equal(sp3.position_ecef_m[:, :len(SATS)], base.position_ecef_m)
+    assert np.isfinite(sp3.position_ecef_m[:, -1]).any()
 
 
-def test_quirk_header_satellite_absent_from_body_is_refused():
-    """RINEX-QUIRKS SP3: '... or the other way round'."""
+def test_quirk_header_satellite_absent_from_body_is_dropped():
+    """A listed satellite without any record (SP3-d of georust/rinex lists 30 of them): dropped with a warning."""
     drop = {(e, "E11") for e in range(3)}
-    with pytest.raises(ParseError, match="E11"):
-        read_sp3(sp3_text(SATS, 3, drop=drop), name="t.sp3")
+    base = read_sp3(sp3_text(SATS, 3), name="t.sp3")
+    sp3 = read_sp3(sp3_text(SATS, 3, drop=drop), name="t.sp3")
+    assert sp3.sats == [s for s in base.sats if s != "E11"]
+    (w,) = [w for w in sp3.warnings if w.code == "LISTED_WITHOUT_RECORDS"]
+    assert "E11" in w.message and w.line_no == 3
+    keep = [base.sats.index(s) for s in sp3.sats]
+    np.testing.assert_array_equal(sp3.position_ecef_m, base.position_ecef_m[:, keep])
     # Absent at one epoch only: tolerated as NaN, counted.
     sp3 = read_sp3(sp3_text(SATS, 3, drop={(1, "E11")}), name="t.sp3")
     assert np.isnan(sp3.position_ecef_m[1, 2]).all() and np.isfinite(sp3.position_ecef_m[0, 2]).all()
@@ -143,7 +153,7 @@ def test_eof_line_and_missing_eof():
     ("PG01  20000.000000", "PG01  20000.0000x0", 21),   # header is 19 lines, first epoch line 20
     ("*  2024  6 24  0 15", "*  2024  6 24  0 1x", 25),
     ("*  2024  6 24  0 15", "*  2024  6 24  0  0", 25),  # not increasing
-    ("PR05  20030.000000", "PG05  20030.000000", 24),    # not in the header
+    ("PR05  20030.000000", "PG01  20030.000000", 24),    # G01 twice in one epoch
 ])
 def test_broken_sp3_raise_parse_error_with_line(old, new, line):
     raw = sp3_text(SATS, 3).decode()

@@ -125,7 +125,15 @@ class _Reader:
     def __init__(self, name, lines):
         self.name = name
         self.lines = lines
-        self.warnings: list[ParseWarning] = []
+        self.counts: dict[str, list] = {}
+
+    def warn(self, code: str, message: str, line_no: int | None) -> None:
+        """A quirk read as documented in docs/reader_policy.md; a repeated code is counted (first message kept)."""
+        self.counts.setdefault(code, [0, line_no, message])[0] += 1
+
+    def flush(self) -> list[ParseWarning]:
+        return [ParseWarning(code, f"{msg} ({n} time{'s' if n != 1 else ''})", ln)
+                for code, (n, ln, msg) in self.counts.items()]
 
     def err(self, i, expected, column=None):
         return ParseError(self.name, i + 1, expected, self.lines[i] if i < len(self.lines) else "<end of file>",
@@ -195,7 +203,11 @@ def _read_frequency(r: _Reader, i: int, ant: AntennaPattern, end_label: str):
                 raise r.err(i, f"'{end_label}' of frequency {code_txt.strip()}", 4)
             if neu is None or noazi is None:
                 raise r.err(i, "NORTH / EAST / UP and a NOAZI row before the end of the frequency block")
-            if ant.dazi_deg > 0 and len(rows) != len(azi):
+            if ant.dazi_deg > 0 and not rows:
+                # quirk (gnssant_ext.atx): DAZI > 0 but only the NOAZI row; it is the whole pattern then
+                r.warn("AZIMUTH_ROWS_MISSING", f"frequency {code} of {ant.antenna_type!r} has no azimuth rows "
+                       f"although DAZI is {ant.dazi_deg:g}: its NOAZI row is used for every azimuth", i + 1)
+            elif ant.dazi_deg > 0 and len(rows) != len(azi):
                 raise r.err(i, f"{len(azi)} azimuth rows (0 to 360 by DAZI {ant.dazi_deg})")
             pcv = np.vstack(rows) if rows else None
             return FrequencyPattern(code, neu, noazi, pcv), i + 1
@@ -259,7 +271,7 @@ def _parse(source, name):
             raise r.err(i, "'START OF ANTENNA' (columns 61-80)", 61)
         i, ant = _read_antenna(r, i + 1)
         patterns.append(ant)
-    return header, patterns, r.warnings
+    return header, patterns, r.flush()
 
 
 def _read_antenna(r: _Reader, i: int):
@@ -320,26 +332,42 @@ def _read_antenna(r: _Reader, i: int):
                 raise r.err(i, "'TYPE / SERIAL NO' before 'END OF ANTENNA'")
             if n_freq_declared is None:
                 raise r.err(i, "'# OF FREQUENCIES' in the antenna block")
-            if n_freq_declared != len(freqs):
-                raise r.err(i, f"{n_freq_declared} frequency blocks as '# OF FREQUENCIES' says "
-                            f"({len(freqs)} found)")
+            _check_frequency_count(r, i, ant, n_freq_declared, freqs)
             ant.frequencies, ant.rms = freqs, rms
             return i + 1, ant
         elif lab == "START OF ANTENNA":
-            raise r.err(i, "'END OF ANTENNA' before the next 'START OF ANTENNA'", 61)
+            if ant is None or not freqs or n_freq_declared is None:
+                raise r.err(i, "'END OF ANTENNA' before the next 'START OF ANTENNA'", 61)
+            # quirk (igs14_small.atx): a complete block whose END OF ANTENNA line is missing
+            r.warn("MISSING_END_OF_ANTENNA", f"antenna {ant.antenna_type!r} ends without 'END OF ANTENNA'; it was "
+                   f"closed at the next 'START OF ANTENNA'", i + 1)
+            _check_frequency_count(r, i, ant, n_freq_declared, freqs)
+            ant.frequencies, ant.rms = freqs, rms
+            return i, ant
         elif ln.strip():
             raise r.err(i, "an antenna-block header line (label in columns 61-80)", 61)
         i += 1
     raise r.err(len(lines) - 1, "'END OF ANTENNA'")
 
 
-def read_antex(source, *, name: str | None = None) -> list[AntennaPattern]:
+def _check_frequency_count(r: _Reader, i: int, ant: AntennaPattern, n_declared: int, freqs: list) -> None:
+    """'# OF FREQUENCIES' against the blocks present: a disagreement is a quirk (the blocks are what is read)."""
+    if n_declared != len(freqs):
+        r.warn("FREQUENCY_COUNT_MISMATCH", f"antenna {ant.antenna_type!r}: '# OF FREQUENCIES' says {n_declared}, "
+               f"the block holds {len(freqs)} frequency blocks (those are read)", i + 1)
+
+
+def read_antex(source, *, name: str | None = None, warnings: list | None = None) -> list[AntennaPattern]:
     """The antenna blocks of an ANTEX 1.x file (path or bytes, any supported compression), in file order.
 
-    Raises `ParseError` with the line and the expected layout for a broken file.
+    Raises `ParseError` with the line and the expected layout for a broken file; quirks read anyway
+    (docs/reader_policy.md) are appended as `ParseWarning`s to `warnings` when a list is given.
     Implements: ANTEX 1.4 (module docstring).
     """
-    return _parse(source, name)[1]
+    header, patterns, found = _parse(source, name)
+    if warnings is not None:
+        warnings.extend(found)
+    return patterns
 
 
 # --- writing ------------------------------------------------------------------------------------------

@@ -59,24 +59,46 @@ class ClockData:
     warnings: list[ParseWarning] = field(default_factory=list)
 
 
-def _header(name: str, lines: list[bytes]):
-    if not lines or lines[0][60:80].strip() != b"RINEX VERSION / TYPE":
-        raise ParseError(name, 1, "'RINEX VERSION / TYPE' in columns 61-80 of the first line",
-                         lines[0].decode("latin-1") if lines else "", 61)
-    first = lines[0].decode("latin-1")
+def _version_line(name: str, lines: list[bytes]) -> tuple[float, int]:
+    """(version, label column) of line 1: labels in columns 61-80 (2.00-3.02, and 3.04 files written that way)
+    or in columns 66-85 with the file type in column 22 (the RINEX clock 3.04 layout: F4.2,17X,A1,20X,A1)."""
+    first = lines[0].decode("latin-1") if lines else ""
+    if first[60:80].strip() == "RINEX VERSION / TYPE":
+        label_col, type_col = 60, 20
+    elif first[65:85].strip() == "RINEX VERSION / TYPE":
+        label_col, type_col = 65, 21
+    else:
+        raise ParseError(name, 1, "'RINEX VERSION / TYPE' in columns 61-80 (RINEX clock 2.00-3.02) or 66-85 (3.04) "
+                         "of the first line", first, 61)
     try:
         version = float(first[0:9])
     except ValueError:
-        raise ParseError(name, 1, "the format version (F9.2) in columns 1-9", first, 1) from None
-    if not (2.0 <= version < 4.0) or first[20:21] != "C":
-        raise ParseError(name, 1, "a RINEX clock file: version 2.xx or 3.0x in columns 1-9 and 'C' in column 21",
-                         first, 1)
+        raise ParseError(name, 1, "the format version (F9.2, or F4.2 in 3.04) in columns 1-9", first, 1) from None
+    if not (2.0 <= version < 4.0) or first[type_col:type_col + 1] != "C":
+        raise ParseError(name, 1, f"a RINEX clock file: version 2.xx or 3.0x in columns 1-9 and 'C' in column "
+                         f"{type_col + 1}", first, 1)
+    if label_col == 65 and version < 3.04:
+        raise ParseError(name, 1, "header labels in columns 66-85 only from RINEX clock 3.04 on", first, 66)
+    return version, label_col
+
+
+def _header(name: str, lines: list[bytes]):
+    version, label_col = _version_line(name, lines)
     time_system, ac, leap, types = "GPS", "", None, []
-    for i in range(1, len(lines)):
+    odd: list[tuple[str, str, int]] = []   # (code, message, line) of header quirks
+    for i in range(0, len(lines)):
         ln = lines[i].decode("latin-1")
-        label = ln[60:].strip()
+        label = ln[label_col:].strip()
+        if len(ln) > label_col + 20 and ln[label_col + 20:].strip():
+            odd.append(("HEADER_TEXT_BEYOND_LABEL", f"text after column {label_col + 20} of a header line "
+                        "(ignored)", i + 1))
+            label = ln[label_col:label_col + 20].strip()
+        if "\t" in ln or not label:
+            odd.append(("HEADER_LINE_WITHOUT_LABEL", "a header line without a label (ignored)", i + 1))
         if label == "END OF HEADER" or ln[65:].strip() == "END OF HEADER":
-            return version, time_system, ac, leap, types, i
+            if not types:
+                odd.append(("MISSING_HEADER_RECORD", "no '# / TYPES OF DATA' header record", i + 1))
+            return version, time_system, ac, leap, types, i, odd
         if label == "TIME SYSTEM ID":
             time_system = ln[0:6].strip() or "GPS"
         elif label == "ANALYSIS CENTER":
@@ -101,7 +123,7 @@ def _parse_records(name: str, recs: list[bytes], line_nos: np.ndarray, shift: in
     """(GpsTime (n,), names (n,) bytes, value1 (n,), value2 (n,) NaN if absent) of record lines, vectorised."""
     n = len(recs)
     if n == 0:
-        return GpsTime(np.zeros(0, dtype=np.int64)), np.zeros(0, dtype="S9"), np.zeros(0), np.zeros(0)
+        return GpsTime(np.zeros(0, dtype=np.int64)), np.zeros(0, dtype="S9"), np.zeros(0), np.zeros(0), 0
     width = max(max(len(r) for r in recs), 79 + shift)
     m = np.frombuffer(b"".join(r.ljust(width) for r in recs), dtype=np.uint8).reshape(n, width)
     s = shift
@@ -141,6 +163,7 @@ def _parse_records(name: str, recs: list[bytes], line_nos: np.ndarray, shift: in
                     raise ParseError(name, ln, f"{what} in columns {a + 1}-{b}",
                                      lines_all[ln - 1].decode("latin-1"), a + 1) from None
             raise
+    misplaced = _misplaced_values(m, nval, s)
     sec = floats(24 + s, 34 + s, np.arange(n), "epoch seconds (F10.6)")
     if np.any((sec < 0) | (sec > 61)):
         raise _bad_line(name, recs, line_nos, (sec < 0) | (sec > 61), "epoch seconds 0-60", lines_all)
@@ -149,9 +172,36 @@ def _parse_records(name: str, recs: list[bytes], line_nos: np.ndarray, shift: in
     two = np.flatnonzero(nval >= 2)
     if two.size:
         v2[two] = floats(60 + s, 79 + s, two, "clock bias sigma (E19.12)")
+    for r in np.flatnonzero(misplaced):
+        v1[r], v2[r] = _values_by_tokens(name, recs[r], int(line_nos[r]), int(nval[r]), s)
     names = np.ascontiguousarray(m[:, 3:3 + 4 + s]).view(f"S{4 + s}").ravel()
     t = GpsTime.from_calendar(y, mo, d, h, mi, sec)
-    return t, names, v1, v2
+    return t, names, v1, v2, int(misplaced.sum())
+
+
+def _misplaced_values(m: np.ndarray, nval: np.ndarray, s: int) -> np.ndarray:
+    """Rows whose E19.12 values are not in their columns (a non-blank just before or after a field): read by
+    whitespace-separated tokens instead, so a value one column off is never cut into a wrong number."""
+    def edge_not_blank(col: int) -> np.ndarray:
+        return m[:, col] != 32 if col < m.shape[1] else np.zeros(len(m), bool)
+    bad = edge_not_blank(39 + s) | edge_not_blank(59 + s)
+    bad |= (nval >= 2) & edge_not_blank(79 + s)
+    return bad
+
+
+def _values_by_tokens(name: str, rec: bytes, line_no: int, nval: int, s: int) -> tuple[float, float]:
+    """(value 1, value 2 or NaN) of a record whose values are misplaced but unambiguous: min(nval, 2) numbers."""
+    toks = rec[37 + s:].replace(b"D", b"E").split()
+    want = min(nval, 2)
+    try:
+        vals = [float(t) for t in toks]
+    except ValueError:
+        vals = []
+    if len(vals) != want:
+        raise ParseError(name, line_no, f"{want} clock value(s) (E19.12) after the number of values, in columns "
+                         f"{41 + s}-{59 + s}" + (f" and {61 + s}-{79 + s}" if want == 2 else ""),
+                         rec.decode("latin-1"), 41 + s)
+    return vals[0], (vals[1] if want == 2 else np.nan)
 
 
 def _to_matrix(name, t: GpsTime, names, v1, v2, line_nos, lines_all):
@@ -196,7 +246,7 @@ def read_rinex_clock(source, *, name: str | None = None) -> ClockData:
     if lines and lines[-1] == b"":
         lines.pop()
     lines = [ln[:-1] if ln.endswith(b"\r") else ln for ln in lines]
-    version, time_system, ac, leap, types, end = _header(display, lines)
+    version, time_system, ac, leap, types, end, odd = _header(display, lines)
     shift = 5 if version >= 3.04 else 0
     body = lines[end + 1:]
     heads = [ln[:2] for ln in body]
@@ -220,7 +270,13 @@ def read_rinex_clock(source, *, name: str | None = None) -> ClockData:
         prev_n += 1
         raise ParseError(display, end + 2 + i, "a clock record (AR, AS, CR, DR, MS in columns 1-2) or the "
                          "continuation line of the record before it", ln.decode("latin-1"), 1)
-    warnings: list[ParseWarning] = []
+    counted: dict[str, list] = {}
+    for code, msg, ln in odd:   # one warning per code, counted (first line kept)
+        counted.setdefault(code, [0, msg, ln])[0] += 1
+    warnings = [ParseWarning(code, f"{msg} ({n} time{'s' if n != 1 else ''})", ln)
+                for code, (n, msg, ln) in counted.items()]
+    if not as_idx and not ar_idx:
+        warnings.append(ParseWarning("NO_RECORDS", "the file holds no AS or AR clock record", end + 1))
     base = end + 2  # 1-based line number of body[0]
     as_lines = np.array(as_idx, dtype=np.int64) + base
     ar_lines = np.array(ar_idx, dtype=np.int64) + base
@@ -229,8 +285,12 @@ def read_rinex_clock(source, *, name: str | None = None) -> ClockData:
         if short:
             raise ParseError(display, base + short[0], f"a clock record of at least {59 + shift} columns (epoch, "
                              "number of values, E19.12 clock bias)", body[short[0]].decode("latin-1"))
-    t_as, n_as, v1_as, v2_as = _parse_records(display, [body[i] for i in as_idx], as_lines, shift, lines)
-    t_ar, n_ar, v1_ar, v2_ar = _parse_records(display, [body[i] for i in ar_idx], ar_lines, shift, lines)
+    t_as, n_as, v1_as, v2_as, mis_as = _parse_records(display, [body[i] for i in as_idx], as_lines, shift, lines)
+    t_ar, n_ar, v1_ar, v2_ar, mis_ar = _parse_records(display, [body[i] for i in ar_idx], ar_lines, shift, lines)
+    if mis_as + mis_ar:
+        warnings.append(ParseWarning("MISPLACED_VALUES", f"{mis_as + mis_ar} clock records have values off their "
+                                     "E19.12 columns; read as whitespace-separated numbers",
+                                     int((as_lines if mis_as else ar_lines)[0])))
     ts = time_system.strip().upper()
     if ts in ("UTC", "GLO", "TAI", "BDT"):
         warnings.append(ParseWarning("TIME_SYSTEM_CONVERTED", f"{ts} epochs converted to GPS time"))

@@ -6,7 +6,10 @@ alpha/beta, Galileo NeQuick ai), time-system corrections and leap seconds. `sele
 use for a satellite at a time.
 
 Implements:
-- RINEX 2.10/2.11 (Gurtner & Estey, IGS/RTCM), sec. 5 and Tables A3/A4 (GPS nav), A10/A11 (GLONASS nav).
+- RINEX 2.10/2.11 (Gurtner & Estey, IGS/RTCM), sec. 5 and Tables A3/A4 (GPS nav), A10/A11 (GLONASS nav); the
+  2.12 drafts' Galileo ('E', 'L') and QZSS ('J', 'Q', or 'N' with 'J' in column 41) files with the system's
+  RINEX 3 record, in the PRN (I2, 3X orbit lines) or letter-id (A1,I2, 4X) layout (warning RINEX2_EXTENSION).
+- Quirks read with a warning and errors: docs/reader_policy.md.
 - RINEX 3.02-3.05 (IGS/RTCM-SC104), sec. 5.4 and Tables A6-A17 (GPS, Galileo, GLONASS, QZSS, BDS records).
 - RINEX 4.00-4.02, sec. 5 and Tables A31ff.: records dispatched on the `> EPH sss TYPE` line; the record types
   read here are G/J LNAV, E INAV/FNAV, C D1/D2, R FDMA. Every other record type (CNAV, CNV1-3, L1NV, L1OC, SBAS,
@@ -328,46 +331,74 @@ def _orbit_line(ctx: _Ctx, line: str, line_no: int, start: int, what: str) -> li
 
 # --- header ---------------------------------------------------------------------------------------------
 
+# RINEX 2 navigation file types: the 2.11 standard's N/G/H, and those of the 2.12 drafts and writers
+# (teqc 'E', RTKLIB 'L' for Galileo; 'J'/'Q' or 'N' with 'J' in column 41 for QZSS, as RTKLIB writes .q files).
+_V2_TYPES = {"N": "G", "G": "R", "H": "S", "E": "E", "L": "E", "J": "J", "Q": "J"}
+
+
+def _v2_system(ctx: _Ctx, first: str, file_type: str, sys_char: str) -> str:
+    """System letter of a RINEX 2 navigation file; the non-2.11 types are read with a warning (2.12 drafts)."""
+    if file_type not in _V2_TYPES:
+        raise ctx.error(1, "a navigation file type 'N' (GPS), 'G' (GLONASS), 'H' (SBAS) or, as RINEX 2.12 drafts "
+                        "write them, 'E'/'L' (Galileo) or 'J'/'Q' (QZSS) in column 21", first, 21)
+    system = _V2_TYPES[file_type]
+    if file_type == "N" and sys_char in ("J", "E", "C"):
+        system = sys_char
+    if file_type not in ("N", "G", "H") or system != "G" and file_type == "N":
+        ctx.warnings.append(ParseWarning("RINEX2_EXTENSION", f"RINEX {first[0:9].strip()} navigation of system "
+                                         f"{system} (file type {file_type!r}, column 41 {sys_char!r}): not in RINEX "
+                                         "2.11, read with the RINEX 2 layout and the system's RINEX 3 record", 1))
+    return system
+
 _SUPPORTED_VERSIONS = ("2", "3", "4")
+# Navigation versions whose layouts are read: 2.00-2.12 (2.12: the drafts' Galileo/QZSS files), 3.00-3.05,
+# 4.00-4.02; any other (e.g. '3.33') is refused loudly, not read with a guessed layout (RINEX-QUIRKS).
+_NAV_VERSIONS = (2.0, 2.01, 2.1, 2.11, 2.12, 3.0, 3.01, 3.02, 3.03, 3.04, 3.05, 4.0, 4.01, 4.02)
 
 
 def _parse_header(ctx: _Ctx, lines: list[str]):
-    if not lines:
+    h0 = next((k for k, ln in enumerate(lines) if ln.strip()), 0)   # blank lines before line 1: a quirk
+    if not lines or not lines[h0].strip():
         raise ctx.error(1, "a RINEX navigation header ('RINEX VERSION / TYPE' in columns 61-80)", "")
-    first = lines[0]
+    first = lines[h0]
     if first[60:80].strip() != "RINEX VERSION / TYPE":
-        raise ctx.error(1, "'RINEX VERSION / TYPE' in columns 61-80 of the first line", first, 61)
+        raise ctx.error(h0 + 1, "'RINEX VERSION / TYPE' in columns 61-80 of the first line", first, 61)
+    if h0:
+        ctx.warnings.append(ParseWarning("LEADING_BLANK_LINES", f"{h0} blank line(s) before the first header line "
+                                         "were skipped", h0 + 1))
     try:
         version = float(first[0:9])
     except ValueError:
-        raise ctx.error(1, "the format version (F9.2) in columns 1-9", first, 1) from None
+        raise ctx.error(h0 + 1, "the format version (F9.2) in columns 1-9", first, 1) from None
     major = int(version) if np.isfinite(version) else -1
-    if str(major) not in _SUPPORTED_VERSIONS:
-        raise ctx.error(1, "RINEX navigation version 2.xx, 3.0x or 4.0x in columns 1-9", first, 1)
+    if str(major) not in _SUPPORTED_VERSIONS or round(version, 2) not in _NAV_VERSIONS:
+        raise ctx.error(h0 + 1, "a RINEX navigation version in " + ", ".join(f"{v:.2f}" for v in _NAV_VERSIONS)
+                        + " in columns 1-9 (other layouts are refused)", first, 1)
     file_type = first[20:21]
     sys_char = first[40:41]
     if major == 2:
-        if file_type not in ("N", "G", "H"):
-            raise ctx.error(1, "a navigation file type 'N' (GPS), 'G' (GLONASS) or 'H' (SBAS) in column 21",
-                            first, 21)
-        system = {"N": "G", "G": "R", "H": "S"}[file_type]
+        system = _v2_system(ctx, first, file_type, sys_char)
     else:
         if file_type == "N":
             system = sys_char if sys_char.strip() else "G"
         elif file_type in ("G", "H"):  # some RINEX 3.00/3.01 writers
             system = {"G": "R", "H": "S"}[file_type]
         else:
-            raise ctx.error(1, "file type 'N' (navigation) in column 21", first, 21)
+            raise ctx.error(h0 + 1, "file type 'N' (navigation) in column 21", first, 21)
         if system not in "GRECJSIM":
-            raise ctx.error(1, "a satellite system G/R/E/C/J/S/I/M in column 41", first, 41)
+            raise ctx.error(h0 + 1, "a satellite system G/R/E/C/J/S/I/M in column 41", first, 41)
     iono: dict[str, np.ndarray] = {}
     corr: dict[str, tuple[float, float, int, int]] = {}
     leap = None
     program = ""
     end = None
-    for i in range(1, len(lines)):
+    for i in range(h0, len(lines)):
         ln = lines[i]
         label = ln[60:80].strip()
+        if ln[80:].strip():
+            ctx.warn_counted("HEADER_TEXT_BEYOND_80", "header lines with text after column 80 (ignored)", i + 1)
+        if i == h0:
+            continue
         if label == "END OF HEADER":
             end = i
             break
@@ -434,21 +465,29 @@ def _epoch_v3(ctx: _Ctx, line: str, line_no: int):
 
 
 def _epoch_v2(ctx: _Ctx, line: str, line_no: int, sys: str):
-    sat = _sat_id(ctx, sys, line[0:2], line_no, line, 0)
-    if len(line) < 22:
+    """(sat, (y, m, d, h, mi, s), three values) of a RINEX 2 PRN / EPOCH / SV CLK line (I2,5(1X,I2),F5.1,3D19.12),
+    or of the 2.12-draft layout with a system letter (A1,I2,5(1X,I2),F5.1,3D19.12: RTKLIB's QZSS/Galileo)."""
+    o = 1 if line[:1].isalpha() else 0
+    if o:
+        if line[0] != sys:
+            raise ctx.error(line_no, f"records of system {sys} as the header says", line, 1)
+        sat = _sat_id(ctx, sys, line[1:3], line_no, line, 1)
+    else:
+        sat = _sat_id(ctx, sys, line[0:2], line_no, line, 0)
+    if len(line) < 22 + o:
         raise ctx.error(line_no, "PRN / EPOCH / SV CLK: I2,5(1X,I2),F5.1 then 3D19.12", line, 1)
     parts = []
     for a, b, what in ((2, 5, "year"), (5, 8, "month"), (8, 11, "day"), (11, 14, "hour"), (14, 17, "minute")):
-        parts.append(_int(ctx, line[a:b], line_no, a, f"epoch {what}", line))
-    sec_txt = line[17:22]
+        parts.append(_int(ctx, line[a + o:b + o], line_no, a + o, f"epoch {what}", line))
+    sec_txt = line[17 + o:22 + o]
     if _NUM_RE.fullmatch(sec_txt) is None or not sec_txt.strip():
-        raise ctx.error(line_no, "epoch seconds (F5.1) in columns 18-22", line, 18)
+        raise ctx.error(line_no, f"epoch seconds (F5.1) in columns {18 + o}-{22 + o}", line, 18 + o)
     parts.append(float(sec_txt))
     y = parts[0]
     parts[0] = y + (1900 if y >= 80 else 2000) if y < 100 else y
-    vals = [_num(ctx, line[c:c + _FIELD_W], line_no, c, "SV clock word", line) for c in (22, 41, 60)]
-    if line[79:].strip():
-        raise ctx.error(line_no, "nothing after column 79 of the PRN / EPOCH / SV CLK line", line, 80)
+    vals = [_num(ctx, line[c:c + _FIELD_W], line_no, c, "SV clock word", line) for c in (22 + o, 41 + o, 60 + o)]
+    if line[79 + o:].strip():
+        raise ctx.error(line_no, f"nothing after column {79 + o} of the PRN / EPOCH / SV CLK line", line, 80 + o)
     return sat, parts, vals
 
 
@@ -559,6 +598,7 @@ def read_rinex_nav(source, *, name: str | None = None) -> NavData:
             if system == "S":
                 continue
             sat, parts, clk = _epoch_v2(ctx, first, ln1, system)
+            start_col = 4 if first[:1].isalpha() else 3
         else:
             sat, parts, clk = _epoch_v3(ctx, first, ln1)
             if major == 4 and sat != _sat_norm(v4_sat):
@@ -613,6 +653,19 @@ def _sat_norm(text: str) -> str:
     return t
 
 
+def _week_from_epoch(ctx: _Ctx, sys: str, toc: GpsTime, toe_sow: np.ndarray, week: np.ndarray,
+                     toc_week: np.ndarray, bad: np.ndarray, line_no: np.ndarray) -> np.ndarray:
+    """Weeks that are neither the epoch's week nor a 1024-rollover of it (gnsstk's BDS test files write week 1 in
+    2014, BDT week 435): the week of toe follows from toc and toe's seconds of week, as RTKLIB's adjweek does."""
+    toc_sow = toc.week_sow()[1]
+    derived = toc_week + np.round((toc_sow - toe_sow) / SECONDS_PER_WEEK).astype(np.int64)
+    r = int(np.argmax(bad))
+    ctx.warn_counted("WEEK_FROM_EPOCH", f"{sys} records whose week (BROADCAST ORBIT - 5, word 3; e.g. "
+                     f"{int(week[r])}) is not the {'BDT' if sys == 'C' else 'GPS'} week of their epoch "
+                     f"({int(toc_week[r])}): the week was taken from the epoch and toe", int(line_no[r]) + 5)
+    return np.where(bad & np.isfinite(toe_sow), derived, week)
+
+
 def _build_kepler(ctx: _Ctx, sys: str, rows, lines) -> KeplerEphemeris:
     n = len(rows)
     v = np.full((n, 31), np.nan)
@@ -652,9 +705,7 @@ def _build_kepler(ctx: _Ctx, sys: str, rows, lines) -> KeplerEphemeris:
                          "made continuous from the record epochs", int(line_no[np.argmax(fix)]))
     bad_week = np.abs(toc_week - week) > 1
     if bad_week.any():
-        r = int(np.argmax(bad_week))
-        raise ctx.error(int(line_no[r]) + 5, f"a week number (BROADCAST ORBIT - 5, word 3) within one week of the "
-                        f"epoch's week {int(toc_week[r])}", lines[int(line_no[r]) + 4])
+        week = _week_from_epoch(ctx, sys, toc, v[:, 11], week, toc_week, bad_week, line_no)
     nan = np.full(n, np.nan)
     neg = np.full(n, -1, dtype=np.int64)
     if sys == "E":

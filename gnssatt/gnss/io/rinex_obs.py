@@ -396,31 +396,32 @@ class _HeaderCursor:
         return self.line
 
 
-def _parse_version_line(lines: list[bytes], name: str) -> ObsHeader:
+def _parse_version_line(lines: list[bytes], name: str, h0: int = 0) -> ObsHeader:
     """ObsHeader holding version, file type and system of line 1 (RINEX 3.05 Table A1 'RINEX VERSION / TYPE').
 
+    h0: index of line 1 (blank lines before it are a quirk, counted by the caller).
     Raises ParseError for an empty file, a Hatanaka file that was not decoded, a missing label, an unreadable or
     unsupported version, or a file type other than 'O'.
     """
-    if not lines or not lines[0].strip():
+    if not lines or not lines[h0].strip():
         raise ParseError(name, 1 if lines else None, "a RINEX observation file (first line RINEX VERSION / TYPE)",
                          "an empty file")
-    first = lines[0].decode("latin-1")
+    first = lines[h0].decode("latin-1")
     if first[60:80].strip() != "RINEX VERSION / TYPE":
         if "CRINEX" in first:
-            raise ParseError(name, 1, "plain RINEX (Hatanaka decoding failed)", first)
-        raise ParseError(name, 1, "'RINEX VERSION / TYPE' in columns 61-80 of line 1 (F9.2,11X,A1,19X,A1,19X)",
-                         first if first.isprintable() else repr(lines[0][:80]))
+            raise ParseError(name, h0 + 1, "plain RINEX (Hatanaka decoding failed)", first)
+        raise ParseError(name, h0 + 1, "'RINEX VERSION / TYPE' in columns 61-80 of line 1 (F9.2,11X,A1,19X,A1,19X)",
+                         first if first.isprintable() else repr(lines[h0][:80]))
     try:
         version = round(float(first[0:9]), 2)
     except ValueError:
-        raise ParseError(name, 1, "the format version (F9.2) in columns 1-9", first, column=1) from None
+        raise ParseError(name, h0 + 1, "the format version (F9.2) in columns 1-9", first, column=1) from None
     if version not in SUPPORTED_VERSIONS:
-        raise ParseError(name, 1, "a RINEX observation version in " + ", ".join(
+        raise ParseError(name, h0 + 1, "a RINEX observation version in " + ", ".join(
             f"{v:.2f}" for v in SUPPORTED_VERSIONS) + " (other layouts are refused)", first, column=1)
     file_type = first[20:21]
     if file_type.upper() != "O":
-        raise ParseError(name, 1, "file type 'O' (observation data) in column 21", first, column=21)
+        raise ParseError(name, h0 + 1, "file type 'O' (observation data) in column 21", first, column=21)
     system = first[40:41].strip().upper() or "G"
     return ObsHeader(version=version, file_type="O", satellite_system=system)
 
@@ -452,8 +453,9 @@ def _h_antenna(hdr: ObsHeader, cur: _HeaderCursor) -> None:
 
 
 def _h_approx_position(hdr: ObsHeader, cur: _HeaderCursor) -> None:
-    """APPROX POSITION XYZ (3F14.4, m); 0 0 0 means unknown, a position far from the Earth is not trusted."""
-    xyz = [_f(cur.line[14 * k:14 * k + 14]) for k in range(3)]
+    """APPROX POSITION XYZ (3F14.4, m); 0 0 0 means unknown, a position far from the Earth is not trusted.
+    Three numbers off their F14.4 columns (georinex's demo files) are read as whitespace-separated tokens."""
+    xyz = _three_f14(hdr, cur, "APPROX POSITION XYZ", "approx-position-misplaced")
     if not all(v is not None for v in xyz):
         return
     pos = np.array(xyz, dtype=np.float64)
@@ -468,9 +470,41 @@ def _h_approx_position(hdr: ObsHeader, cur: _HeaderCursor) -> None:
                                          "from the geocentre: not trusted", cur.line_no))
 
 
+def _floats_or_none(texts) -> list | None:
+    try:
+        return [_f(t) for t in texts]
+    except ValueError:
+        return None
+
+
+def _three_f14(hdr: ObsHeader, cur: _HeaderCursor, label: str, code: str) -> list:
+    """The 3F14.4 numbers of a header record; three numbers off their columns (georinex's demo files write them
+    one column right) are read as the numbers written, with the warning `code`; anything else is a ParseError."""
+    xyz = _approx_fields(cur.line)
+    tokens = cur.line[:60].split()
+    by_tokens = _floats_or_none(tokens) if len(tokens) == 3 else None
+    if by_tokens is not None and by_tokens != xyz:
+        hdr.warnings.append(ParseWarning(code, f"{label} numbers are not in their F14.4 columns (1-14, 15-28, "
+                                         "29-42); read as the three numbers written", cur.line_no))
+        return by_tokens
+    if xyz is None:
+        raise ParseError(cur.name, cur.line_no, f"three F14.4 numbers (columns 1-42) in {label}", cur.line)
+    return xyz
+
+
+def _approx_fields(line: str) -> list | None:
+    """The three F14.4 fields as written (None entries for blanks), or None if one is not a number or the
+    text around a field runs into it (a digit in the column before a field's first character)."""
+    out = _floats_or_none([line[14 * k:14 * k + 14] for k in range(3)])
+    if out is None or any(line[14 * k - 1:14 * k].strip() and line[14 * k:14 * k + 1].strip()
+                          for k in (1, 2)) or line[42:43].strip():
+        return None
+    return out
+
+
 def _h_antenna_delta(hdr: ObsHeader, cur: _HeaderCursor) -> None:
     """ANTENNA: DELTA H/E/N (3F14.4, m)."""
-    hen = [_f(cur.line[14 * k:14 * k + 14]) for k in range(3)]
+    hen = _three_f14(hdr, cur, "ANTENNA: DELTA H/E/N", "antenna-delta-misplaced")
     if all(v is not None for v in hen):
         hdr.antenna_delta_hen_m = np.array(hen, dtype=np.float64)
 
@@ -548,7 +582,11 @@ def _h_obs_types_v2(hdr: ObsHeader, cur: _HeaderCursor) -> None:
     n = int(line[0:6])
     codes = _type_codes(cur, n, lambda ln: [ln[10 + 6 * k:12 + 6 * k] for k in range(9)], 6,
                         "{} so far: 9 per line, columns 11-60")
-    if len(codes) != n:
+    if len(codes) > n:   # quirk (georinex's wrong_obs2_count.10o): the codes listed are what the body holds
+        hdr.warnings.append(ParseWarning("obs-type-count-mismatch", f"# / TYPES OF OBSERV announces {n} types but "
+                                         f"lists {len(codes)} ({' '.join(codes)}); the listed types are read",
+                                         line_no))
+    elif len(codes) != n:
         raise ParseError(name, line_no, f"{n} observation types", f"{len(codes)}: {' '.join(codes)}")
     bad = [c for c in codes if len(c) != 2 or c[0] not in "CLDSP" or not c[1].isdigit()]
     if bad:
@@ -619,8 +657,13 @@ def _parse_header(lines: list[bytes], name: str) -> ObsHeader:
     Implements: RINEX 2.11 Table A1 and RINEX 3.05 Table A2 (observation header records); labels not listed in
     `_HEADER_RECORDS` are skipped, a line without a label is a warning.
     """
-    hdr = _parse_version_line(lines, name)
+    h0 = next((k for k, ln in enumerate(lines) if ln.strip()), 0)
+    hdr = _parse_version_line(lines, name, h0)
     cur = _HeaderCursor(lines, name, SUPPORTED_VERSIONS[hdr.version])
+    cur.i = h0 + 1
+    if h0:
+        hdr.warnings.append(ParseWarning("leading-blank-lines", f"{h0} blank line(s) before the RINEX VERSION / "
+                                         "TYPE line were skipped", h0 + 1))
     end = None
     while cur.i < len(lines):
         cur.line = line = lines[cur.i].decode("latin-1")
@@ -925,6 +968,18 @@ def _v3_records(hdr: ObsHeader, lines: list[bytes], lens: np.ndarray, obs_rows: 
     return _RecordRows(keys, rec_epoch, sys_b, vals, lli, ssi)
 
 
+def _v3_last_epoch_truncated(ep_idx: np.ndarray, flag: np.ndarray, nrec: np.ndarray, obs_rows: np.ndarray) -> bool:
+    """Whether only the last epoch (flag 0/1) has fewer records than announced: a file cut inside its last epoch."""
+    if len(ep_idx) == 0 or flag[-1] > 1:
+        return False
+    n_last = int(np.sum(obs_rows > ep_idx[-1]))
+    if n_last >= nrec[-1]:
+        return False
+    owner = np.searchsorted(ep_idx, obs_rows[obs_rows < ep_idx[-1]], side="right") - 1
+    counts = np.bincount(owner, minlength=len(ep_idx) - 1) if len(owner) else np.zeros(len(ep_idx) - 1, np.int64)
+    return bool(np.array_equal(counts, np.where(flag[:-1] <= 1, nrec[:-1], 0)))
+
+
 def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
     """RinexObs of a RINEX 3/4 data section: epoch lines, events, then observation records.
 
@@ -939,6 +994,14 @@ def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
     consumed, events = _v3_events(hdr, lines, is_epoch, ep_idx, epoch_fields, name)
 
     obs_rows = np.flatnonzero(~(is_epoch | is_comment | is_blank | consumed))
+    if _v3_last_epoch_truncated(ep_idx, flag, nrec, obs_rows):
+        li = int(ep_idx[-1])
+        hdr.warnings.append(ParseWarning("truncated-last-epoch", f"the last epoch (line {n0 + li + 1}) announces "
+                                         f"{int(nrec[-1])} satellite records but the file ends after "
+                                         f"{int(np.sum(obs_rows > li))}; it is dropped, the epochs before it are "
+                                         "read", n0 + li + 1))
+        obs_rows, ep_idx = obs_rows[obs_rows < li], ep_idx[:-1]
+        fields, flag, nrec = fields[:-1], flag[:-1], nrec[:-1]
     owner = _v3_record_owners(lines, obs_rows, ep_idx, flag, nrec, name, n0)
     obs_ep = np.flatnonzero(flag <= 1)
     ep_pos = np.full(len(ep_idx), -1, dtype=np.int64)
@@ -1049,6 +1112,8 @@ def _v2_epoch_fields(line: str, name: str, line_no: int):
         mo, d, h, mi = int(line[4:6]), int(line[7:9]), int(line[10:12]), int(line[13:15])
         whole, frac = line[15:26].split(".")
         frac = (frac.rstrip() + "0000000")[:7]
+        if whole != whole.rstrip() or " " in frac.rstrip():   # a blank inside the seconds ('0 .0000000')
+            raise ValueError
         if not (1 <= mo <= 12 and 1 <= d <= 31 and h <= 23 and mi <= 59 and frac.isdigit()):
             raise ValueError
         return (year, mo, d, h, mi, int(whole), int(frac)), flag, n
@@ -1062,6 +1127,22 @@ def _v2_sat(txt: str, default: str, name: str, line_no: int, line: str) -> int:
     if letter not in _SYSTEMS or not prn.isdigit():
         raise ParseError(name, line_no, "satellite ids like G01 (A1,I2) in columns 33-68", line)
     return ord(letter) * 100 + int(prn)
+
+
+def _v2_truncated_tail(hdr: ObsHeader, lines: list[bytes], i: int, name: str, n0: int, error: ParseError) -> None:
+    """The epoch at body line `i` runs past the end of the file: a truncated last epoch (quirk: the epochs before
+    it are read, it is dropped with a warning) if no epoch line follows it; otherwise `error` (a wrong count)."""
+    for k in range(i + 1, len(lines)):
+        line = lines[k].decode("latin-1")
+        try:
+            _v2_epoch_fields(line, name, n0 + k + 1)
+        except ParseError:
+            continue
+        if line[32:35].strip() and line[28:29] in "01":   # an epoch line with satellites: not just a cut tail
+            raise error
+    hdr.warnings.append(ParseWarning("truncated-last-epoch", f"the last epoch (line {n0 + i + 1}) is cut by the "
+                                     f"end of the file ({error.expected}); it is dropped, the epochs before it "
+                                     "are read", n0 + i + 1))
 
 
 def _read_body_v2(hdr: ObsHeader, body: tuple, name: str):
@@ -1105,8 +1186,10 @@ def _read_body_v2(hdr: ObsHeader, body: tuple, name: str):
             continue
         n_cont = (n - 1) // 12 if n > 0 else 0
         if i + 1 + n_cont > n_lines:
-            raise ParseError(name, n0 + i + 1, f"truncated file: {n_cont} satellite-list continuation lines "
-                             "after this epoch line", "end of file")
+            _v2_truncated_tail(hdr, lines, i, name, n0, ParseError(
+                name, n0 + i + 1, f"truncated file: {n_cont} satellite-list continuation lines after this epoch "
+                "line", "end of file"))
+            break
         sat_text = line[32:68].ljust(36)
         for k in range(n_cont):
             cont = lines[i + 1 + k].decode("latin-1")
@@ -1118,18 +1201,21 @@ def _read_body_v2(hdr: ObsHeader, body: tuple, name: str):
         a = i + 1 + n_cont
         b = a + n * lps
         if b > n_lines:
-            raise ParseError(name, n0 + i + 1, f"truncated file: {n} satellite records of {lps} line(s) after "
-                             "this epoch line", f"{n_lines - a} lines before the end of the file", )
+            _v2_truncated_tail(hdr, lines, i, name, n0, ParseError(
+                name, n0 + i + 1, f"truncated file: {n} satellite records of {lps} line(s) after this epoch line",
+                f"{n_lines - a} lines before the end of the file"))
+            break
         block = list(range(a, b))
         if comment_cum[b] - comment_cum[a]:  # comment lines inside the block: skip them, extend the block
             block, j = [], a
-            while len(block) < n * lps:
-                if j >= n_lines:
-                    raise ParseError(name, n0 + i + 1, f"truncated file: {n} satellite records after this "
-                                     "epoch line", "end of file")
+            while len(block) < n * lps and j < n_lines:
                 if not is_comment[j]:
                     block.append(j)
                 j += 1
+            if len(block) < n * lps:
+                _v2_truncated_tail(hdr, lines, i, name, n0, ParseError(
+                    name, n0 + i + 1, f"truncated file: {n} satellite records after this epoch line", "end of file"))
+                break
             b = j
         if flag == 6:  # cycle-slip records: same layout, not observations
             events.append(ObsEvent(6, n0 + i + 1, _times_from_fields(*date, 1e7),

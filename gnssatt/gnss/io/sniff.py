@@ -89,7 +89,7 @@ def identify(path: Path, name: str) -> tuple[str, dict]:
         raise ParseError(name, None, _KNOWN, "an empty file after decompression")
     if _is_binary(head):
         raise ParseError(name, 1, _KNOWN, "binary data")
-    first = head.split(b"\n", 1)[0].decode("latin-1").rstrip("\r")
+    first = next((ln for ln in head.split(b"\n") if ln.strip()), b"").decode("latin-1").rstrip("\r")
     stripped = head.lstrip()
     if stripped.startswith(b"{") or stripped.startswith(b"["):
         from gnssatt.gnss.io.platform import parse_platform
@@ -104,6 +104,8 @@ def identify(path: Path, name: str) -> tuple[str, dict]:
 
         return "reference_attitude", summarize_reference_attitude(_read_all(path, name, 512 * 1024 * 1024), name)
     label = first[60:80].strip()
+    if first[65:85].strip() == "RINEX VERSION / TYPE" and first[21:22] == "C":   # RINEX clock 3.04 layout
+        return "rinex_clock", _summarize_with("rinex_clock", "summarize_rinex_clock", path, name)
     if label.startswith("CRINEX VERS"):
         data = _decompress_hatanaka(_read_all(path, name, limit=None), name)
         return "rinex_obs", scan_rinex_obs(_lines(io.BytesIO(data), name), name, compression="hatanaka")
@@ -119,7 +121,8 @@ def identify(path: Path, name: str) -> tuple[str, dict]:
             return "rinex_clock", _summarize_with("rinex_clock", "summarize_rinex_clock", path, name)
         raise ParseError(name, 1, "RINEX file type O (observation), N/G/H (navigation) or C (clock) in column 21",
                          first)
-    if first.startswith("#") and len(first) > 2 and first[1] in "abcd" and first[2] in "PV":
+    if first.startswith("#") and len(first) > 3 and (first[1] in "abcd" and first[2] in "PV"
+                                                     or first[1:3] == "  " and first[3] in "12"):  # SP3 before 'a'
         return "sp3", _summarize_with("sp3", "summarize_sp3", path, name)
     if label == "ANTEX VERSION / SYST":
         return "antex", _summarize_with("antex", "summarize_antex", path, name)
@@ -269,6 +272,29 @@ def _scan_version_line(h: _ScannedHeader, line: str, name: str) -> None:
         raise ParseError(name, 1, "RINEX version 2.10-4.02", line[0:9])
 
 
+def _scan_approx(h: _ScannedHeader, line: str) -> list[float] | None:
+    """APPROX POSITION XYZ (3F14.4); three numbers off their columns are read as written (a warning), as the
+    full reader does (rinex_obs._three_f14)."""
+    def floats(texts):
+        try:
+            return [float(t) for t in texts]
+        except ValueError:
+            return None
+    fixed = floats([line[0:14], line[14:28], line[28:42]])
+    if fixed is not None and (line[13:14].strip() and line[14:15].strip() or line[27:28].strip()
+                              and line[28:29].strip() or line[42:43].strip()):
+        fixed = None   # a number runs across a field boundary
+    tokens = line[0:60].split()
+    by_tokens = floats(tokens) if len(tokens) == 3 else None
+    if by_tokens is not None and by_tokens != fixed:
+        h.warnings.append(ParseWarning("approx-position-misplaced", "APPROX POSITION XYZ numbers are not in their "
+                                       "F14.4 columns; read as the three numbers written", h.line_no))
+        return by_tokens
+    if fixed is None:
+        h.warnings.append(ParseWarning("bad-approx-position", "unreadable APPROX POSITION XYZ", h.line_no))
+    return fixed
+
+
 def _scan_header_record(h: _ScannedHeader, line: str, label: str, name: str) -> None:
     """Note one header record (marker, receiver, antenna, interval, position, observation types) in `h`."""
     line_no = h.line_no
@@ -284,10 +310,7 @@ def _scan_header_record(h: _ScannedHeader, line: str, label: str, name: str) -> 
         except ValueError:
             h.warnings.append(ParseWarning("bad-interval", f"unreadable INTERVAL {line[0:10]!r}", line_no))
     elif label == "APPROX POSITION XYZ":
-        try:
-            h.approx = [float(line[0:14]), float(line[14:28]), float(line[28:42])]
-        except ValueError:
-            h.warnings.append(ParseWarning("bad-approx-position", "unreadable APPROX POSITION XYZ", line_no))
+        h.approx = _scan_approx(h, line)
     elif label == "SYS / # / OBS TYPES":
         if line[0:1].strip():
             h.pending_sys = line[0]
@@ -317,7 +340,10 @@ def _scan_obs_types(h: _ScannedHeader, name: str) -> dict[str, list[str]]:
     if h.version < 3:
         if not h.v2_types:
             raise ParseError(name, line_no, "a '# / TYPES OF OBSERV' header line", "none in the header")
-        if len(h.v2_types) != h.v2_count:
+        if len(h.v2_types) > h.v2_count:   # the codes listed are what is read (rinex_obs does the same)
+            h.warnings.append(ParseWarning("obs-type-count-mismatch", f"# / TYPES OF OBSERV announces {h.v2_count} "
+                                           f"types but lists {len(h.v2_types)}; the listed types are read"))
+        elif len(h.v2_types) != h.v2_count:
             raise ParseError(name, line_no, f"{h.v2_count} observation types as announced in # / TYPES OF OBSERV",
                              f"{len(h.v2_types)} listed")
         sys_letter = (h.first_line[40:41] or "G").strip() or "G"
@@ -340,7 +366,12 @@ def _scan_header(lines: Iterator[str], name: str) -> tuple[_ScannedHeader, dict[
     for line in lines:
         h.line_no += 1
         label = line[60:80].strip()
-        if h.line_no == 1:
+        if h.version is None:
+            if not line.strip():   # blank lines before line 1: skipped with a warning
+                continue
+            if h.line_no > 1:
+                h.warnings.append(ParseWarning("leading-blank-lines", f"{h.line_no - 1} blank line(s) before the "
+                                               "RINEX VERSION / TYPE line were skipped", h.line_no))
             _scan_version_line(h, line, name)
             continue
         if label == "END OF HEADER":
@@ -376,6 +407,7 @@ class _BodyScan:
         self.epochs = _EpochStats()
         self.sats: set[str] = set()
         self.events = 0
+        self.truncated: tuple[int, int, int] | None = None   # (epoch line, lines announced, lines found)
 
     def need(self, count: int, what: str, epoch_line: int, events: bool = False) -> Iterator[str]:
         """The next `count` lines after an epoch line (comment lines skipped unless they are event records)."""
@@ -385,6 +417,9 @@ class _BodyScan:
             try:
                 line = next(self.it)
             except StopIteration:
+                if not events:   # a file cut inside its last epoch: the caller drops that epoch with a warning
+                    self.truncated = (epoch_line, count, got)
+                    return
                 raise ParseError(self.name, self.line_no + 1, f"{count} {what} after the epoch line {epoch_line}",
                                  f"end of file after {got}") from None
             self.line_no += 1
@@ -417,7 +452,8 @@ class _BodyScan:
                 raise ParseError(name, self.line_no, "a satellite record starting with a satellite id like G01",
                                  rec)
             self.sats.add(sid)
-        self.epochs.add(t)
+        if self.truncated is None:
+            self.epochs.add(t)
 
     def epoch_v2(self, line: str) -> None:
         """One RINEX 2 epoch line, its satellite list continuation lines and its observation lines."""
@@ -443,7 +479,8 @@ class _BodyScan:
             self.sats.add(sid)
         for _ in self.need(count * self.v2_lines_per_sat, "observation lines", epoch_line):
             pass
-        self.epochs.add(t)
+        if self.truncated is None:
+            self.epochs.add(t)
 
     def run(self) -> None:
         for line in self.it:
@@ -471,6 +508,11 @@ def scan_rinex_obs(lines: Iterator[str], name: str, compression: str | None = No
     scan = _BodyScan(lines, name, h.line_no, v3, v2_lines_per_sat)
     scan.run()
     epochs, sats = scan.epochs, scan.sats
+    if scan.truncated is not None:
+        ep_line, n_lines, got = scan.truncated
+        warnings.append(ParseWarning("truncated-last-epoch", f"the last epoch (line {ep_line}) announces {n_lines} "
+                                     f"lines but the file ends after {got}; it is dropped, the epochs before it "
+                                     "are read", ep_line))
     if not epochs.count:
         raise ParseError(name, scan.line_no + 1, "at least one epoch with observations", "none")
     if epochs.backwards:

@@ -15,9 +15,12 @@ position/clock records (km, km, km, microseconds; F14.6 fixed columns), optional
 Bad or absent values, as the SP3 formats define them: a position component of 0.000000 (the whole position is
 then NaN), a clock of 999999.999999 (or larger), likewise for velocities and clock rates.
 
-Quirks handled (RINEX-QUIRKS "SP3"): an epoch line with seconds 60.000 rolls over into the next minute (counted
-warning); a satellite in the body the header does not list, or listed but absent from the body, is a
-`ParseError` (never swapped or guessed); missing velocity records become NaN (counted warning).
+Quirks read with a warning (docs/reader_policy.md): an epoch line with seconds 60.000 rolls over into the next
+minute; a satellite in the body that the '+' lines do not list is added under its own record id (records are
+matched by id, never by position, so nothing is swapped); a listed satellite without any record is dropped;
+missing velocity records become NaN; blank lines and lines holding only an elision mark ('   *', the SP3-a
+examples) are skipped; blank lines before line 1 are skipped; the oldest SP3 (no version letter in column 2, no
+P/V flag in column 3) is read as SP3-a.
 
 Time scale: `time` is GPS time. Files in GAL/QZS/IRN time (steered to GPS) are taken as is; TAI, UTC (GLO taken as
 UTC) and BDT epochs are converted (TAI - 19 s; UTC + leap seconds; BDT + 14 s) and a warning says so.
@@ -79,16 +82,23 @@ class Sp3Data:
 
 
 class _Ctx:
-    def __init__(self, name):
+    def __init__(self, name, line_offset: int = 0):
         self.name = name
+        self.line_offset = line_offset   # lines skipped before line 1 (leading blank lines)
         self.warnings: list[ParseWarning] = []
         self.counts: dict[str, list] = {}
 
+    def _ln(self, line_no):
+        return None if line_no is None else line_no + self.line_offset
+
     def error(self, line_no, expected, found="", column=None):
-        return ParseError(self.name, line_no, expected, found, column)
+        return ParseError(self.name, self._ln(line_no), expected, found, column)
+
+    def warn(self, code, message, line_no):
+        self.warnings.append(ParseWarning(code, message, self._ln(line_no)))
 
     def count(self, code, message, line_no):
-        e = self.counts.setdefault(code, [0, line_no, message])
+        e = self.counts.setdefault(code, [0, self._ln(line_no), message])
         e[0] += 1
 
     def flush(self):
@@ -139,14 +149,14 @@ def _convert_time(ctx: _Ctx, t: GpsTime, time_system: str) -> GpsTime:
     if ts in ("GPS", "GAL", "QZS", "IRN", "", "CCC"):
         return t
     if ts == "TAI":
-        ctx.warnings.append(ParseWarning("TIME_SYSTEM_CONVERTED", "TAI epochs converted to GPS time (-19 s)"))
+        ctx.warn("TIME_SYSTEM_CONVERTED", "TAI epochs converted to GPS time (-19 s)", None)
         return t - 19.0
     if ts == "BDT":
-        ctx.warnings.append(ParseWarning("TIME_SYSTEM_CONVERTED", "BDT epochs converted to GPS time (+14 s)"))
+        ctx.warn("TIME_SYSTEM_CONVERTED", "BDT epochs converted to GPS time (+14 s)", None)
         return t + 14.0
     if ts in ("UTC", "GLO"):
-        ctx.warnings.append(ParseWarning("TIME_SYSTEM_CONVERTED", f"{ts} epochs converted to GPS time with the "
-                                         "leap-second table (GLO taken as UTC)"))
+        ctx.warn("TIME_SYSTEM_CONVERTED", f"{ts} epochs converted to GPS time with the "
+                 "leap-second table (GLO taken as UTC)", None)
         return GpsTime(t.s + gps_minus_utc_s(t.s), t.frac)
     raise ctx.error(13, "a time system GPS/GLO/GAL/QZS/BDT/IRN/UTC/TAI in columns 10-12 of the first %c line",
                     time_system)
@@ -184,6 +194,7 @@ class _Sp3Body:
     seen_p: np.ndarray
     seen_v: np.ndarray
     eof: bool = False
+    unlisted: list = field(default_factory=list)   # (satellite, first line) of records not in the '+' lines
 
 
 def _sp3_lines_1_2(ctx: _Ctx, lines: list[str]) -> _Sp3Header:
@@ -191,6 +202,11 @@ def _sp3_lines_1_2(ctx: _Ctx, lines: list[str]) -> _Sp3Header:
     if len(lines) < 2:
         raise ctx.error(len(lines) or 1, "an SP3 header ('#a'..'#d' line 1, '##' line 2)", lines[0] if lines else "")
     l1 = lines[0]
+    if l1.startswith("#  ") and len(l1) > 3 and l1[3] in "12":
+        # the SP3 of Remondi (1989) before letters: '#' then the start epoch; SP3-a's layout, positions only
+        ctx.warn("NO_VERSION_LETTER", "line 1 has no version letter (column 2) nor P/V flag (column 3): the "
+                 "original SP3 layout, read as SP3-a with positions", 1)
+        l1 = "#aP" + l1[3:]
     if len(l1) < 3 or l1[0] != "#" or l1[1] not in "abcd" or l1[2] not in "PV":
         raise ctx.error(1, "'#aP', '#bP', '#cP', '#dP' (or ...V) in columns 1-3", l1, 1)
     _epoch(ctx, "*  " + l1[3:], 1)  # line 1 has the epoch line's layout from column 4 on
@@ -243,9 +259,11 @@ def _sp3_descriptors(ctx: _Ctx, lines: list[str], i: int, hdr: _Sp3Header) -> in
     while i < len(lines) and lines[i].startswith("++"):
         i += 1
     n_pc = 0
-    while i < len(lines) and lines[i][:2] in ("%c", "%f", "%i", "/*", "%/"):
+    while i < len(lines) and (lines[i][:2] in ("%c", "%f", "%i", "/*", "%/") or not lines[i].strip()):
         ln = lines[i]
-        if ln.startswith("%c"):
+        if not ln.strip():
+            ctx.count("BLANK_LINE", "blank lines were ignored", i + 1)
+        elif ln.startswith("%c"):
             if n_pc == 0 and hdr.version in "cd":
                 hdr.file_type = ln[3:5].strip() or "G"
                 hdr.time_system = ln[9:12].strip()
@@ -269,9 +287,11 @@ def _sp3_pv_record(ctx: _Ctx, body: _Sp3Body, e: int, index: dict[str, int], ln:
     if len(ln) < 46:
         raise ctx.error(lno, f"a {c0} record with x, y, z (3F14.6) in columns 5-46", ln, len(ln) + 1)
     sat = _sat_id(ctx, ln[1:4], lno, ln, 1)
-    j = index.get(sat) if sat is not None else None
+    if sat is None:
+        raise ctx.error(lno, "a satellite id in columns 2-4", f"{ln[1:4]!r} in: {ln}", 2)
+    j = index.get(sat)
     if j is None:
-        raise ctx.error(lno, "a satellite listed in the header's '+' lines", f"{ln[1:4]!r} in: {ln}", 2)
+        j = _add_unlisted(body, index, sat, lno)
     xyz = (_flt(ctx, ln, 4, 18, lno, "x"), _flt(ctx, ln, 18, 32, lno, "y"), _flt(ctx, ln, 32, 46, lno, "z"))
     c_txt = ln[46:60]
     cval = _flt(ctx, ln, 46, 60, lno, "clock") if c_txt.strip() else np.nan
@@ -288,13 +308,24 @@ def _sp3_pv_record(ctx: _Ctx, body: _Sp3Body, e: int, index: dict[str, int], ln:
         c_out[e, j] = cval
 
 
+def _add_unlisted(body: _Sp3Body, index: dict[str, int], sat: str, lno: int) -> int:
+    """Column of a satellite with records but not in the '+' lines (quirk: read under its own id)."""
+    index[sat] = j = len(index)
+    body.unlisted.append((sat, lno))
+    for key in ("pos", "clk", "vel", "rate", "seen_p", "seen_v"):
+        a = getattr(body, key)
+        pad = np.full(a.shape[:1] + (1,) + a.shape[2:], False if a.dtype == bool else np.nan, dtype=a.dtype)
+        setattr(body, key, np.concatenate([a, pad], axis=1))
+    return j
+
+
 def _sp3_body(ctx: _Ctx, lines: list[str], body_start: int, hdr: _Sp3Header) -> _Sp3Body:
     """_Sp3Body of the lines from `body_start`: '*' epochs, 'P'/'V' records, 'EP'/'EV' skipped, 'EOF'."""
     epoch_lines = [k for k in range(body_start, len(lines)) if lines[k].startswith("*")]
     n_ep = len(epoch_lines)
     if n_ep != hdr.n_epochs_header:
-        ctx.warnings.append(ParseWarning("EPOCH_COUNT_MISMATCH", f"line 1 announces {hdr.n_epochs_header} epochs, "
-                                         f"the body has {n_ep}", 1))
+        ctx.warn("EPOCH_COUNT_MISMATCH", f"line 1 announces {hdr.n_epochs_header} epochs, "
+                 f"the body has {n_ep}", 1)
     index = {s: j for j, s in enumerate(hdr.sats)}
     ns = len(hdr.sats)
     body = _Sp3Body(epoch_lines, np.zeros((n_ep, 6)), np.full((n_ep, ns, 3), np.nan), np.full((n_ep, ns), np.nan),
@@ -321,7 +352,9 @@ def _sp3_body(ctx: _Ctx, lines: list[str], body_start: int, hdr: _Sp3Header) -> 
         elif c0 == "E" and ln[1:2] in ("P", "V"):
             continue
         elif not ln.strip():
-            ctx.count("BLANK_LINE", "blank lines in the body were ignored", lno)
+            ctx.count("BLANK_LINE", "blank lines were ignored", lno)
+        elif ln.strip() == "*":
+            ctx.count("ELISION_LINE", "lines holding only '*' (an elision mark, no epoch) were skipped", lno)
         else:
             raise ctx.error(lno, "an epoch ('*'), 'P', 'V', 'EP', 'EV' record or 'EOF'", ln, 1)
         if e < 0 and c0 != "*":
@@ -332,23 +365,30 @@ def _sp3_body(ctx: _Ctx, lines: list[str], body_start: int, hdr: _Sp3Header) -> 
 def _sp3_completeness(ctx: _Ctx, body: _Sp3Body, hdr: _Sp3Header, n_lines: int) -> bool:
     """Whether velocities are present; refuses listed satellites without records, warns of missing ones."""
     if not body.eof:
-        ctx.warnings.append(ParseWarning("MISSING_EOF", "the file ends without an 'EOF' line (truncated?)",
-                                         n_lines))
-    seen_p, seen_v = body.seen_p, body.seen_v
-    absent = ~seen_p.any(axis=0)
+        ctx.warn("MISSING_EOF", "the file ends without an 'EOF' line (truncated?)", n_lines)
+    if body.unlisted:
+        ctx.warn("UNLISTED_SATELLITE", f"satellites with records but not in the '+' lines, read under their own "
+                 f"ids: {', '.join(s for s, _ in body.unlisted)}", body.unlisted[0][1])
+        hdr.sats = hdr.sats + [s for s, _ in body.unlisted]
+    absent = ~body.seen_p.any(axis=0)
     if absent.any():
-        raise ctx.error(hdr.sat_line_no, "every satellite listed in the '+' lines to have records in the body",
-                        f"no P record for {', '.join(s for s, a in zip(hdr.sats, absent) if a)}")
+        ctx.warn("LISTED_WITHOUT_RECORDS", f"satellites listed in the '+' lines without any P record, dropped: "
+                 f"{', '.join(s for s, a in zip(hdr.sats, absent) if a)}", hdr.sat_line_no)
+        keep = ~absent
+        hdr.sats = [s for s, k in zip(hdr.sats, keep) if k]
+        for key in ("pos", "clk", "vel", "rate", "seen_p", "seen_v"):
+            setattr(body, key, getattr(body, key)[:, keep])
+    seen_p, seen_v = body.seen_p, body.seen_v
     missing_p = int((~seen_p).sum())
     if missing_p:
-        ctx.warnings.append(ParseWarning("MISSING_RECORDS", f"{missing_p} satellite-epochs without a P record "
-                                         "(NaN)", None))
+        ctx.warn("MISSING_RECORDS", f"{missing_p} satellite-epochs without a P record "
+                 "(NaN)", None)
     has_vel = hdr.pos_vel_flag == "V" or seen_v.any()
     if has_vel:
         miss_v = int((seen_p & ~seen_v).sum())
         if miss_v:
-            ctx.warnings.append(ParseWarning("MISSING_VELOCITY", f"{miss_v} P records without a V record "
-                                             "(velocity NaN)", None))
+            ctx.warn("MISSING_VELOCITY", f"{miss_v} P records without a V record "
+                     "(velocity NaN)", None)
     return bool(has_vel)
 
 
@@ -375,8 +415,12 @@ def read_sp3(source, *, name: str | None = None) -> Sp3Data:
     Implements: SP3-c (Hilla 2010) / SP3-d (Hilla 2016) sec. "Format" line by line (see module docstring).
     """
     text, display = read_source_text(source, name)
-    ctx = _Ctx(display)
     lines = _split_lines(text)
+    lead = next((k for k, ln in enumerate(lines) if ln.strip()), 0)
+    ctx = _Ctx(display, lead)
+    if lead:
+        ctx.warn("LEADING_BLANK_LINES", f"{lead} blank line(s) before line 1 were skipped", 1 - lead)
+        lines = lines[lead:]
     hdr = _sp3_lines_1_2(ctx, lines)
     i = _sp3_satellites(ctx, lines, 2, hdr)
     body_start = _sp3_descriptors(ctx, lines, i, hdr)
