@@ -299,10 +299,93 @@ def job_page(job_id: str, request: Request, session: SessionDep):
                                                         ObservationSet.team_id == team.id)).scalars().all()
     images = [r for r in rows if r["media_type"] == "image/png"]
     charts = [r for r in rows if r["name"].endswith(".csv")]
+    charts = [r for r in rows if r["name"].endswith(".csv") or r["name"] == "charts.json"]
+    quality = summary.get("quality") if isinstance(summary, dict) and isinstance(summary.get("quality"), dict) else None
+    raw = {k: v for k, v in summary.items() if k != "quality"} if isinstance(summary, dict) else summary
+    base = f"/ui/jobs/{quote(job.id, safe='')}"
     return render(request, "job.html", team=team, job=job_view(job), products=rows, images=images,
-                  charts=charts, summary=summary_items(summary) if summary is not None else [],
-                  summary_note=summary_note, sets=sets,
+                  charts=charts, summary=summary_items(raw) if raw is not None else [],
+                  summary_note=summary_note, sets=sets, quality=quality,
+                  report_url=f"{base}/report" if "report.html" in by_name else None,
+                  pdf_url=f"{base}/report.pdf" if "report.html" in by_name and pdf_available() else None,
+                  zip_url=f"{base}/all.zip",
                   config_text=json.dumps(job.config or {}, indent=2, sort_keys=True))
+
+
+#: Content-Security-Policy of report.html shown inline: its own inline CSS and data: images, nothing else.
+REPORT_CSP = "default-src 'none'; style-src 'unsafe-inline'; img-src data:; frame-ancestors 'self'; base-uri 'none'"
+
+
+def _owned_job(request: Request, session, job_id: str) -> tuple[Team | None, Job | None, Response | None]:
+    team = page_team(request, session)
+    if team is None:
+        return None, None, to_login(request)
+    job = session.get(Job, job_id)
+    if job is None or job.team_id != team.id:
+        return team, None, problem_page(request, team, ProblemError(404, "not-found", "Job not found",
+                                                                    f"No job with id {job_id!r} is visible to your team."))
+    return team, job, None
+
+
+def _product(session, job: Job, name: str) -> Product | None:
+    return session.execute(select(Product).where(Product.job_id == job.id, Product.name == name)).scalar_one_or_none()
+
+
+@router.get("/jobs/{job_id}/report", response_class=HTMLResponse)
+def report_inline(job_id: str, request: Request, session: SessionDep):
+    """report.html shown in the browser (not downloaded), under a CSP that allows only its inline CSS and images."""
+    team, job, early = _owned_job(request, session, job_id)
+    if early is not None:
+        return early
+    p = _product(session, job, "report.html")
+    if p is None:
+        return problem_page(request, team, ProblemError(404, "not-found", "No report", "This job has no report.html."))
+    resp = HTMLResponse(request.app.state.blobs.path(p.sha256).read_text())
+    _finish(request, resp)
+    resp.headers["Content-Security-Policy"] = REPORT_CSP
+    resp.headers["Content-Disposition"] = 'inline; filename="report.html"'
+    return resp
+
+
+def pdf_available() -> bool:
+    from app.report_pdf import available
+
+    return available()
+
+
+@router.get("/jobs/{job_id}/report.pdf")
+def report_pdf(job_id: str, request: Request, session: SessionDep):
+    """report.html printed to PDF by the system Chromium (app.report_pdf), cached beside the blobs."""
+    from app.report_pdf import PdfUnavailable, pdf_of
+
+    team, job, early = _owned_job(request, session, job_id)
+    if early is not None:
+        return early
+    p = _product(session, job, "report.html")
+    if p is None:
+        return problem_page(request, team, ProblemError(404, "not-found", "No report", "This job has no report.html."))
+    try:
+        data = pdf_of(request.app.state.blobs.path(p.sha256), p.sha256)
+    except PdfUnavailable as exc:
+        return problem_page(request, team, ProblemError(503, "pdf-unavailable", "PDF not available", str(exc)))
+    return _finish(request, Response(data, media_type="application/pdf", headers={
+        "Content-Disposition": f'attachment; filename="report-{job.id[:8]}.pdf"'}))
+
+
+@router.get("/jobs/{job_id}/all.zip")
+def download_all(job_id: str, request: Request, session: SessionDep):
+    """Every product of the job, its configuration and the versions of the software and of the inputs, in one zip."""
+    from app.bundle import job_bundle
+
+    team, job, early = _owned_job(request, session, job_id)
+    if early is not None:
+        return early
+    products = session.execute(select(Product).where(Product.job_id == job.id).order_by(Product.name)).scalars().all()
+    sets = session.execute(select(ObservationSet).where(ObservationSet.id.in_(list(job.set_ids or [])),
+                                                        ObservationSet.team_id == team.id)).scalars().all()
+    data = job_bundle(job, products, sets, request.app.state.blobs.path)
+    return _finish(request, Response(data, media_type="application/zip", headers={
+        "Content-Disposition": f'attachment; filename="gnssatt-{job.id[:8]}.zip"'}))
 
 
 @router.get("/new", response_class=HTMLResponse)
