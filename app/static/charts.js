@@ -392,7 +392,7 @@
       const colour = s.stroke || (s.axis && EULER[s.axis]) || COLOURS[i % COLOURS.length];
       const ref = s.role === "reference";
       return {
-        label: s.label, stroke: ref ? "#111" : colour, width: ref ? 1 : 1.25, dash: ref ? [5, 4] : undefined,
+        label: s.label, stroke: colour, width: ref ? 1.75 : 1.25, dash: ref ? [6, 4] : undefined, alpha: ref ? 0.75 : 1,
         scale: s.scale || "y", spanGaps: false, value: (u, v) => fmt(v),
         paths: s.step ? uPlot.paths.stepped({align: 1}) : undefined,
         points: s.points ? {show: true, size: 3, stroke: colour, fill: colour} : {show: false},
