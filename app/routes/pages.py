@@ -58,12 +58,63 @@ router = APIRouter(prefix="/ui", include_in_schema=False)
 # --- wiring --------------------------------------------------------------------------------------------------
 
 def install_pages(app: FastAPI) -> None:
-    """Add the /ui pages, the /static assets, `/` -> /ui and the CSRF guard of cookie-authenticated /v1 calls."""
+    """Add the /ui pages, the /static assets, `/` -> /ui, the offline API docs (/docs, /redoc from vendored
+    Swagger UI and ReDoc), /docs/conventions, and the CSRF guard of cookie-authenticated /v1 calls."""
+    install_docs(app)
     app.include_router(router)
     app.mount("/static", StaticFiles(directory=str(STATIC_DIR)), name="static")
     app.add_api_route("/", lambda: RedirectResponse("/ui", status_code=307), methods=["GET"],
                       include_in_schema=False)
     app.add_middleware(CsrfMiddleware)
+
+
+REPO_DIR = APP_DIR.parent
+CONVENTIONS_MD = REPO_DIR / "docs" / "CONVENTIONS.md"
+
+
+def install_docs(app: FastAPI) -> None:
+    """/docs (Swagger UI) and /redoc (ReDoc) from the assets in static/vendor instead of FastAPI's CDN URLs, so
+    the API documentation renders without a network; /docs/conventions renders docs/CONVENTIONS.md."""
+    from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
+
+    app.router.routes[:] = [r for r in app.router.routes if getattr(r, "path", None) not in ("/docs", "/redoc")]
+    openapi_url = app.openapi_url or "/openapi.json"
+
+    def swagger(request: Request):
+        return get_swagger_ui_html(openapi_url=openapi_url, title=f"{app.title} API",
+                                   swagger_js_url="/static/vendor/swagger-ui/swagger-ui-bundle.js",
+                                   swagger_css_url="/static/vendor/swagger-ui/swagger-ui.css",
+                                   swagger_favicon_url="/static/favicon.svg",
+                                   oauth2_redirect_url=app.swagger_ui_oauth2_redirect_url)
+
+    def redoc(request: Request):
+        return get_redoc_html(openapi_url=openapi_url, title=f"{app.title} API",
+                              redoc_js_url="/static/vendor/redoc/redoc.standalone.js",
+                              redoc_favicon_url="/static/favicon.svg", with_google_fonts=False)
+
+    app.add_api_route("/docs", swagger, methods=["GET"], include_in_schema=False)
+    app.add_api_route("/redoc", redoc, methods=["GET"], include_in_schema=False)
+    app.add_api_route("/docs/conventions", conventions_page, methods=["GET"], include_in_schema=False)
+
+
+def conventions_html() -> str | None:
+    """docs/CONVENTIONS.md as HTML (CommonMark + tables by markdown-it-py; raw HTML in the file is escaped)."""
+    from markdown_it import MarkdownIt
+
+    try:
+        text = CONVENTIONS_MD.read_text(encoding="utf-8")
+    except OSError:
+        return None
+    return MarkdownIt("commonmark", {"html": False}).enable("table").render(text)
+
+
+def conventions_page(request: Request, session: SessionDep):
+    """The file formats and conventions every error message cites, readable without signing in."""
+    body = conventions_html()
+    if body is None:
+        return problem_page(request, None, ProblemError(404, "not-found", "CONVENTIONS.md missing",
+                                                        "docs/CONVENTIONS.md is not in this installation."))
+    return render(request, "conventions.html", team=page_team(request, session), body=body)
 
 
 class CsrfMiddleware:
