@@ -74,6 +74,9 @@ def submit_job(body: JobCreate, request: Request, response: Response, team: Team
             raise ProblemError(422, "unknown-observation-set", "Unknown observation set",
                                f"No observation set {missing[0]!r} is visible to your team.",
                                field="observation_set_ids")
+        from app.preflight import check_sets   # refuse now what a worker could not run (issue 24)
+
+        check_sets(spec.name, [session.get(ObservationSet, i) for i in ids])
     map_ids = list(getattr(config, "pcv_map_ids", None) or [])
     if map_ids:   # maps a job applies are checked now, not when a worker runs it
         owned_maps = set(session.execute(select(PcvMap.id).where(PcvMap.id.in_(map_ids),
