@@ -74,9 +74,6 @@ def submit_job(body: JobCreate, request: Request, response: Response, team: Team
             raise ProblemError(422, "unknown-observation-set", "Unknown observation set",
                                f"No observation set {missing[0]!r} is visible to your team.",
                                field="observation_set_ids")
-        from app.preflight import check_sets   # refuse now what a worker could not run (issue 24)
-
-        check_sets(spec.name, [session.get(ObservationSet, i) for i in ids])
     map_ids = list(getattr(config, "pcv_map_ids", None) or [])
     if map_ids:   # maps a job applies are checked now, not when a worker runs it
         owned_maps = set(session.execute(select(PcvMap.id).where(PcvMap.id.in_(map_ids),
@@ -86,6 +83,10 @@ def submit_job(body: JobCreate, request: Request, response: Response, team: Team
                 raise ProblemError(422, "unknown-pcv-map", "Unknown PCV map",
                                    f"No PCV map {map_id!r} is visible to your team; GET /v1/pcv-maps lists them.",
                                    field=f"config.pcv_map_ids.{i}")
+    if ids:   # refuse now what a worker could not run: platform, orbits, antennas' files, common epochs
+        from app.preflight import check_sets
+
+        check_sets(spec.name, [session.get(ObservationSet, i) for i in ids])
     now = utcnow()
     settings = request.app.state.settings
     job = Job(team_id=team.id, type=spec.name, config=config.model_dump(mode="json"), set_ids=ids,
