@@ -216,11 +216,29 @@ def product_url(job_id: str, name: str) -> str:
     return f"/v1/jobs/{quote(job_id, safe='')}/products/{quote(name, safe='')}"
 
 
-def job_view(job: Job) -> dict[str, Any]:
+def job_view(job: Job, set_names: dict[str, str] | None = None) -> dict[str, Any]:
+    """A job for the templates; set_names (set id -> name) fills `set_names`, the duration is started to
+    finished [s] (None while it runs)."""
+    duration = None
+    if job.started_at is not None and job.finished_at is not None:
+        duration = max((job.finished_at - job.started_at).total_seconds(), 0.0)
+    ids = list(job.set_ids or [])
     return {"id": job.id, "type": job.type, "state": job.state, "progress": float(job.progress or 0.0),
             "stage": job.stage, "created_at": job.created_at, "started_at": job.started_at,
             "finished_at": job.finished_at, "attempts": job.attempts, "error": job.error,
-            "config": job.config or {}, "set_ids": list(job.set_ids or []), "terminal": job.state in TERMINAL}
+            "config": job.config or {}, "set_ids": ids, "terminal": job.state in TERMINAL,
+            "duration_s": duration,
+            "set_names": [{"id": i, "name": (set_names or {}).get(i) or i[:8]} for i in ids]}
+
+
+def set_names_of(session, team_id: str, jobs) -> dict[str, str]:
+    """Set id -> name (or short id) of the sets the jobs read, in one query."""
+    ids = {i for j in jobs for i in (j.set_ids or [])}
+    if not ids:
+        return {}
+    rows = session.execute(select(ObservationSet.id, ObservationSet.name).where(
+        ObservationSet.id.in_(list(ids)), ObservationSet.team_id == team_id)).all()
+    return {i: (n or i[:8]) for i, n in rows}
 
 
 def summary_items(summary: Any, prefix: str = "", depth: int = 3) -> list[tuple[str, str]]:
@@ -300,7 +318,8 @@ def dashboard(request: Request, session: SessionDep, sets_offset: int = 0, jobs_
                            .limit(PAGE_SIZE).offset(sets_offset)).scalars().all()
     jobs = session.execute(jobs_q.order_by(Job.created_at.desc(), Job.id)
                            .limit(PAGE_SIZE).offset(jobs_offset)).scalars().all()
-    return render(request, "dashboard.html", team=team, sets=sets, jobs=[job_view(j) for j in jobs],
+    names = set_names_of(session, team.id, jobs)
+    return render(request, "dashboard.html", team=team, sets=sets, jobs=[job_view(j, names) for j in jobs],
                   n_sets=n_sets, n_jobs=n_jobs, sets_offset=sets_offset, jobs_offset=jobs_offset,
                   page_size=PAGE_SIZE)
 
@@ -319,8 +338,9 @@ def set_page(set_id: str, request: Request, session: SessionDep):
                            .where(JobSet.set_id == set_id, Job.team_id == team.id)
                            .order_by(Job.created_at.desc()).limit(PAGE_SIZE)).scalars().all()
     summary = {k: v for k, v in (obs_set.summary or {}).items() if k != "files"}
+    names = set_names_of(session, team.id, jobs)
     return render(request, "set.html", team=team, obs_set=obs_set, files=obs_set.files,
-                  summary=summary_items(summary), jobs=[job_view(j) for j in jobs])
+                  summary=summary_items(summary), jobs=[job_view(j, names) for j in jobs])
 
 
 @router.get("/jobs/{job_id}", response_class=HTMLResponse)

@@ -355,7 +355,21 @@
     canvas.dataset.ready = "1";
   }
 
+  /* A sign-in link carries the key in its fragment (/ui/login?next=...#key=KEY, printed by `make demo`): the
+   * fragment never reaches the server or its logs; the page fills the form, forgets the fragment, signs in. */
+  function signInFromFragment() {
+    const form = document.getElementById("login-form");
+    if (!form || !location.hash.startsWith("#key=")) return;
+    const key = decodeURIComponent(location.hash.slice(5));
+    history.replaceState(null, "", location.pathname + location.search);
+    const input = document.getElementById("api_key");
+    if (!input || !key) return;
+    input.value = key;
+    form.submit();
+  }
+
   window.gnssatt = {api, showProblem};
+  signInFromFragment();
   startLiveProgress();
   wireCancel();
   wireNewPage();

@@ -154,3 +154,21 @@ def test_long_error_message_does_not_overflow(browser, site, attitude_job, width
     assert page.locator(".js-problem").is_visible()
     assert _overflow(page) <= 0, (f"horizontal overflow at {width} px with a long error", _wide(page))
     context.close()
+
+
+def test_sign_in_link_with_the_key_in_the_fragment_opens_the_job_page(browser, site, attitude_job):
+    """`make demo`'s last lines: /ui/login?next=/ui/jobs/ID#key=KEY signs in and lands on the job page; the key
+    never reaches the server (fragment), and the address bar forgets it."""
+    from client.demo import final_lines
+
+    page_line = final_lines(site.url, attitude_job["key"], attitude_job["job_id"], Path("/nonexistent"))[0]
+    url = page_line.split(": ", 1)[1]
+    context = browser.new_context()
+    page = context.new_page()
+    seen: list[str] = []
+    page.on("request", lambda r: seen.append(r.url))
+    page.goto(url)
+    page.wait_for_url(f"{site.url}/ui/jobs/{attitude_job['job_id']}")
+    assert page.locator("#quality-verdict").is_visible()
+    assert not any(attitude_job["key"] in u for u in seen)
+    context.close()
