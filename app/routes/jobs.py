@@ -94,13 +94,20 @@ def submit_job(body: JobCreate, request: Request, response: Response, team: Team
               max_attempts=settings.max_attempts, cancel_requested=False)
     job.sets = [JobSet(set_id=sid, position=i) for i, sid in enumerate(ids)]
     session.add(job)
+    session.flush()
+    from app.webhooks import register   # optional webhook of the job's end (issue 24)
+
+    made_secret = register(session, job, body.webhook_url, body.webhook_secret)
     session.commit()
     try:
         enqueue(request.app.state.huey, job.id)
     except Exception:  # noqa: BLE001 - the job row is the truth: the reaper re-rings queued jobs
         log.warning("could not enqueue job %s now; a worker's reaper will pick it up", job.id, exc_info=True)
     response.headers["Location"] = f"/v1/jobs/{job.id}"
-    return to_public(job)
+    public = to_public(job)
+    if made_secret:
+        public.webhook_secret = made_secret
+    return public
 
 
 @router.get("", response_model=Page[JobPublic], responses=ERRORS, summary="List jobs")

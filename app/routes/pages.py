@@ -60,8 +60,11 @@ router = APIRouter(prefix="/ui", include_in_schema=False)
 def install_pages(app: FastAPI) -> None:
     """Add the /ui pages, the /static assets, `/` -> /ui, the offline API docs (/docs, /redoc from vendored
     Swagger UI and ReDoc), /docs/conventions, and the CSRF guard of cookie-authenticated /v1 calls."""
+    from app.webhooks import router as webhooks_router
+
     install_docs(app)
     app.include_router(router)
+    app.include_router(webhooks_router)
     app.mount("/static", StaticFiles(directory=str(STATIC_DIR)), name="static")
     app.add_api_route("/", lambda: RedirectResponse("/ui", status_code=307), methods=["GET"],
                       include_in_schema=False)
@@ -374,7 +377,10 @@ def job_page(job_id: str, request: Request, session: SessionDep):
     quality = summary.get("quality") if isinstance(summary, dict) and isinstance(summary.get("quality"), dict) else None
     raw = {k: v for k, v in summary.items() if k != "quality"} if isinstance(summary, dict) else summary
     base = f"/ui/jobs/{quote(job.id, safe='')}"
+    from app.webhooks import webhook_view
+
     return render(request, "job.html", team=team, job=job_view(job), products=rows, images=images,
+                  webhook=webhook_view(session, job.id),
                   charts=charts, summary=summary_items(raw) if raw is not None else [],
                   summary_note=summary_note, sets=sets, quality=quality,
                   report_url=f"{base}/report" if "report.html" in by_name else None,
