@@ -39,7 +39,7 @@ def attitude_job(site, tmp_path_factory):
         job = c.get(f"/v1/jobs/{job_id}").json()
         assert job["state"] == "succeeded", job
         summary = c.get(f"/v1/jobs/{job_id}/products/summary.json").json()
-    return {"key": key, "job_id": job_id, "set_id": set_id, "summary": summary}
+    return {"key": key, "job_id": job_id, "set_id": set_id, "summary": summary, "dir": out}
 
 
 def _overflow(page) -> int:
@@ -171,4 +171,48 @@ def test_sign_in_link_with_the_key_in_the_fragment_opens_the_job_page(browser, s
     page.wait_for_url(f"{site.url}/ui/jobs/{attitude_job['job_id']}")
     assert page.locator("#quality-verdict").is_visible()
     assert not any(attitude_job["key"] in u for u in seen)
+    context.close()
+
+
+def test_platform_writer_adds_a_platform_json_the_service_accepts(browser, site, attitude_job):
+    """/ui/new: without a platform.json, the form writes one (CONVENTIONS.md layout) into the upload; the set is
+    accepted with its antennas matched, and an attitude job on it passes the early checks."""
+    d = attitude_job["dir"]
+    plat = json.loads((d / "platform.json").read_text())
+    files = [p for p in sorted(d.rglob("*")) if p.is_file() and "truth" not in p.relative_to(d).parts
+             and p.name != "platform.json"]
+    context, page = sign_in(browser, site, attitude_job["key"])
+    page.goto("/ui/new")
+    page.click("#platform-writer summary")
+    page.fill("#pf-name", "written in the browser")
+    rows = page.locator("#pf-antennas tbody tr")
+    assert rows.count() == 3
+    for i, (ant, spec) in enumerate(plat["antennas"].items()):
+        row = rows.nth(i)
+        row.locator(".pf-id").fill(ant)
+        for k in range(3):
+            row.locator(f".pf-p{k}").fill(repr(spec["position_m"][k]))
+    written = json.loads(page.inner_text("#pf-preview"))
+    assert written["antennas"] == {a: {"position_m": s["position_m"], "boresight": [0, 0, -1]}
+                                   for a, s in plat["antennas"].items()}
+    assert written["master"] == next(iter(plat["antennas"])) and len(written["baselines"]) == 2
+    page.set_input_files("#set-files", [str(p) for p in files])
+    page.click("#pf-use")
+    names = page.eval_on_selector("#set-files", "i => Array.from(i.files).map(f => f.name)")
+    assert "platform.json" in names and len(names) == len(files) + 1
+    page.fill("#set-name", "platform from the form")
+    page.click("#upload-button")
+    page.locator("#uploaded-set").wait_for(state="visible", timeout=60_000)
+    set_id = page.get_attribute("#uploaded-set", "data-set-id")
+    with httpx.Client(base_url=site.url, headers={"Authorization": f"Bearer {attitude_job['key']}"}) as c:
+        summary = c.get(f"/v1/observation-sets/{set_id}").json()["summary"]
+        assert summary["platform"] == "written in the browser" and set(summary["antennas"]) == set(plat["antennas"])
+        # the template link serves the CONVENTIONS example
+        assert c.get("/static/platform-template.json").json()["antennas"]
+    # the form refuses an incomplete platform: one antenna
+    page.goto("/ui/new")
+    page.click("#platform-writer summary")
+    page.locator("#pf-antennas .pf-remove").first.click()
+    page.locator("#pf-antennas .pf-remove").first.click()
+    assert "at least two antennas" in page.inner_text(".js-pf-problem")
     context.close()
