@@ -60,11 +60,13 @@ router = APIRouter(prefix="/ui", include_in_schema=False)
 def install_pages(app: FastAPI) -> None:
     """Add the /ui pages, the /static assets, `/` -> /ui, the offline API docs (/docs, /redoc from vendored
     Swagger UI and ReDoc), /docs/conventions, and the CSRF guard of cookie-authenticated /v1 calls."""
+    from app.job_delete import router as job_delete_router
     from app.webhooks import router as webhooks_router
 
     install_docs(app)
     app.include_router(router)
     app.include_router(webhooks_router)
+    app.include_router(job_delete_router)
     app.mount("/static", StaticFiles(directory=str(STATIC_DIR)), name="static")
     app.add_api_route("/", lambda: RedirectResponse("/ui", status_code=307), methods=["GET"],
                       include_in_schema=False)

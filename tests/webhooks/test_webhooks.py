@@ -59,6 +59,7 @@ def api(tmp_path, monkeypatch):
         with rt.Session.begin() as s:
             key, _ = create_key(s, "team-w")
         client.headers["Authorization"] = f"Bearer {key}"
+        client.rt = rt
         yield client
     runner.set_runtime(None)
     rt.engine.dispose()
@@ -158,3 +159,30 @@ def test_deliveries_visible_on_the_job_page(api):
     cell = html.split('id="webhook"', 1)[1].split("</td>", 1)[0]
     assert rx.url in cell and "delivered" in cell and "2 attempts" in cell
     assert "HTTP 500" in cell and "204 ok" in cell
+
+
+def test_delete_job_frees_its_unshared_blobs(api):
+    """DELETE /v1/jobs/{id}: 204, the job and its product rows gone, blobs no one else refers to removed, blobs
+    shared with another job's product kept; unfinished jobs 409, other teams' 404."""
+    from core.models import Job, Product
+
+    first = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]
+    second = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]
+    blobs = api.app.state.blobs
+    prods = {p["name"]: p["sha256"] for p in api.get(f"/v1/jobs/{first}/products").json()}
+    other = {p["sha256"] for p in api.get(f"/v1/jobs/{second}/products").json()}
+    shared, own = set(prods.values()) & other, set(prods.values()) - other
+    assert own, "the two jobs must differ in some product for this test"
+    assert api.delete(f"/v1/jobs/{first}").status_code == 204
+    assert api.get(f"/v1/jobs/{first}").status_code == 404
+    assert all(not blobs.path(s).exists() for s in own)
+    assert all(blobs.path(s).exists() for s in shared)
+    assert all(blobs.path(s).exists() for s in other)
+    assert api.get(f"/v1/jobs/{second}/products/selftest.json").status_code == 200
+    assert api.delete(f"/v1/jobs/{first}").status_code == 404
+    with api.rt.Session.begin() as s:
+        s.add(Job(id="f" * 32, team_id=s.get(Job, second).team_id, type="selftest", state="running", config={},
+                  set_ids=[]))
+        assert s.query(Product).filter(Product.job_id == first).count() == 0
+    resp = api.delete("/v1/jobs/" + "f" * 32)
+    assert resp.status_code == 409 and "cancel" in resp.json()["detail"]
