@@ -16,6 +16,7 @@
   "use strict";
   const HEIGHT = 230;
   const MAX_BYTES = 80 * 1024 * 1024; // larger CSVs are linked, not charted (browser memory)
+  const MAX_DOTS = 2000; // series marked `points` are drawn as dots up to this many rows, as lines beyond
   const COLOURS = ["#d62728", "#2ca02c", "#1f77b4", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
                    "#7f7f7f", "#bcbd22"];
   const EULER = {yaw: "#d62728", pitch: "#2ca02c", roll: "#1f77b4"};
@@ -395,7 +396,8 @@
         label: s.label, stroke: colour, width: ref ? 1.75 : 1.25, dash: ref ? [6, 4] : undefined, alpha: ref ? 0.75 : 1,
         scale: s.scale || "y", spanGaps: false, value: (u, v) => fmt(v),
         paths: s.step ? uPlot.paths.stepped({align: 1}) : undefined,
-        points: s.points ? {show: true, size: 3, stroke: colour, fill: colour} : {show: false},
+        // dots only where few enough to see apart: a long pass's ~2e4 circles cost more than the rest of a chart
+        points: s.points && x.length <= MAX_DOTS ? {show: true, size: 3, stroke: colour, fill: colour} : {show: false},
       };
     }));
     const opts = {

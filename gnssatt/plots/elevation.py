@@ -50,12 +50,28 @@ def binned(el_deg: np.ndarray, values: np.ndarray, stat: str = "rms", bin_deg: f
 
 
 def _columns(res):
-    kind = column(res, "observable")
-    kind = None if kind is None else np.char.lower(np.asarray(kind, dtype=str))
+    """(phase mask, used, phase residual [mm], elevation [deg], C/N0) per row of residuals.csv in the long layout
+    (observable + residual_m) or the wide one (phase_residual_mm / phase_residual_m per row)."""
+    n = len(column(res, "time_gps"))
     used = column(res, "used")
-    used = np.ones(len(column(res, "time_gps")), bool) if used is None else truthy(used)
-    return (kind, used, numeric(res, "residual_m"), numeric(res, "el_ant_deg", "elevation_deg"),
-            numeric(res, "cn0_dbhz", "cn0"))
+    used = np.ones(n, bool) if used is None else truthy(used)
+    kind, r = column(res, "observable"), numeric(res, "residual_m")
+    if kind is not None and r is not None:
+        phase = np.char.lower(np.asarray(kind, dtype=str)) == "phase"
+        phase_mm = 1e3 * r
+    else:
+        mm, m = numeric(res, "phase_residual_mm"), numeric(res, "phase_residual_m")
+        phase_mm = mm if mm is not None else (1e3 * m if m is not None else np.full(n, np.nan))
+        phase = np.ones(n, bool)
+    el = numeric(res, "el_ant_deg", "elevation_deg", "elevation_antenna_deg", "el_deg")
+    cn0 = numeric(res, "cn0_dbhz", "cn0", "snr_dbhz")
+    return (phase, used, phase_mm, np.full(n, np.nan) if el is None else el,
+            np.full(n, np.nan) if cn0 is None else cn0)
+
+
+def _signals(res, n: int) -> tuple[list[str], np.ndarray]:
+    sig = column(res, "signal", "code", "frequency")
+    return categories(sig) if sig is not None else (["all"], np.zeros(n, dtype=np.int64))
 
 
 def elevation_figure(residuals_csv: Any, context: PlotContext | Mapping | None = None) -> Figure:
@@ -73,22 +89,21 @@ def elevation_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
             no_data(a, "no residuals")
         set_title(fig, title, context)
         return fig
-    kind, used, r, el, cn0 = _columns(res)
-    sig_names, sig_code = categories(column(res, "signal"))
-    phase = (kind == "phase") if kind is not None else np.ones(len(r), bool)
+    phase, used, r_mm, el, cn0 = _columns(res)
+    sig_names, sig_code = _signals(res, len(t))
     for row, name in enumerate(names):
         ax_r, ax_c = axes[row]
         for s, sig in enumerate(sig_names):
-            m = np.flatnonzero((code == row) & (sig_code == s) & used & phase & np.isfinite(r) & np.isfinite(el))
+            m = np.flatnonzero((code == row) & (sig_code == s) & used & phase & np.isfinite(r_mm) & np.isfinite(el))
             if m.size:
                 k = _thin(m)
                 colour = f"C{s % 10}"
-                ax_r.plot(el[k], 1e3 * r[k], ".", ms=1.2, color=colour, alpha=0.35)
-                c, rms, n = binned(el[m], 1e3 * r[m])
+                ax_r.plot(el[k], r_mm[k], ".", ms=1.2, color=colour, alpha=0.35)
+                c, rms, n = binned(el[m], r_mm[m])
                 ok = n >= 10
                 ax_r.plot(c[ok], rms[ok], "-o", ms=3, lw=1.2, color=colour, label=f"{sig}: RMS per {BIN_DEG:g}° bin")
             mc = np.flatnonzero((code == row) & (sig_code == s) & phase & np.isfinite(cn0) & np.isfinite(el))
-            if mc.size and cn0 is not None:
+            if mc.size:
                 mc = first_per_epoch_and_key(gps_time(res), sig_code, mc)
                 k = _thin(mc)
                 ax_c.plot(el[k], cn0[k], ".", ms=1.2, color=f"C{s % 10}", alpha=0.35)
@@ -129,11 +144,15 @@ def fix_skyplot_figure(residuals_csv: Any, baselines_csv: Any, context: PlotCont
         set_title(fig, title, context)
         return fig
     tr = gps_time(res).astype(np.int64)
-    tb = gps_time(bl).astype(np.int64)
-    bl_names = np.asarray(column(bl, "baseline"), dtype=str)
-    fixed_b = truthy(column(bl, "fixed"))
-    az, el = numeric(res, "az_ant_deg", "azimuth_deg"), numeric(res, "el_ant_deg", "elevation_deg")
-    _, sat_code = categories(column(res, "sat", "satellite"))
+    tb = gps_time(bl).astype(np.int64) if column(bl, "time_gps") is not None else np.zeros(0, np.int64)
+    bl_names = np.asarray(column(bl, "baseline") if column(bl, "baseline") is not None else [], dtype=str)
+    fixed_b = truthy(column(bl, "fixed")) if column(bl, "fixed") is not None else np.zeros(len(tb), bool)
+    nan = np.full(len(tr), np.nan)
+    az = numeric(res, "az_ant_deg", "azimuth_deg", "azimuth_antenna_deg", "az_deg")
+    el = numeric(res, "el_ant_deg", "elevation_deg", "elevation_antenna_deg", "el_deg")
+    az, el = (nan if az is None else az), (nan if el is None else el)
+    sat = column(res, "sat", "satellite", "prn")
+    _, sat_code = categories(sat) if sat is not None else ([], np.zeros(len(tr), dtype=np.int64))
     for j, (ax, name) in enumerate(zip(axes, names)):
         mb = bl_names == name
         order = np.argsort(tb[mb], kind="stable")

@@ -167,7 +167,7 @@ def test_delete_job_frees_its_unshared_blobs(api):
     from core.models import Job, Product
 
     first = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]
-    second = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]
+    second = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0, "fan_out": 2}}).json()["id"]
     blobs = api.app.state.blobs
     prods = {p["name"]: p["sha256"] for p in api.get(f"/v1/jobs/{first}/products").json()}
     other = {p["sha256"] for p in api.get(f"/v1/jobs/{second}/products").json()}
