@@ -27,7 +27,8 @@ def unreferenced(session, shas: set[str]) -> set[str]:
     return shas - used
 
 
-@router.delete("/{job_id}", status_code=204, responses={404: {"model": Problem}, 409: {"model": Problem}},
+@router.delete("/{job_id}", status_code=204, responses={401: {"model": Problem}, 404: {"model": Problem},
+                                                        409: {"model": Problem}, 422: {"model": Problem}},
                summary="Delete a finished job and its products")
 def delete_job(job_id: str, request: Request, team: TeamDep, session: SessionDep) -> Response:
     job = session.get(Job, job_id)

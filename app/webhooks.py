@@ -12,7 +12,7 @@ from fastapi import APIRouter
 from pydantic import BaseModel
 
 from app.deps import SessionDep, TeamDep
-from app.problems import ProblemError
+from app.problems import Problem, ProblemError
 from core.models import Job
 from core.webhook_models import JobWebhook, WebhookDelivery
 
@@ -72,7 +72,11 @@ def webhook_view(session, job_id: str) -> WebhookPublic | None:
                                                     error=r.error, duration_ms=r.duration_ms) for r in rows])
 
 
-@router.get("/{job_id}/webhook", response_model=WebhookPublic, summary="A job's webhook and its deliveries")
+ERRORS = {401: {"model": Problem}, 404: {"model": Problem}, 422: {"model": Problem}}
+
+
+@router.get("/{job_id}/webhook", response_model=WebhookPublic, responses=ERRORS,
+            summary="A job's webhook and its deliveries")
 def get_webhook(job_id: str, team: TeamDep, session: SessionDep) -> WebhookPublic:
     job = session.get(Job, job_id)
     if job is None or job.team_id != team.id:
