@@ -269,6 +269,10 @@ def all_products(sol, creation_date: str | None = None, aem_float_epochs: str = 
         if hdt is not None:
             out["heading.nmea"] = hdt
     else:
+        # one creation time per solution: products written twice from one solution are the same bytes
+        if creation_date is None:
+            creation_date = getattr(sol, "_aem_creation_date", None) or _utc_now()
+            setattr(sol, "_aem_creation_date", creation_date)
         aem = aem_kvn(sol, creation_date=creation_date, float_epochs=aem_float_epochs)
         if aem is not None:
             out["attitude.aem"] = aem
