@@ -44,20 +44,30 @@ def check_url(url: str) -> str:
     return url
 
 
-def register(session, job: Job, url: str | None, secret: str | None) -> str | None:
-    """Attach a webhook to a new job (before its commit); returns the secret when the server made it."""
+def check_webhook(url: str | None, secret: str | None) -> None:
+    """422 for a webhook_url that is not an absolute http(s) URL, a secret without a URL, or a secret of the
+    wrong length; nothing for no webhook at all."""
     if not url:
         if secret:
             raise ProblemError(422, "invalid-webhook-url", "webhook_secret without webhook_url",
                                "Give webhook_url with webhook_secret.", field="webhook_url")
+        return
+    check_url(url)
+    if secret is not None and not 16 <= len(secret) <= 200:
+        raise ProblemError(422, "invalid-webhook-secret", "Invalid webhook secret",
+                           "webhook_secret must be 16 to 200 characters.", field="webhook_secret")
+
+
+def register(session, job: Job, url: str | None, secret: str | None) -> str | None:
+    """Attach a webhook to a new job (flushed, before its commit; check_webhook has passed); returns the secret
+    when the server made it."""
+    check_webhook(url, secret)
+    if not url:
         return None
     made = None
     if not secret:
         secret = made = secrets.token_urlsafe(32)
-    elif not 16 <= len(secret) <= 200:
-        raise ProblemError(422, "invalid-webhook-secret", "Invalid webhook secret",
-                           "webhook_secret must be 16 to 200 characters.", field="webhook_secret")
-    session.add(JobWebhook(job_id=job.id, url=check_url(url), secret=secret, state="pending", attempts=0))
+    session.add(JobWebhook(job_id=job.id, url=url, secret=secret, state="pending", attempts=0))
     return made
 
 

@@ -87,6 +87,9 @@ def submit_job(body: JobCreate, request: Request, response: Response, team: Team
         from app.preflight import check_sets
 
         check_sets(spec.name, [session.get(ObservationSet, i) for i in ids])
+    from app.webhooks import check_webhook, register   # optional webhook of the job's end (issue 24)
+
+    check_webhook(body.webhook_url, body.webhook_secret)
     now = utcnow()
     settings = request.app.state.settings
     job = Job(team_id=team.id, type=spec.name, config=config.model_dump(mode="json"), set_ids=ids,
@@ -95,8 +98,6 @@ def submit_job(body: JobCreate, request: Request, response: Response, team: Team
     job.sets = [JobSet(set_id=sid, position=i) for i, sid in enumerate(ids)]
     session.add(job)
     session.flush()
-    from app.webhooks import register   # optional webhook of the job's end (issue 24)
-
     made_secret = register(session, job, body.webhook_url, body.webhook_secret)
     session.commit()
     try:

@@ -138,6 +138,10 @@ def test_unreachable_receiver_and_bad_urls(api):
         assert resp.status_code == 422 and resp.json()["field"] == "webhook_url", bad
     resp = api.post("/v1/jobs", json={"type": "selftest", "webhook_url": "http://127.0.0.1:9/", "webhook_secret": "short"})
     assert resp.status_code == 422 and resp.json()["field"] == "webhook_secret"
+    with api.rt.Session() as s:
+        from core.models import Job
+        n_jobs = s.query(Job).count()
+    assert n_jobs == 1, "a refused webhook must not leave a job behind"
     plain = api.post("/v1/jobs", json={"type": "selftest"}).json()
     assert api.get(f"/v1/jobs/{plain['id']}/webhook").status_code == 404
 
