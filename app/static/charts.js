@@ -267,6 +267,7 @@
     for (const c of registry.instances) {
       c.plot.axes[0].label = `${clock.system} time [hh:mm:ss]`;
       c.plot.redraw(false, true);
+      if (c.plot.cursor.idx != null) c.plot.setLegend({idx: c.plot.cursor.idx}); // the legend's time too
     }
   }
 

@@ -94,6 +94,8 @@ def test_job_page_verdict_overlay_zoom(browser, site, attitude_job, artifacts, w
     page.select_option("#time-system", "UTC")
     assert page.evaluate("GnssattCharts.instances[0].plot.axes[0].label").startswith("UTC")
     assert page.evaluate("GnssattCharts.clock.leap") == 18
+    legend_time = page.inner_text(".chart .u-legend .u-series:first-child .u-value").strip()
+    assert legend_time == "–" or legend_time.endswith("UTC"), legend_time
     page.screenshot(path=str(artifacts / f"ui-job-attitude-{width}.png"), full_page=True)
     assert _overflow(page) <= 0, (f"horizontal overflow at {width} px", _wide(page))
     assert page.console_errors == [], page.console_errors
