@@ -89,9 +89,61 @@ def cmd_revoke_key(args) -> None:
         sys.exit(1)
 
 
+def _read_config(path: str | None) -> dict:
+    if not path:
+        return {}
+    try:
+        config = json.loads(Path(path).read_text())
+    except OSError as exc:
+        sys.exit(f"gnssatt: cannot read the config file {path}: {exc.strerror}")
+    except json.JSONDecodeError as exc:
+        sys.exit(f"gnssatt: {path}, line {exc.lineno}, column {exc.colno}: not JSON ({exc.msg})")
+    if not isinstance(config, dict):
+        sys.exit(f"gnssatt: {path}: the config must be a JSON object, not {type(config).__name__}")
+    return config
+
+
+def check_job_request(c: GnssattClient, job_type: str, config: dict) -> dict:
+    """Before any upload: the job type exists and the server accepts the config (a submit without sets, which
+    the server refuses for the set count only after it has validated the type and the config; nothing is
+    queued). Exits with one line naming the problem; returns the job type's description."""
+    types = {t["name"]: t for t in c.job_types()}
+    spec = types.get(job_type)
+    if spec is None:
+        sys.exit(f"gnssatt: unknown job type {job_type!r}; the service has: {', '.join(sorted(types))}")
+    if spec.get("min_sets", 1) >= 1:
+        try:
+            c.submit_job(job_type, [], config)
+        except ApiError as exc:
+            if not str(exc.problem.get("type", "")).endswith("wrong-set-count"):
+                field = f" (field {exc.problem['field']})" if exc.problem.get("field") else ""
+                sys.exit(f"gnssatt: config refused before upload{field}: {exc.problem.get('detail', exc)}")
+        else:  # pragma: no cover - a server that queued a job without sets breaks its own contract
+            sys.exit("gnssatt: the server accepted a job without observation sets; not uploading")
+    return spec
+
+
+def print_quality(out_dir: Path) -> None:
+    """The quality block of summary.json (attitude jobs), one line per item, to stdout after the product paths."""
+    path = Path(out_dir) / "summary.json"
+    try:
+        quality = json.loads(path.read_text()).get("quality")
+    except (OSError, ValueError, AttributeError):
+        return
+    if not isinstance(quality, dict):
+        return
+    print(f"quality: {str(quality.get('verdict', '')).upper()}")
+    for it in quality.get("items", []):
+        print(f"  {it.get('verdict', ''):<5}  {it.get('label', '')}: {it.get('text', '')}")
+
+
 def cmd_submit(args) -> None:
-    config = json.loads(Path(args.config).read_text()) if args.config else {}
+    config = _read_config(args.config)
+    missing_files = [p for p in args.paths if not Path(p).exists()]
+    if missing_files:
+        sys.exit(f"gnssatt: no such file: {missing_files[0]}")
     with _client(args) as c:
+        check_job_request(c, args.type, config)
         obs_set = c.upload_set([Path(p) for p in args.paths], name=args.name)
         print(f"observation set {obs_set['id']}: {len(obs_set['files'])} file(s)", file=sys.stderr)
         job = c.submit_job(args.type, [obs_set["id"]], config)
@@ -112,12 +164,35 @@ def _finish(c: GnssattClient, job: dict, out: str | None) -> None:
     out_dir = Path(out or f"gnssatt-{job['id']}")
     for p in c.download_products(job["id"], out_dir):
         print(p)
+    print_quality(out_dir)
+
+
+def resolve_job_id(c: GnssattClient, given: str) -> str:
+    """A full job id, or the one job of the team whose id starts with `given` (the 8-character ids the pages
+    show); exits naming the candidates when the prefix is ambiguous or matches nothing."""
+    given = given.strip().lower()
+    if len(given) == 32:
+        return given
+    if len(given) < 4:
+        sys.exit(f"gnssatt: job id prefix {given!r} is too short (give at least 4 characters)")
+    matches, offset = [], 0
+    while True:
+        page = c.list_jobs(limit=500, offset=offset)
+        matches += [j["id"] for j in page["items"] if j["id"].startswith(given)]
+        if page.get("next_offset") is None or len(matches) > 1:
+            break
+        offset = page["next_offset"]
+    if not matches:
+        sys.exit(f"gnssatt: no job of your team has an id starting with {given!r}")
+    if len(matches) > 1:
+        sys.exit(f"gnssatt: job id prefix {given!r} is ambiguous: {', '.join(m[:12] for m in matches[:5])} ...")
+    return matches[0]
 
 
 def cmd_status(args) -> None:
     with _client(args) as c:
         if args.job_id:
-            print(json.dumps(c.get_job(args.job_id), indent=2))
+            print(json.dumps(c.get_job(resolve_job_id(c, args.job_id)), indent=2))
         else:
             for job in c.list_jobs(state=args.state, limit=args.limit)["items"]:
                 print(f"{job['id']}  {job['type']:<12} {job['state']:<9} {job['progress'] * 100:5.1f}%  "
@@ -126,9 +201,10 @@ def cmd_status(args) -> None:
 
 def cmd_fetch(args) -> None:
     with _client(args) as c:
-        job = c.get_job(args.job_id)
+        job_id = resolve_job_id(c, args.job_id)
+        job = c.get_job(job_id)
         if args.wait:
-            job = c.wait(args.job_id, on_update=_progress_bar)
+            job = c.wait(job_id, on_update=_progress_bar)
             sys.stderr.write("\n")
         _finish(c, job, args.out)
 
@@ -245,14 +321,14 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("status", help="one job, or the list of jobs")
     client_opts(s)
-    s.add_argument("job_id", nargs="?")
+    s.add_argument("job_id", nargs="?", help="a job id or a unique prefix of one (at least 4 characters)")
     s.add_argument("--state", default=None)
     s.add_argument("--limit", type=int, default=20)
     s.set_defaults(func=cmd_status)
 
     s = sub.add_parser("fetch", help="download a job's products")
     client_opts(s)
-    s.add_argument("job_id")
+    s.add_argument("job_id", help="a job id or a unique prefix of one (at least 4 characters)")
     s.add_argument("--out", default=None)
     s.add_argument("--wait", action="store_true")
     s.set_defaults(func=cmd_fetch)
@@ -282,12 +358,37 @@ def parse(argv: list[str] | None = None) -> argparse.Namespace:
     return args
 
 
+def one_line_error(exc: BaseException, args) -> str | None:
+    """The one line printed for an error a user can fix (server unreachable, key refused, timeouts), or None."""
+    import httpx
+
+    url = getattr(args, "url", None) or os.environ.get("GNSSATT_URL") or "http://127.0.0.1:8000"
+    if isinstance(exc, ApiError) and exc.status in (401, 403):
+        return (f"gnssatt: the service at {url} refused the API key ({exc.status} {exc.problem.get('title', '')}): "
+                "check --key / GNSSATT_API_KEY (an operator mints keys with 'gnssatt admin create-key --team NAME')")
+    if isinstance(exc, ApiError):
+        return f"gnssatt: {exc}"
+    if isinstance(exc, httpx.ConnectError):
+        return (f"gnssatt: cannot connect to the service at {url} ({exc}): is it running ('make demo' or "
+                "'gnssatt serve')? Set --url / GNSSATT_URL for another address")
+    if isinstance(exc, httpx.TimeoutException):
+        return f"gnssatt: the service at {url} did not answer in time ({exc.__class__.__name__})"
+    if isinstance(exc, httpx.TransportError):
+        return f"gnssatt: connection to {url} failed: {exc.__class__.__name__}: {exc}"
+    if isinstance(exc, TimeoutError):
+        return f"gnssatt: {exc}"
+    return None
+
+
 def main(argv: list[str] | None = None) -> None:
     args = parse(argv)
     try:
         args.func(args)
-    except ApiError as exc:
-        print(f"gnssatt: {exc}", file=sys.stderr)
+    except Exception as exc:  # noqa: BLE001 - errors a user can fix are one line; others keep their traceback
+        line = one_line_error(exc, args)
+        if line is None:
+            raise
+        print(line, file=sys.stderr)
         sys.exit(1)
 
 

@@ -141,11 +141,32 @@ def demo(port: int, data_dir: Path, scenario: str, duration_s: float, job_type: 
             local = client.download_products(job["id"], data_dir / "demo-products" / job["id"])
         for prod, path in zip(client.products(job["id"]), local):
             print(f"  {prod['url']}\n    -> {path}")
-        attitude = data_dir / "demo-products" / job["id"] / "attitude.csv"
+        folder = data_dir / "demo-products" / job["id"]
+        attitude = folder / "attitude.csv"
         if attitude.is_file():
             print_accuracy(attitude, sample / "truth" / "attitude.csv")
-    print(f"\nAPI docs: {url}/docs   API key: {key}")
-    print("The service keeps running in the background. Stop it with: make stop")
+        print_quality(folder)
+    print(f"\nAPI docs: {url}/docs   conventions: {url}/docs/conventions   API key: {key}")
+    print("The service keeps running in the background. Stop it with: make stop\n")
+    for line in final_lines(url, key, job["id"], folder):
+        print(line)
+
+
+def final_lines(url: str, key: str, job_id: str, folder: Path) -> list[str]:
+    """The demo's last three lines: the job page (a sign-in link whose key travels in the URL fragment, which the
+    browser keeps to itself), the report, the products folder."""
+    from urllib.parse import quote
+
+    page = f"{url}/ui/login?next={quote('/ui/jobs/' + job_id, safe='')}#key={quote(key, safe='')}"
+    report = folder / "report.html"
+    return [f"job page: {page}", f"report:   {report if report.is_file() else url + '/ui/jobs/' + job_id + '/report'}",
+            f"products: {folder}"]
+
+
+def print_quality(folder: Path) -> None:
+    from client.cli import print_quality as _print
+
+    _print(folder)
 
 
 def _read_quaternions(path: Path) -> dict[str, tuple]:

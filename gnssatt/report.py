@@ -27,7 +27,12 @@ th{background:#eef2f7;text-align:center}td.k{text-align:left;color:#3c4957;backg
 tfoot td{font-weight:600;background:#f3f3f3}
 figure{margin:10px 0 24px}figure img{max-width:100%;height:auto;border:1px solid #e3e8ee}
 figcaption{font-size:12px;color:#5a6775}
-@media print{body{padding:0}figure{break-inside:avoid}}
+.verdict{display:inline-block;padding:1px 8px;border-radius:10px;font-size:12px;font-weight:600;text-transform:uppercase}
+.verdict-pass{background:#e3f3e7;color:#237a3b}.verdict-check{background:#fff3dc;color:#a86400}
+.verdict-fail{background:#fde4e2;color:#b3261e}.verdict-info{background:#eef2f7;color:#5a6775}
+table.quality td,table.quality th{text-align:left}pre.config{background:#f7f9fb;padding:6px 8px;font-size:12px;
+white-space:pre-wrap;overflow-wrap:anywhere}details summary{cursor:pointer;color:#1f5fa8}
+@media print{body{padding:0}figure{break-inside:avoid}details>*{display:block}}
 """
 
 
@@ -83,9 +88,29 @@ def _table_html(name: str, table: Any) -> str:
             + (f"<tfoot>{foot}</tfoot>" if foot else "") + "</table>")
 
 
+def quality_html(quality: Mapping[str, Any]) -> str:
+    """The quality block of summary.json (gnssatt.attitude.quality) as a verdict table and the epoch lists."""
+    verdict = _esc(quality.get("verdict", ""))
+    rows = "".join(f"<tr><th>{_esc(it.get('label'))}</th><td>{_esc(it.get('text'))}</td>"
+                   f"<td><span class=\"verdict verdict-{_esc(it.get('verdict'))}\">{_esc(it.get('verdict'))}</span></td>"
+                   f"<td>{_esc(it.get('threshold'))}</td></tr>" for it in quality.get("items", []))
+    parts = [f"<h2>Quality <span class=\"verdict verdict-{verdict}\">{verdict}</span></h2>"
+             f"<table class=\"quality\"><thead><tr><th>item</th><th>result</th><th>verdict</th><th>threshold</th></tr>"
+             f"</thead><tbody>{rows}</tbody></table>"]
+    for key, name in (("wrong_fixes", "Wrong fixes"), ("over_1deg", "Fixed epochs over 1 deg (not wrong fixes)")):
+        lst = quality.get(key) or []
+        if lst:
+            body = "".join(f"<tr><td>{_esc(e['time_gps'])}</td><td>{_esc(e['axis'])}</td><td>{e['error_deg']:+.3f}</td>"
+                           f"<td>{e['sigma_deg']:.3f}</td><td>{_esc(e['label'])}</td></tr>" for e in lst)
+            parts.append(f"<details><summary>{_esc(name)}: {len(lst)}</summary><table><thead><tr><th>GPS time</th>"
+                         f"<th>axis</th><th>error [deg]</th><th>sigma [deg]</th><th>label</th></tr></thead>"
+                         f"<tbody>{body}</tbody></table></details>")
+    return "".join(parts)
+
+
 def html_report(title: str, summary: Mapping[str, Any] | None, plots: Mapping[str, bytes] | None,
                 tables: Mapping[str, Any] | Sequence[tuple[str, Any]] | None = None,
-                generated_at: _dt.datetime | None = None) -> str:
+                generated_at: _dt.datetime | None = None, config: Mapping[str, Any] | None = None) -> str:
     """One self-contained HTML document: title, summary numbers as a key/value table, each table, and each
     plot as an inline `data:image/png;base64` image with its name as caption. All text is HTML-escaped.
 
@@ -96,16 +121,28 @@ def html_report(title: str, summary: Mapping[str, Any] | None, plots: Mapping[st
         tables: {name: rows} where rows are a list of dicts, a (columns, rows) pair, or
             {"columns", "rows", "footer"} (e.g. gnssatt.plots.ttff.table5()).
         generated_at: time stamp printed under the title (default: now, UTC).
+        config: the job's configuration, shown once (the plots' titles need not repeat it).
+
+    A `quality` block in the summary (attitude jobs) comes first as a verdict table; the raw summary keys follow
+    in a collapsed section, with sensible digits (format_value).
     """
     when = (generated_at or _dt.datetime.now(_dt.timezone.utc)).strftime("%Y-%m-%d %H:%M:%S UTC")
     parts = [f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
              f"<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
              f"<title>{_esc(title)}</title><style>{_CSS}</style></head><body>",
              f"<h1>{_esc(title)}</h1><div class=\"meta\">gnssatt report · generated {when} · times in GPS time</div>"]
+    quality = summary.get("quality") if isinstance(summary, Mapping) else None
+    if isinstance(quality, Mapping):
+        parts.append(quality_html(quality))
     if summary:
         rows = "".join(f"<tr><td class=\"k\">{_esc(k)}</td><td>{_esc(format_value(v))}</td></tr>"
-                       for k, v in flatten_summary(summary))
-        parts.append(f"<h2>Summary</h2><table class=\"summary\"><tbody>{rows}</tbody></table>")
+                       for k, v in flatten_summary({k: v for k, v in summary.items() if k != "quality"}))
+        table = f"<table class=\"summary\"><tbody>{rows}</tbody></table>"
+        parts.append(f"<details><summary>All summary keys (raw summary.json)</summary>{table}</details>"
+                     if isinstance(quality, Mapping) else f"<h2>Summary</h2>{table}")
+    if config:
+        parts.append(f"<h2>Configuration</h2><pre class=\"config\">"
+                     f"{_esc(json.dumps(config, indent=2, sort_keys=True, default=str))}</pre>")
     items = tables.items() if isinstance(tables, Mapping) else (tables or [])
     for name, table in items:
         parts.append(_table_html(name, table))

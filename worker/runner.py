@@ -140,7 +140,17 @@ def _log_text(ctx: JobContext) -> str | None:
 # --- the whole life of one attempt ----------------------------------------------------------------
 
 def execute_job(rt: Runtime, job_id: str) -> str | None:
-    """Claim and run one job; returns the state it was left in, or None when it could not be claimed."""
+    """Claim and run one job; returns the state it was left in, or None when it could not be claimed. A job that
+    ended (succeeded, failed, cancelled) has its webhook, if any, sent (worker.webhooks)."""
+    state = _execute_job(rt, job_id)
+    if state in TERMINAL_STATES:
+        from worker.webhooks import notify_finished
+
+        notify_finished(rt, job_id)
+    return state
+
+
+def _execute_job(rt: Runtime, job_id: str) -> str | None:
     claimed = claim(rt, job_id)
     if claimed is None:
         return None

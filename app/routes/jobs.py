@@ -83,6 +83,13 @@ def submit_job(body: JobCreate, request: Request, response: Response, team: Team
                 raise ProblemError(422, "unknown-pcv-map", "Unknown PCV map",
                                    f"No PCV map {map_id!r} is visible to your team; GET /v1/pcv-maps lists them.",
                                    field=f"config.pcv_map_ids.{i}")
+    if ids:   # refuse now what a worker could not run: platform, orbits, antennas' files, common epochs
+        from app.preflight import check_sets
+
+        check_sets(spec.name, [session.get(ObservationSet, i) for i in ids])
+    from app.webhooks import check_webhook, register   # optional webhook of the job's end (issue 24)
+
+    check_webhook(body.webhook_url, body.webhook_secret)
     now = utcnow()
     settings = request.app.state.settings
     job = Job(team_id=team.id, type=spec.name, config=config.model_dump(mode="json"), set_ids=ids,
@@ -90,13 +97,18 @@ def submit_job(body: JobCreate, request: Request, response: Response, team: Team
               max_attempts=settings.max_attempts, cancel_requested=False)
     job.sets = [JobSet(set_id=sid, position=i) for i, sid in enumerate(ids)]
     session.add(job)
+    session.flush()
+    made_secret = register(session, job, body.webhook_url, body.webhook_secret)
     session.commit()
     try:
         enqueue(request.app.state.huey, job.id)
     except Exception:  # noqa: BLE001 - the job row is the truth: the reaper re-rings queued jobs
         log.warning("could not enqueue job %s now; a worker's reaper will pick it up", job.id, exc_info=True)
     response.headers["Location"] = f"/v1/jobs/{job.id}"
-    return to_public(job)
+    public = to_public(job)
+    if made_secret:
+        public.webhook_secret = made_secret
+    return public
 
 
 @router.get("", response_model=Page[JobPublic], responses=ERRORS, summary="List jobs")

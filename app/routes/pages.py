@@ -58,12 +58,68 @@ router = APIRouter(prefix="/ui", include_in_schema=False)
 # --- wiring --------------------------------------------------------------------------------------------------
 
 def install_pages(app: FastAPI) -> None:
-    """Add the /ui pages, the /static assets, `/` -> /ui and the CSRF guard of cookie-authenticated /v1 calls."""
+    """Add the /ui pages, the /static assets, `/` -> /ui, the offline API docs (/docs, /redoc from vendored
+    Swagger UI and ReDoc), /docs/conventions, and the CSRF guard of cookie-authenticated /v1 calls."""
+    from app.job_delete import router as job_delete_router
+    from app.webhooks import router as webhooks_router
+
+    install_docs(app)
     app.include_router(router)
+    app.include_router(webhooks_router)
+    app.include_router(job_delete_router)
     app.mount("/static", StaticFiles(directory=str(STATIC_DIR)), name="static")
     app.add_api_route("/", lambda: RedirectResponse("/ui", status_code=307), methods=["GET"],
                       include_in_schema=False)
     app.add_middleware(CsrfMiddleware)
+
+
+REPO_DIR = APP_DIR.parent
+CONVENTIONS_MD = REPO_DIR / "docs" / "CONVENTIONS.md"
+
+
+def install_docs(app: FastAPI) -> None:
+    """/docs (Swagger UI) and /redoc (ReDoc) from the assets in static/vendor instead of FastAPI's CDN URLs, so
+    the API documentation renders without a network; /docs/conventions renders docs/CONVENTIONS.md."""
+    from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
+
+    app.router.routes[:] = [r for r in app.router.routes if getattr(r, "path", None) not in ("/docs", "/redoc")]
+    openapi_url = app.openapi_url or "/openapi.json"
+
+    def swagger(request: Request):
+        return get_swagger_ui_html(openapi_url=openapi_url, title=f"{app.title} API",
+                                   swagger_js_url="/static/vendor/swagger-ui/swagger-ui-bundle.js",
+                                   swagger_css_url="/static/vendor/swagger-ui/swagger-ui.css",
+                                   swagger_favicon_url="/static/favicon.svg",
+                                   oauth2_redirect_url=app.swagger_ui_oauth2_redirect_url)
+
+    def redoc(request: Request):
+        return get_redoc_html(openapi_url=openapi_url, title=f"{app.title} API",
+                              redoc_js_url="/static/vendor/redoc/redoc.standalone.js",
+                              redoc_favicon_url="/static/favicon.svg", with_google_fonts=False)
+
+    app.add_api_route("/docs", swagger, methods=["GET"], include_in_schema=False)
+    app.add_api_route("/redoc", redoc, methods=["GET"], include_in_schema=False)
+    app.add_api_route("/docs/conventions", conventions_page, methods=["GET"], include_in_schema=False)
+
+
+def conventions_html() -> str | None:
+    """docs/CONVENTIONS.md as HTML (CommonMark + tables by markdown-it-py; raw HTML in the file is escaped)."""
+    from markdown_it import MarkdownIt
+
+    try:
+        text = CONVENTIONS_MD.read_text(encoding="utf-8")
+    except OSError:
+        return None
+    return MarkdownIt("commonmark", {"html": False}).enable("table").render(text)
+
+
+def conventions_page(request: Request, session: SessionDep):
+    """The file formats and conventions every error message cites, readable without signing in."""
+    body = conventions_html()
+    if body is None:
+        return problem_page(request, None, ProblemError(404, "not-found", "CONVENTIONS.md missing",
+                                                        "docs/CONVENTIONS.md is not in this installation."))
+    return render(request, "conventions.html", team=page_team(request, session), body=body)
 
 
 class CsrfMiddleware:
@@ -165,11 +221,29 @@ def product_url(job_id: str, name: str) -> str:
     return f"/v1/jobs/{quote(job_id, safe='')}/products/{quote(name, safe='')}"
 
 
-def job_view(job: Job) -> dict[str, Any]:
+def job_view(job: Job, set_names: dict[str, str] | None = None) -> dict[str, Any]:
+    """A job for the templates; set_names (set id -> name) fills `set_names`, the duration is started to
+    finished [s] (None while it runs)."""
+    duration = None
+    if job.started_at is not None and job.finished_at is not None:
+        duration = max((job.finished_at - job.started_at).total_seconds(), 0.0)
+    ids = list(job.set_ids or [])
     return {"id": job.id, "type": job.type, "state": job.state, "progress": float(job.progress or 0.0),
             "stage": job.stage, "created_at": job.created_at, "started_at": job.started_at,
             "finished_at": job.finished_at, "attempts": job.attempts, "error": job.error,
-            "config": job.config or {}, "set_ids": list(job.set_ids or []), "terminal": job.state in TERMINAL}
+            "config": job.config or {}, "set_ids": ids, "terminal": job.state in TERMINAL,
+            "duration_s": duration,
+            "set_names": [{"id": i, "name": (set_names or {}).get(i) or i[:8]} for i in ids]}
+
+
+def set_names_of(session, team_id: str, jobs) -> dict[str, str]:
+    """Set id -> name (or short id) of the sets the jobs read, in one query."""
+    ids = {i for j in jobs for i in (j.set_ids or [])}
+    if not ids:
+        return {}
+    rows = session.execute(select(ObservationSet.id, ObservationSet.name).where(
+        ObservationSet.id.in_(list(ids)), ObservationSet.team_id == team_id)).all()
+    return {i: (n or i[:8]) for i, n in rows}
 
 
 def summary_items(summary: Any, prefix: str = "", depth: int = 3) -> list[tuple[str, str]]:
@@ -249,7 +323,8 @@ def dashboard(request: Request, session: SessionDep, sets_offset: int = 0, jobs_
                            .limit(PAGE_SIZE).offset(sets_offset)).scalars().all()
     jobs = session.execute(jobs_q.order_by(Job.created_at.desc(), Job.id)
                            .limit(PAGE_SIZE).offset(jobs_offset)).scalars().all()
-    return render(request, "dashboard.html", team=team, sets=sets, jobs=[job_view(j) for j in jobs],
+    names = set_names_of(session, team.id, jobs)
+    return render(request, "dashboard.html", team=team, sets=sets, jobs=[job_view(j, names) for j in jobs],
                   n_sets=n_sets, n_jobs=n_jobs, sets_offset=sets_offset, jobs_offset=jobs_offset,
                   page_size=PAGE_SIZE)
 
@@ -268,8 +343,9 @@ def set_page(set_id: str, request: Request, session: SessionDep):
                            .where(JobSet.set_id == set_id, Job.team_id == team.id)
                            .order_by(Job.created_at.desc()).limit(PAGE_SIZE)).scalars().all()
     summary = {k: v for k, v in (obs_set.summary or {}).items() if k != "files"}
+    names = set_names_of(session, team.id, jobs)
     return render(request, "set.html", team=team, obs_set=obs_set, files=obs_set.files,
-                  summary=summary_items(summary), jobs=[job_view(j) for j in jobs])
+                  summary=summary_items(summary), jobs=[job_view(j, names) for j in jobs])
 
 
 @router.get("/jobs/{job_id}", response_class=HTMLResponse)
@@ -299,10 +375,96 @@ def job_page(job_id: str, request: Request, session: SessionDep):
                                                         ObservationSet.team_id == team.id)).scalars().all()
     images = [r for r in rows if r["media_type"] == "image/png"]
     charts = [r for r in rows if r["name"].endswith(".csv")]
+    charts = [r for r in rows if r["name"].endswith(".csv") or r["name"] == "charts.json"]
+    quality = summary.get("quality") if isinstance(summary, dict) and isinstance(summary.get("quality"), dict) else None
+    raw = {k: v for k, v in summary.items() if k != "quality"} if isinstance(summary, dict) else summary
+    base = f"/ui/jobs/{quote(job.id, safe='')}"
+    from app.webhooks import webhook_view
+
     return render(request, "job.html", team=team, job=job_view(job), products=rows, images=images,
-                  charts=charts, summary=summary_items(summary) if summary is not None else [],
-                  summary_note=summary_note, sets=sets,
+                  webhook=webhook_view(session, job.id),
+                  charts=charts, summary=summary_items(raw) if raw is not None else [],
+                  summary_note=summary_note, sets=sets, quality=quality,
+                  report_url=f"{base}/report" if "report.html" in by_name else None,
+                  pdf_url=f"{base}/report.pdf" if "report.html" in by_name and pdf_available() else None,
+                  zip_url=f"{base}/all.zip",
                   config_text=json.dumps(job.config or {}, indent=2, sort_keys=True))
+
+
+#: Content-Security-Policy of report.html shown inline: its own inline CSS and data: images, nothing else.
+REPORT_CSP = "default-src 'none'; style-src 'unsafe-inline'; img-src data:; frame-ancestors 'self'; base-uri 'none'"
+
+
+def _owned_job(request: Request, session, job_id: str) -> tuple[Team | None, Job | None, Response | None]:
+    team = page_team(request, session)
+    if team is None:
+        return None, None, to_login(request)
+    job = session.get(Job, job_id)
+    if job is None or job.team_id != team.id:
+        return team, None, problem_page(request, team, ProblemError(404, "not-found", "Job not found",
+                                                                    f"No job with id {job_id!r} is visible to your team."))
+    return team, job, None
+
+
+def _product(session, job: Job, name: str) -> Product | None:
+    return session.execute(select(Product).where(Product.job_id == job.id, Product.name == name)).scalar_one_or_none()
+
+
+@router.get("/jobs/{job_id}/report", response_class=HTMLResponse)
+def report_inline(job_id: str, request: Request, session: SessionDep):
+    """report.html shown in the browser (not downloaded), under a CSP that allows only its inline CSS and images."""
+    team, job, early = _owned_job(request, session, job_id)
+    if early is not None:
+        return early
+    p = _product(session, job, "report.html")
+    if p is None:
+        return problem_page(request, team, ProblemError(404, "not-found", "No report", "This job has no report.html."))
+    resp = HTMLResponse(request.app.state.blobs.path(p.sha256).read_text())
+    _finish(request, resp)
+    resp.headers["Content-Security-Policy"] = REPORT_CSP
+    resp.headers["Content-Disposition"] = 'inline; filename="report.html"'
+    return resp
+
+
+def pdf_available() -> bool:
+    from app.report_pdf import available
+
+    return available()
+
+
+@router.get("/jobs/{job_id}/report.pdf")
+def report_pdf(job_id: str, request: Request, session: SessionDep):
+    """report.html printed to PDF by the system Chromium (app.report_pdf), cached beside the blobs."""
+    from app.report_pdf import PdfUnavailable, pdf_of
+
+    team, job, early = _owned_job(request, session, job_id)
+    if early is not None:
+        return early
+    p = _product(session, job, "report.html")
+    if p is None:
+        return problem_page(request, team, ProblemError(404, "not-found", "No report", "This job has no report.html."))
+    try:
+        data = pdf_of(request.app.state.blobs.path(p.sha256), p.sha256)
+    except PdfUnavailable as exc:
+        return problem_page(request, team, ProblemError(503, "pdf-unavailable", "PDF not available", str(exc)))
+    return _finish(request, Response(data, media_type="application/pdf", headers={
+        "Content-Disposition": f'attachment; filename="report-{job.id[:8]}.pdf"'}))
+
+
+@router.get("/jobs/{job_id}/all.zip")
+def download_all(job_id: str, request: Request, session: SessionDep):
+    """Every product of the job, its configuration and the versions of the software and of the inputs, in one zip."""
+    from app.bundle import job_bundle
+
+    team, job, early = _owned_job(request, session, job_id)
+    if early is not None:
+        return early
+    products = session.execute(select(Product).where(Product.job_id == job.id).order_by(Product.name)).scalars().all()
+    sets = session.execute(select(ObservationSet).where(ObservationSet.id.in_(list(job.set_ids or [])),
+                                                        ObservationSet.team_id == team.id)).scalars().all()
+    data = job_bundle(job, products, sets, request.app.state.blobs.path)
+    return _finish(request, Response(data, media_type="application/zip", headers={
+        "Content-Disposition": f'attachment; filename="gnssatt-{job.id[:8]}.zip"'}))
 
 
 @router.get("/new", response_class=HTMLResponse)

@@ -13,6 +13,10 @@ class JobCreate(BaseModel):
     type: str = Field(description="A job type from GET /v1/job-types.", min_length=1, max_length=60)
     observation_set_ids: list[str] = Field(default_factory=list, max_length=10000)
     config: dict[str, Any] = Field(default_factory=dict, description="Validated against the type's config schema.")
+    webhook_url: str | None = Field(None, max_length=2000, description="http(s) URL sent an HMAC-signed POST "
+                                    "when the job ends (app/webhooks.py, worker/webhooks.py).")
+    webhook_secret: str | None = Field(None, max_length=200, description="HMAC-SHA256 key of the webhook's "
+                                       "X-Gnssatt-Signature (16-200 characters); made by the server when omitted.")
 
 
 class JobPublic(BaseModel):
@@ -28,6 +32,8 @@ class JobPublic(BaseModel):
     error: dict[str, Any] | None = Field(description="RFC 9457 problem document of a failed job.")
     config: dict[str, Any]
     observation_set_ids: list[str]
+    webhook_secret: str | None = Field(None, description="The webhook's HMAC key, only in the answer to the submit "
+                                       "that made it (no webhook_secret given).")
 
 
 class ProductPublic(BaseModel):

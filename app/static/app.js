@@ -355,7 +355,98 @@
     canvas.dataset.ready = "1";
   }
 
+  /* A sign-in link carries the key in its fragment (/ui/login?next=...#key=KEY, printed by `make demo`): the
+   * fragment never reaches the server or its logs; the page fills the form, forgets the fragment, signs in. */
+  function signInFromFragment() {
+    const form = document.getElementById("login-form");
+    if (!form || !location.hash.startsWith("#key=")) return;
+    const key = decodeURIComponent(location.hash.slice(5));
+    history.replaceState(null, "", location.pathname + location.search);
+    const input = document.getElementById("api_key");
+    if (!input || !key) return;
+    input.value = key;
+    form.submit();
+  }
+
+  /* /ui/new: a form that writes platform.json (CONVENTIONS.md) and adds it to the upload's file list. */
+  function wirePlatformWriter() {
+    const form = document.getElementById("platform-form");
+    if (!form) return;
+    const body = form.querySelector("#pf-antennas tbody");
+    const preview = document.getElementById("pf-preview");
+    const problem = document.querySelector(".js-pf-problem");
+    const BORESIGHTS = {"-z (zenith for a nadir-pointing body z)": [0, 0, -1], "+z": [0, 0, 1], "+x": [1, 0, 0],
+                        "-x": [-1, 0, 0], "+y": [0, 1, 0], "-y": [0, -1, 0]};
+    function addRow(id, pos, bore) {
+      const tr = el("tr", {class: "pf-antenna"});
+      const cell = (input) => { const td = el("td"); td.appendChild(input); tr.appendChild(td); return input; };
+      cell(el("input", {type: "text", class: "pf-id", value: id, maxlength: "60", required: ""}));
+      for (let i = 0; i < 3; i++) cell(el("input", {type: "number", step: "any", class: `pf-p${i}`, value: String(pos[i])}));
+      const sel = cell(el("select", {class: "pf-bore"}));
+      for (const [label, v] of Object.entries(BORESIGHTS)) {
+        const o = el("option", {value: JSON.stringify(v)}, label);
+        if (JSON.stringify(v) === JSON.stringify(bore)) o.selected = true;
+        sel.appendChild(o);
+      }
+      const rm = el("button", {type: "button", class: "link pf-remove"}, "remove");
+      rm.addEventListener("click", () => { tr.remove(); update(); });
+      cell(rm);
+      body.appendChild(tr);
+    }
+    function doc() {
+      const rows = Array.from(body.querySelectorAll("tr.pf-antenna"));
+      const antennas = {};
+      const errors = [];
+      for (const [i, r] of rows.entries()) {
+        const id = r.querySelector(".pf-id").value.trim();
+        const pos = [0, 1, 2].map((k) => Number(r.querySelector(`.pf-p${k}`).value));
+        if (!id) errors.push(`antenna ${i + 1}: give its id (the RINEX MARKER NAME of its file)`);
+        else if (antennas[id]) errors.push(`antenna ${id} is listed twice`);
+        if (pos.some((v) => !Number.isFinite(v))) errors.push(`antenna ${id || i + 1}: x, y, z must be numbers [m]`);
+        antennas[id] = {position_m: pos, boresight: JSON.parse(r.querySelector(".pf-bore").value)};
+      }
+      const ids = Object.keys(antennas);
+      if (ids.length < 2) errors.push("an attitude needs at least two antennas");
+      const out = {name: document.getElementById("pf-name").value.trim() || "platform",
+                   kind: document.getElementById("pf-kind").value, antennas, master: ids[0],
+                   baselines: ids.slice(1).map((b) => [ids[0], b])};
+      return {out, errors};
+    }
+    function update() {
+      const {out, errors} = doc();
+      const text = JSON.stringify(out, null, 2) + "\n";
+      preview.textContent = text;
+      problem.hidden = !errors.length;
+      problem.textContent = errors.join("; ");
+      const link = document.getElementById("pf-download");
+      if (link.dataset.url) URL.revokeObjectURL(link.dataset.url);
+      link.dataset.url = URL.createObjectURL(new Blob([text], {type: "application/json"}));
+      link.href = link.dataset.url;
+      return {text, errors};
+    }
+    addRow("GPS-2", [0, 0, 0], [0, 0, -1]);
+    addRow("GPS-0", [1.0, 0, 0], [0, 0, -1]);
+    addRow("GPS-1", [0, 1.0, 0], [0, 0, -1]);
+    form.addEventListener("input", update);
+    form.addEventListener("change", update);
+    document.getElementById("pf-add").addEventListener("click", () => { addRow(`ANT-${body.children.length + 1}`, [0, 0, 0], [0, 0, -1]); update(); });
+    document.getElementById("pf-use").addEventListener("click", () => {
+      const {text, errors} = update();
+      if (errors.length) return;
+      const input = document.getElementById("set-files");
+      const dt = new DataTransfer();
+      for (const f of Array.from(input.files || [])) if (f.name !== "platform.json") dt.items.add(f);
+      dt.items.add(new File([text], "platform.json", {type: "application/json"}));
+      input.files = dt.files;
+      input.dispatchEvent(new Event("change"));
+      document.getElementById("pf-use").textContent = "platform.json added to the upload ✓";
+    });
+    update();
+  }
+
   window.gnssatt = {api, showProblem};
+  signInFromFragment();
+  wirePlatformWriter();
   startLiveProgress();
   wireCancel();
   wireNewPage();

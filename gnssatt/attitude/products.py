@@ -15,7 +15,8 @@ import numpy as np
 
 from gnssatt.attitude.filter import REASONS
 
-__all__ = ["attitude_csv", "baselines_csv", "residuals_csv", "events_csv", "aem_kvn", "nmea_hdt", "all_products",
+__all__ = ["attitude_csv", "baselines_csv", "residuals_csv", "events_csv", "errors_csv", "aem_kvn", "nmea_hdt",
+           "sign_continuous", "all_products",
            "product_tables", "write_products"]
 
 
@@ -130,62 +131,87 @@ def events_csv(sol) -> str:
     return buf.getvalue()
 
 
-def aem_kvn(sol, creation_date: str = "2000-01-01T00:00:00", originator: str = "GNSSATT") -> str | None:
-    """CCSDS AEM 1.0 KVN of the GCRF->body quaternions (scalar first), or None without an attitude."""
-    if sol.att_epochs is None or sol.att_epochs.size == 0:
-        return None
-    t = sol.pobs.time[sol.att_epochs]
-    iso = np.asarray(t.iso(3))
-    name = sol.inputs.platform.name
-    lines = [
-        "CCSDS_AEM_VERS = 1.0",
-        f"CREATION_DATE = {creation_date}",
-        f"ORIGINATOR = {originator}",
-        "",
-        "META_START",
-        "COMMENT GNSS attitude (gnssatt): passive quaternion GCRF -> body, v_body = R(q) v_gcrf, scalar first",
-        "COMMENT GCRF from ECEF by IAU 2006/2000A with zero EOP; float epochs included (see attitude.csv fixed)",
-        f"OBJECT_NAME = {name}",
-        f"OBJECT_ID = {name}",
-        "CENTER_NAME = EARTH",
-        "REF_FRAME_A = GCRF",
-        "REF_FRAME_B = SC_BODY_1",
-        "ATTITUDE_DIR = A2B",
-        "TIME_SYSTEM = GPS",
-        f"START_TIME = {iso[0]}",
-        f"USEABLE_START_TIME = {iso[0]}",
-        f"USEABLE_STOP_TIME = {iso[-1]}",
-        f"STOP_TIME = {iso[-1]}",
-        "ATTITUDE_TYPE = QUATERNION",
-        "QUATERNION_TYPE = FIRST",
-        "META_STOP",
-        "",
-        "DATA_START",
-    ]
-    q = sol.q_body_from_gcrf
+def sign_continuous(q: np.ndarray) -> np.ndarray:
+    """Quaternions (n, 4) with signs chosen so that consecutive rows have a non-negative dot product (q and -q
+    are the same rotation; interpolators of AEM data need the short way between samples)."""
+    q = np.array(q, dtype=np.float64, copy=True)
+    if len(q) < 2:
+        return q
+    flip = np.cumsum(np.sum(q[1:] * q[:-1], axis=1) < 0) % 2 == 1
+    q[1:][flip] *= -1.0
+    return q
+
+
+def _utc_now() -> str:
+    import datetime as _dt
+
+    return _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%S")
+
+
+def _aem_segment(name: str, iso: np.ndarray, q: np.ndarray, comments: list[str], useable: bool) -> list[str]:
+    meta = ["META_START", *(f"COMMENT {c}" for c in comments), f"OBJECT_NAME = {name}", f"OBJECT_ID = {name}",
+            "CENTER_NAME = EARTH", "REF_FRAME_A = GCRF", "REF_FRAME_B = SC_BODY_1", "ATTITUDE_DIR = A2B",
+            "TIME_SYSTEM = GPS", f"START_TIME = {iso[0]}"]
+    if useable:
+        meta += [f"USEABLE_START_TIME = {iso[0]}", f"USEABLE_STOP_TIME = {iso[-1]}"]
+    meta += [f"STOP_TIME = {iso[-1]}", "ATTITUDE_TYPE = QUATERNION", "QUATERNION_TYPE = FIRST", "META_STOP", "",
+             "DATA_START"]
     body = iso.astype(object)
     for i in range(4):
         body = body + " " + _fmt(q[:, i], "%.12f").astype(object)
-    return "\n".join(lines + body.tolist() + ["DATA_STOP", ""])
+    return meta + body.tolist() + ["DATA_STOP", ""]
+
+
+def aem_kvn(sol, creation_date: str | None = None, originator: str = "GNSSATT",
+            float_epochs: str = "omit") -> str | None:
+    """CCSDS AEM 1.0 KVN of the GCRF->body quaternions (scalar first), or None without a fixed attitude.
+
+    The first segment holds the fixed epochs only, USEABLE_START/STOP_TIME = first / last fixed epoch; signs
+    are continuous (sign_continuous) across the segment. float_epochs: "omit" (default) leaves the float
+    epochs out, "segment" adds them as a second segment without a useable span. creation_date: UTC, default
+    now. Implements: CCSDS 504.0-B-1 sec. 4.2-4.3 (segments, USEABLE_START/STOP_TIME within START/STOP_TIME).
+    """
+    if float_epochs not in ("omit", "segment"):
+        raise ValueError(f"float_epochs must be 'omit' or 'segment', not {float_epochs!r}")
+    if sol.att_epochs is None or sol.att_epochs.size == 0 or not sol.att_fixed.any():
+        return None
+    t = sol.pobs.time[sol.att_epochs]
+    iso_all = t.iso(3)
+    iso_all = np.asarray(iso_all if isinstance(iso_all, list) else [iso_all])
+    name = sol.inputs.platform.name
+    fixed = np.asarray(sol.att_fixed, bool)
+    lines = ["CCSDS_AEM_VERS = 1.0", f"CREATION_DATE = {creation_date or _utc_now()}", f"ORIGINATOR = {originator}",
+             ""]
+    common = "GNSS attitude (gnssatt): passive quaternion GCRF -> body, v_body = R(q) v_gcrf, scalar first"
+    lines += _aem_segment(name, iso_all[fixed], sign_continuous(sol.q_body_from_gcrf[fixed]),
+                          [common, "GCRF from ECEF by IAU 2006/2000A with zero EOP",
+                           f"fixed epochs only ({int(fixed.sum())} of {fixed.size}; float epochs "
+                           f"{'in the next segment' if float_epochs == 'segment' else 'left out'})"], True)
+    if float_epochs == "segment" and (~fixed).any():
+        lines += ["", *_aem_segment(name, iso_all[~fixed], sign_continuous(sol.q_body_from_gcrf[~fixed]),
+                                    [common, "FLOAT epochs: ambiguities not fixed, sigma in attitude.csv; "
+                                     "not for use where the fixed segment has data"], False)]
+    return "\n".join(lines)
 
 
 def nmea_hdt(sol, baseline_index: int = 0) -> str | None:
-    """NMEA HDT sentences (true heading of the body x axis) for a terrestrial platform, one per epoch with a
-    baseline solution; heading = baseline azimuth minus the baseline's azimuth in the body frame."""
+    """NMEA HDT sentences (true heading of the body x axis) for a terrestrial platform, one per FIXED epoch
+    (attitude fixed, or the baseline fixed when there is one baseline); heading = baseline azimuth minus the
+    baseline's azimuth in the body frame. None without a fixed epoch."""
     bt = sol.baseline_table
     if sol.inputs.platform.kind != "terrestrial" or bt["epoch"].size == 0:
         return None
     if sol.att_epochs is not None:
-        heading = np.mod(sol.euler_deg[:, 0], 360.0)
-        epochs = sol.att_epochs
+        keep = np.asarray(sol.att_fixed, bool)
+        heading = np.mod(sol.euler_deg[keep, 0], 360.0)
     else:
-        m = bt["bl"] == baseline_index
+        m = (bt["bl"] == baseline_index) & np.asarray(bt["fixed"], bool)
         bb = sol.body_baselines_m[baseline_index]
         heading = np.mod(bt["azimuth_deg"][m] - np.degrees(np.arctan2(bb[1], bb[0])), 360.0)
-        epochs = bt["epoch"][m]
-    _, _, _, hh, mm, ss = sol.pobs.time[epochs].calendar()
+    if heading.size == 0:
+        return None
     out = []
-    for h, m_, s_, hd in zip(hh, mm, ss, heading):
+    for hd in heading.tolist():
         body = f"GPHDT,{hd:.3f},T"
         ck = 0
         for ch in body:
@@ -194,22 +220,60 @@ def nmea_hdt(sol, baseline_index: int = 0) -> str | None:
     return "\r\n".join(out) + "\r\n"
 
 
-def all_products(sol) -> dict[str, str | dict]:
-    """Product name -> content (text or JSON-able dict) of a solved attitude job."""
+def errors_csv(sol, ref) -> str | None:
+    """errors.csv: per attitude epoch, the reference Euler angles and the estimate's errors against them [deg]
+    (gnssatt.attitude.quality.reference_series; empty cells where the reference has no value), fixed flag and
+    the formal 1-sigma; None without a reference."""
+    if ref is None:
+        return None
+    t = sol.pobs.time[sol.att_epochs]
+    iso, _, sow = _time_cols(t)
+
+    def num(a):
+        out = np.full(a.shape, "", dtype=object)
+        ok = np.isfinite(a)
+        out[ok] = _fmt(a[ok], "%.6f")
+        return out
+
+    cols = [np.asarray(iso), _fmt(sow, "%.3f")]
+    cols += [num(ref.euler_ref_deg[:, i]) for i in range(3)] + [num(ref.error_deg[:, i]) for i in range(3)]
+    cols += [_fmt(sol.sigma_euler_deg[:, i], "%.6f") for i in range(3)] + [_fmt(sol.att_fixed.astype(int), "%d")]
+    header = ("time_gps,gps_sow,yaw_ref_deg,pitch_ref_deg,roll_ref_deg,yaw_error_deg,pitch_error_deg,"
+              "roll_error_deg,sigma_yaw_deg,sigma_pitch_deg,sigma_roll_deg,fixed")
+    return _join(header, cols)
+
+
+def all_products(sol, creation_date: str | None = None, aem_float_epochs: str = "omit") -> dict[str, str | dict]:
+    """Product name -> content (text or JSON-able dict) of a solved attitude job. Adds the `quality` block
+    (gnssatt.attitude.quality) to sol.summary; errors.csv when the set has a reference; charts.json (the job
+    page's series, gnssatt.attitude.chart_series)."""
+    from gnssatt.attitude.chart_series import chart_series
+    from gnssatt.attitude.quality import quality_block, reference_series
+
     out: dict[str, str | dict] = {}
+    ref = reference_series(sol)
+    sol.summary["quality"] = quality_block(sol, ref)
     att = attitude_csv(sol)
     if att is not None:
         out["attitude.csv"] = att
     out["baselines.csv"] = baselines_csv(sol)
     out["residuals.csv"] = residuals_csv(sol)
     out["events.csv"] = events_csv(sol)
+    err = errors_csv(sol, ref) if att is not None else None
+    if err is not None:
+        out["errors.csv"] = err
+    out["charts.json"] = chart_series(sol, ref)
     out["summary.json"] = sol.summary
     if sol.inputs.platform.kind == "terrestrial":
         hdt = nmea_hdt(sol)
         if hdt is not None:
             out["heading.nmea"] = hdt
     else:
-        aem = aem_kvn(sol)
+        # one creation time per solution: products written twice from one solution are the same bytes
+        if creation_date is None:
+            creation_date = getattr(sol, "_aem_creation_date", None) or _utc_now()
+            setattr(sol, "_aem_creation_date", creation_date)
+        aem = aem_kvn(sol, creation_date=creation_date, float_epochs=aem_float_epochs)
         if aem is not None:
             out["attitude.aem"] = aem
     return out

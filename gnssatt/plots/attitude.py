@@ -28,9 +28,10 @@ ERROR_OFFSETS_DEG = {"yaw": 0.0, "pitch": -1.5, "roll": 1.5}
 #: A reference sample farther than this from both neighbours of an epoch is not interpolated across [s]
 #: (star trackers drop out; bridging a gap would invent a reference).
 MAX_REFERENCE_GAP_S = 60.0
-#: Sky plots and residual scatters draw at most this many points (evenly thinned beyond, as the panel titles say;
+#: Sky plots and residual scatters draw at most this many points per series (evenly thinned beyond, as the panel
+#: titles say; a 1100-px panel shows no more distinct points;
 #: all statistics use all rows, and residuals.csv holds them all).
-MAX_POINTS = 20000
+MAX_POINTS = 6000
 
 RESIDUAL_COLUMNS = {
     "baseline": ("baseline",),
@@ -613,7 +614,8 @@ def attitude_plots(products: Mapping[str, Any], reference: Any = None,
     products: {"attitude.csv": text, "baselines.csv": text, "residuals.csv": text, "events.csv": text}
         (any may be missing; a one-baseline platform has no attitude.csv).
     reference: the set's reference attitude CSV text (CONVENTIONS.md) or None.
-    Returns e.g. {"euler.png", "fix_status.png", "dop.png", "residuals.png", "skyplot.png"}.
+    Returns e.g. {"euler.png", "fix_status.png", "dop.png", "residuals.png", "skyplot.png", "elevation.png",
+    "skyplot_fix.png"} (the last two: gnssatt.plots.elevation).
     """
     # each CSV is parsed once here, not once per plot (residuals.csv feeds three plots)
     tab = {k: (None if v is None else read_csv_table(v)) for k, v in products.items()}
@@ -630,4 +632,9 @@ def attitude_plots(products: Mapping[str, Any], reference: Any = None,
             out["dop.png"] = dop_plot(res, att, context)
             out["residuals.png"] = residuals_plot(res, context)
             out["skyplot.png"] = skyplot_plot(res, context)
+            from gnssatt.plots.elevation import elevation_plot, fix_skyplot_plot
+
+            out["elevation.png"] = elevation_plot(res, context)
+            if bl is not None:
+                out["skyplot_fix.png"] = fix_skyplot_plot(res, bl, context)
     return out

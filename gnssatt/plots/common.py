@@ -76,10 +76,16 @@ def new_figure(width_in: float = 10.0, height_in: float = 6.0) -> Figure:
     return Figure(figsize=(width_in, height_in), dpi=DPI, layout="constrained")
 
 
+#: zlib level of the PNGs: 1 encodes ~3x faster than the default 6 for ~10-30 % larger files (plots of long passes
+#: are encoded in the job, so the job's wall time counts more than a few kB)
+PNG_COMPRESS_LEVEL = 1
+
+
 def figure_png(fig: Figure, dpi: int = DPI) -> bytes:
     """The figure as PNG bytes (no timestamp or software metadata, so equal figures give equal bytes)."""
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi, metadata={"Software": None})
+    fig.savefig(buf, format="png", dpi=dpi, metadata={"Software": None},
+                pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
     return buf.getvalue()
 
 

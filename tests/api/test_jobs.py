@@ -247,4 +247,6 @@ def test_attitude_job_with_unknown_pcv_map_is_422_at_submit(api):
     assert api.get("/v1/jobs").json()["total"] == before
     resp = api.post("/v1/jobs", json={"type": "attitude", "observation_set_ids": [set_id],
                                       "config": {"pcv_map_ids": [known]}})
-    assert resp.status_code == 202, resp.text
+    # the known map passes; the sample set has no navigation file, which is refused next (app/preflight.py)
+    assert resp.status_code == 422 and resp.json()["type"].endswith("missing-navigation"), resp.text
+    assert api.get("/v1/jobs").json()["total"] == before

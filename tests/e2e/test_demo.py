@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -42,3 +43,11 @@ def test_make_demo_runs_the_attitude_job_and_says_what_it_does(tmp_path):
     assert "succeeded after" in out and "Accuracy against the simulator's truth" in out, out
     assert list((data_dir / "demo-products").glob("*/attitude.csv")), "attitude.csv not downloaded"
     assert "stopped 2 process(es)" in stop.stdout, stop.stdout + stop.stderr
+    # issue 24: the quality verdict, then the last three lines: job page (sign-in link, key in the fragment),
+    # report, products folder
+    assert "quality: " in out, out
+    page, report, products = lines[-3:]
+    assert page.startswith("job page: http://127.0.0.1:") and "/ui/login?next=%2Fui%2Fjobs%2F" in page
+    assert "#key=" in page
+    assert report.startswith("report:   ") and report.endswith("report.html")
+    assert products.startswith("products: ") and (Path(products.split(": ", 1)[1]) / "attitude.csv").is_file()

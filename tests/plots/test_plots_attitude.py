@@ -226,9 +226,10 @@ def test_attitude_plots_bundle_and_report():
     res, _ = residuals_case(n=40)
     pngs = A.attitude_plots({"attitude.csv": att, "residuals.csv": res, "baselines.csv": baselines_case(n=40),
                              "events.csv": events_case()}, ref_q, CTX)
-    assert list(pngs) == ["euler.png", "fix_status.png", "dop.png", "residuals.png", "skyplot.png"]
+    assert list(pngs) == ["euler.png", "fix_status.png", "dop.png", "residuals.png", "skyplot.png", "elevation.png",
+                          "skyplot_fix.png"]
     assert all(p.startswith(PNG_MAGIC) for p in pngs.values())
     one_baseline = A.attitude_plots({"baselines.csv": baselines_case(n=10, names=("A>B",))})
     assert list(one_baseline) == ["fix_status.png"]
     doc = html_report("Attitude", {"epochs": 40}, pngs)
-    assert doc.count("data:image/png;base64,") == 5
+    assert doc.count("data:image/png;base64,") == 7

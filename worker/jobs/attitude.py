@@ -159,9 +159,9 @@ JOB_TYPE = JobType(
                 "sigmas. Products: attitude.csv, baselines.csv, residuals.csv, events.csv, summary.json, and "
                 "attitude.aem (spacecraft) or heading.nmea (terrestrial).",
     config_model=AttitudeConfig, pipeline="worker.jobs.attitude:run", min_sets=1, max_sets=1,
-    produces=("attitude.csv", "baselines.csv", "residuals.csv", "events.csv", "summary.json", "attitude.aem",
-              "heading.nmea", "euler.png", "fix_status.png", "dop.png", "residuals.png", "skyplot.png",
-              "report.html"))
+    produces=("attitude.csv", "baselines.csv", "residuals.csv", "events.csv", "errors.csv", "charts.json",
+              "summary.json", "attitude.aem", "heading.nmea", "euler.png", "fix_status.png", "dop.png",
+              "residuals.png", "skyplot.png", "elevation.png", "skyplot_fix.png", "report.html"))
 
 
 def maps_for_settings(docs: list[tuple[str, dict]], baselines: list[tuple[str, str]]) -> dict:
@@ -281,11 +281,13 @@ def _write_plots_and_report(ctx: JobContext, config, obs_set, products: dict, ta
     texts.update({name: table for name, table in tables.items() if name in texts})
     refs = obs_set.of_kind("reference_attitude")
     reference = refs[0].path.read_text() if refs else None
-    context = PlotContext(set_name=obs_set.name or obs_set.id, job_id=ctx.job_id, config=config.model_dump())
+    # the plot titles name the few settings that change what a plot shows; the report shows the config once
+    context = PlotContext(set_name=obs_set.name or obs_set.id, job_id=ctx.job_id,
+                          config={"preset": config.preset, "mode": config.mode})
     pngs = attitude_plots(texts, reference, context)
     if clock is not None:
         clock.mark("report and storing plots")
     for name, png in pngs.items():
         ctx.write_product(name, png, media_type="image/png")
-    ctx.write_product("report.html", html_report(f"Attitude · {obs_set.name or obs_set.id}", summary, pngs),
-                      media_type="text/html")
+    ctx.write_product("report.html", html_report(f"Attitude · {obs_set.name or obs_set.id}", summary, pngs,
+                                                 config=config.model_dump(mode="json")), media_type="text/html")
