@@ -26,7 +26,7 @@ from gnssatt.gnss.time import GpsTime
 from gnssatt.sim.inertial import SensorParams, airborne_truth, simulate_sensors
 from gnssatt.single_antenna.acc_mag import FLAG_FILTER_EDGE, AccMagInputs, AccMagSettings, solve_acc_mag
 from gnssatt.single_antenna.geomagnetic import field_ecef_nT
-from gnssatt.single_antenna.sensor_csv import SensorLog
+from gnssatt.gnss.io.sensor_csv import SensorLog
 
 T0 = GpsTime.from_calendar(2025, 4, 1, 10, 0, 0)
 DATE = dt.datetime(2025, 4, 1, 10)

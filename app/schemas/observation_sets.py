@@ -8,7 +8,8 @@ from pydantic import BaseModel, Field
 
 class SetFilePublic(BaseModel):
     name: str = Field(description="Path of the file inside the set.")
-    kind: str = Field(description="rinex_obs, rinex_nav, sp3, rinex_clock, antex, platform or reference_attitude")
+    kind: str = Field(description="rinex_obs, rinex_nav, sp3, rinex_clock, antex, platform, stations, satellites, "
+                      "antenna_pattern, reference_attitude, accelerometer, magnetometer, gyro or velocity")
     size_bytes: int
     sha256: str
     summary: dict[str, Any] = Field(description="What the file holds: format, version, time span, satellites...")

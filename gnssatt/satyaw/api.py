@@ -8,6 +8,8 @@ product (RINEX navigation or SP3); stations / satellites: the stations.json / sa
 """
 from __future__ import annotations
 
+import json
+
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -100,19 +102,21 @@ def _ephemeris(orbit_files: list[tuple[str, Path, str]]):
 
 
 def load_inputs(files, stations: dict | None = None):
-    """(Network, ephemeris, orbit source text, warnings) of local files identified by content."""
+    """(Network, ephemeris, orbit source text, warnings, satellites.json document or None) of local files
+    identified by content; the set's stations.json / satellites.json are used where the caller gives none."""
     from gnssatt.gnss.io.sniff import identify
 
     pairs = _pairs(files)
     kinds = [(n, p, identify(p, n)[0]) for n, p in pairs]
-    positions = parse_stations(stations)
+    docs = {k: json.loads(Path(p).read_bytes()) for n, p, k in kinds if k in ("stations", "satellites")}
+    positions = parse_stations(stations or docs.get("stations"))
     obs_files = [(n, p) for n, p, k in kinds if k == "rinex_obs"]
     if not obs_files:
         raise SatYawInputError("No observations", "the set has no RINEX observation file", field="files")
     st = [load_station(p, n, positions) for n, p in obs_files]
     eph, source = _ephemeris([(n, p, k) for n, p, k in kinds if k in ("sp3", "rinex_nav")])
     warnings = [w for s in st for w in s.warnings]
-    return build_network(st), eph, source, warnings
+    return build_network(st), eph, source, warnings, docs.get("satellites")
 
 
 def nominal_model(desc: SatelliteDescription, geom: SatGeometry) -> np.ndarray:
@@ -196,8 +200,8 @@ def estimate_satellite_yaw(files, *, stations: dict | None = None, satellites: d
                            options: SatYawOptions | None = None, progress=None) -> YawRun:
     """YawRun: every selected satellite's yaw from the set's files (seed 004 eq. 9, sec. 2.2-2.5)."""
     opts = options or SatYawOptions()
-    net, eph, source, warnings = load_inputs(files, stations)
-    descs = satellite_descriptions(satellites)
+    net, eph, source, warnings, set_satellites = load_inputs(files, stations)
+    descs = satellite_descriptions(satellites or set_satellites)
     sats = _pick_satellites(net, descs, opts.satellites)
     out = {}
     for i, sat in enumerate(sats):
@@ -233,8 +237,8 @@ def estimate_satellite_baseline(files, *, stations: dict | None = None, satellit
     """BaselineRun: each satellite's main -> aux baseline, code bias and PCV map with the model yaw
     (seed 004 sec. 2.1). exclude: sat -> [(start_s, end_s)] of non-nominal periods (manoeuvres) to leave out."""
     opts = options or SatYawOptions()
-    net, eph, source, warnings = load_inputs(files, stations)
-    descs = satellite_descriptions(satellites)
+    net, eph, source, warnings, set_satellites = load_inputs(files, stations)
+    descs = satellite_descriptions(satellites or set_satellites)
     sats = list(opts.satellites) if opts.satellites else _sats_with_aux(net, descs)
     if not sats:
         raise SatYawInputError("No auxiliary signal", "no observation file tracks an auxiliary-antenna signal",

@@ -26,7 +26,7 @@ from gnssatt.gnss.time import GpsTime
 from gnssatt.single_antenna.accelerometer import angular_rate_from_attitude, lever_arm_terms_m_s2
 from gnssatt.single_antenna.differentiate import filter_series
 from gnssatt.single_antenna.gravity import OMEGA_ECEF_RAD_S, specific_force_ecef_m_s2
-from gnssatt.single_antenna.sensor_csv import SensorLog
+from gnssatt.gnss.io.sensor_csv import SensorLog
 from gnssatt.single_antenna.wahba import FLAG_NEAR_PARALLEL, FLAG_TOO_FEW, wahba_svd
 
 FLAG_NO_SPECIFIC_FORCE = 8    # |specific force| below min_specific_force_m_s2 (free fall): no attitude

@@ -12,7 +12,7 @@ from gnssatt.gnss.time import GpsTime
 from gnssatt.sim.inertial import SensorParams, airborne_truth, leo_truth, simulate_sensors, static_truth
 from gnssatt.single_antenna.acc_mag import (FLAG_BIAS_UNOBSERVABLE, FLAG_FILTER_EDGE, FLAG_GRAVITY_ONLY,
                                             FLAG_NO_SPECIFIC_FORCE, AccMagInputs, AccMagSettings, solve_acc_mag)
-from gnssatt.single_antenna.sensor_csv import SensorLog
+from gnssatt.gnss.io.sensor_csv import SensorLog
 from tests.conftest import require_module
 
 T0 = GpsTime.from_calendar(2025, 4, 1, 10, 0, 0)

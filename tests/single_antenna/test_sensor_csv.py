@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 
 from gnssatt.gnss.io.errors import ParseError
-from gnssatt.single_antenna.sensor_csv import read_sensor_csv
+from gnssatt.gnss.io.sensor_csv import read_sensor_csv
 
 ACC = ("time_gps,ax_m_s2,ay_m_s2,az_m_s2\n"
        "2013-04-01T10:00:00.000,0.1,0.2,-9.81\n"

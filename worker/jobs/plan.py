@@ -149,7 +149,7 @@ def _trajectory(ctx: JobContext, t):
     import numpy as np
 
     from gnssatt.planning.trajectory import track_from_samples
-    from gnssatt.single_antenna.sensor_csv import read_sensor_csv
+    from gnssatt.gnss.io.sensor_csv import read_sensor_csv
 
     files = [f for s in ctx.sets for f in s.files if f.kind == "velocity" or f.name.lower().endswith("velocity.csv")]
     if not files:

@@ -20,11 +20,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterator
 
+import numpy as np
+
 
 from gnssatt.gnss.io.errors import ParseError, ParseWarning
 
-_KNOWN = ("RINEX observation (2.10-4.02), RINEX navigation, SP3-c/d, RINEX clock, ANTEX, platform.json or a "
-          "reference attitude CSV (plain, .gz, .Z, .zip or Hatanaka)")
+_KNOWN = ("RINEX observation (2.10-4.02), RINEX navigation, SP3-c/d, RINEX clock, ANTEX, platform.json, "
+          "stations.json, satellites.json, antenna_pattern.json, a reference attitude CSV or an accelerometer, "
+          "magnetometer, gyro or velocity CSV (plain, .gz, .Z, .zip or Hatanaka)")
 
 
 # --- opening ---------------------------------------------------------------------------------------
@@ -92,17 +95,10 @@ def identify(path: Path, name: str) -> tuple[str, dict]:
     first = next((ln for ln in head.split(b"\n") if ln.strip()), b"").decode("latin-1").rstrip("\r")
     stripped = head.lstrip()
     if stripped.startswith(b"{") or stripped.startswith(b"["):
-        from gnssatt.gnss.io.platform import parse_platform
-
-        data = _read_all(path, name, limit=16 * 1024 * 1024)
-        platform = parse_platform(data, name)
-        return "platform", {"format": "platform.json", "name": platform.name, "kind": platform.kind,
-                            "antennas": list(platform.antennas), "master": platform.master,
-                            "baselines": [f"{a}>{b}" for a, b in platform.baselines]}
-    if first.replace(" ", "").startswith("time_gps,"):
-        from gnssatt.gnss.io.reference_attitude import summarize_reference_attitude
-
-        return "reference_attitude", summarize_reference_attitude(_read_all(path, name, 512 * 1024 * 1024), name)
+        return _identify_json(_read_all(path, name, limit=16 * 1024 * 1024), name)
+    header = first.replace(" ", "")
+    if header.startswith("time_gps,") or header.startswith("gps_week,gps_sow,"):
+        return _identify_csv(path, name, header)
     label = first[60:80].strip()
     if first[65:85].strip() == "RINEX VERSION / TYPE" and first[21:22] == "C":   # RINEX clock 3.04 layout
         return "rinex_clock", _summarize_with("rinex_clock", "summarize_rinex_clock", path, name)
@@ -127,6 +123,70 @@ def identify(path: Path, name: str) -> tuple[str, dict]:
     if label == "ANTEX VERSION / SYST":
         return "antex", _summarize_with("antex", "summarize_antex", path, name)
     raise ParseError(name, 1, _KNOWN, first[:80])
+
+
+def _json_kinds(doc) -> str:
+    """Which JSON input a decoded document is, by its top-level keys: platform.json (`antennas`), stations.json
+    (`stations`), satellites.json (`satellites`) or antenna_pattern.json (`model`) (docs/formats/)."""
+    if isinstance(doc, dict) and "antennas" not in doc:
+        for key, kind in (("stations", "stations"), ("satellites", "satellites"), ("model", "antenna_pattern")):
+            if key in doc:
+                return kind
+    return "platform"
+
+
+def _identify_json(data: bytes, name: str) -> tuple[str, dict]:
+    """(kind, summary) of a JSON input; each is checked by its own parser (file and field named on error)."""
+    try:
+        doc = json.loads(data)
+    except (ValueError, RecursionError):
+        doc = None  # parse_platform says what is wrong, with line and column
+    kind = _json_kinds(doc)
+    if kind == "platform":
+        from gnssatt.gnss.io.platform import parse_platform
+
+        platform = parse_platform(data, name)
+        return "platform", {"format": "platform.json", "name": platform.name, "kind": platform.kind,
+                            "antennas": list(platform.antennas), "master": platform.master,
+                            "baselines": [f"{a}>{b}" for a, b in platform.baselines]}
+    if kind == "antenna_pattern":
+        from gnssatt.vector_phase.pattern_file import parse_antenna_pattern
+
+        antenna = parse_antenna_pattern(doc, name)
+        return kind, {"format": "antenna_pattern.json", "model": doc.get("model"), "type": type(antenna).__name__}
+    from gnssatt.satyaw.inputs import SatYawInputError, parse_stations, satellite_descriptions
+
+    try:
+        found = parse_stations(doc, name) if kind == "stations" else satellite_descriptions(doc, name)
+    except SatYawInputError as exc:
+        raise ParseError(name, None, f"a {kind}.json as docs/satellite_yaw.md describes", exc.detail) from exc
+    except (TypeError, ValueError, KeyError) as exc:
+        raise ParseError(name, None, f"a {kind}.json as docs/satellite_yaw.md describes", repr(exc)) from exc
+    listed = sorted(doc[kind]) if kind == "satellites" else sorted(k for k in doc[kind])
+    return kind, {"format": f"{kind}.json", kind: listed, "count": len(listed if kind == "satellites" else found)}
+
+
+#: sensor log kinds by a column only their header has (gnssatt.gnss.io.sensor_csv.SPECS)
+_SENSOR_COLUMNS = {"ax_m_s2": "accelerometer", "bx_nT": "magnetometer", "wx_rad_s": "gyro", "vx_ecef_m_s": "velocity"}
+
+
+def _identify_csv(path: Path, name: str, header: str) -> tuple[str, dict]:
+    """(kind, summary) of a time-tagged CSV: a sensor log (accelerometer, magnetometer, gyro, velocity;
+    docs/formats/) by its columns, else a reference attitude (CONVENTIONS.md)."""
+    columns = set(header.split(","))
+    kind = next((k for col, k in _SENSOR_COLUMNS.items() if col in columns), None)
+    if kind is None:
+        from gnssatt.gnss.io.reference_attitude import summarize_reference_attitude
+
+        return "reference_attitude", summarize_reference_attitude(_read_all(path, name, 512 * 1024 * 1024), name)
+    from gnssatt.gnss.io.sensor_csv import read_sensor_csv
+
+    log = read_sensor_csv(_read_all(path, name, 512 * 1024 * 1024), kind, name)
+    steps = np.diff(log.t_s)
+    return kind, {"format": f"{kind} CSV", "rows": int(len(log.t_s)), "time_first": log.time[0].iso(),
+                  "time_last": log.time[-1].iso(),
+                  "median_interval_s": float(np.median(steps)) if len(steps) else None,
+                  "columns": sorted(columns)}
 
 
 def _read_all(path: Path, name: str, limit: int | None) -> bytes:

@@ -53,7 +53,7 @@ def _velocity(obs_set, ctx):
     """(time, r_ecef_m, v_ecef_m_s, sigma_m_s or None, n_sats or None, source)."""
     import numpy as np
 
-    from gnssatt.single_antenna.sensor_csv import read_sensor_csv
+    from gnssatt.gnss.io.sensor_csv import read_sensor_csv
 
     f = _file(obs_set, "velocity")
     if f is not None:
@@ -108,7 +108,7 @@ def run(ctx, config) -> None:
     from gnssatt.single_antenna import acc_mag
     from gnssatt.single_antenna.geomagnetic import MODEL_NAME, field_ecef_nT, model_date
     from gnssatt.single_antenna.products import attitude_csv
-    from gnssatt.single_antenna.sensor_csv import read_sensor_csv
+    from gnssatt.gnss.io.sensor_csv import read_sensor_csv
 
     st = config.acceleration_magnetometer
     obs_set = ctx.require_one()

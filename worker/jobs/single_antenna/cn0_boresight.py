@@ -162,7 +162,7 @@ def _full_attitude(ctx, obs_set, t, r, v, out, bore_body, st: Settings, kind: st
     from gnssatt.single_antenna.acc_mag import sample_at
     from gnssatt.single_antenna.geomagnetic import field_ecef_nT, model_date
     from gnssatt.single_antenna.products import attitude_csv
-    from gnssatt.single_antenna.sensor_csv import read_sensor_csv
+    from gnssatt.gnss.io.sensor_csv import read_sensor_csv
     from gnssatt.single_antenna.wahba import wahba_svd
 
     f = next((x for x in obs_set.files if x.kind == "magnetometer" or x.name.lower().endswith("magnetometer.csv")), None)
