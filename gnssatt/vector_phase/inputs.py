@@ -85,6 +85,19 @@ def antenna_of(doc: dict, plat_name: str, antenna_id: str, model: str | None):
                            field=f'antennas["{antenna_id}"].antenna_pattern') from exc
 
 
+def _with_set_pattern(doc: dict, files, antenna_id: str) -> dict:
+    """The platform document with the set's one antenna_pattern.json (its own file, identified by content) as
+    the antenna's pattern where platform.json gives none (docs/formats/antenna_vector_length.md)."""
+    patterns = [f for f in files if f[1] == "antenna_pattern"]
+    antennas = doc.get("antennas", {})
+    if len(patterns) != 1 or "antenna_pattern" in antennas.get(antenna_id, {}):
+        return doc
+    import json
+
+    pattern = json.loads(Path(patterns[0][2]).read_bytes())
+    return {**doc, "antennas": {**antennas, antenna_id: {**antennas.get(antenna_id, {}), "antenna_pattern": pattern}}}
+
+
 def _phase_column(obs, name: str) -> int:
     for code in PHASE_CODES:
         if code in obs.codes:
@@ -154,7 +167,7 @@ def load_set(files, *, antenna_id: str | None = None, antenna_model: str | None 
     if ant not in platform.antennas:
         raise InputProblem("Unknown antenna", f"{plat_name}: no antenna {ant!r} (antennas: {sorted(platform.antennas)})",
                            file=plat_name, field="config.vector_phase.antenna_id")
-    model = antenna_of(doc, plat_name, ant, antenna_model)
+    model = antenna_of(_with_set_pattern(doc, files, ant), plat_name, ant, antenna_model)
     obs_files = {f[0]: f[2] for f in files if f[1] == "rinex_obs"}
     navs = [f for f in files if f[1] == "rinex_nav"]
     if not obs_files:

@@ -88,3 +88,27 @@ def test_bad_antenna_table_names_the_key(tmp_path):
         _run(tmp_path, obs_set)
     assert err.value.title == "Unusable antenna pattern" and "h_theta_m" in err.value.detail
     assert "shape 2 x 2 x 2" in err.value.detail
+
+
+def test_antenna_pattern_as_its_own_file_in_the_set(tmp_path):
+    """A set whose platform.json has no antenna_pattern but which holds an antenna_pattern.json (identified by
+    content) runs with that pattern: the same attitude as with the pattern inside platform.json."""
+    obs_set, truth = _set(tmp_path, n_epochs=15)
+    plat = next(f for f in obs_set.files if f.kind == "platform")
+    doc = json.loads(plat.path.read_text())
+    pattern = doc["antennas"]["ANT"].pop("antenna_pattern")
+    split = tmp_path / "split"
+    split.mkdir()
+    (split / "platform.json").write_text(json.dumps(doc))
+    (split / "rx_antenna.json").write_text(json.dumps(pattern))
+    others = [f.path for f in obs_set.files if f.kind != "platform"]
+    split_set = local_set([split / "platform.json", split / "rx_antenna.json", *others], "split")
+    assert "antenna_pattern" in {f.kind for f in split_set.files}
+    x0 = truth.position_ecef_m.tolist()
+    a = run_job_locally("single-antenna-attitude", [split_set],
+                        {"method": "vector-phase", "vector_phase": {"initial_position_ecef_m": x0}},
+                        tmp_path / "o1", progress=None)
+    b = _run(tmp_path, obs_set, initial_position_ecef_m=x0)
+    ya = [r["yaw_deg"] for r in csv.DictReader(io.StringIO(a["attitude.csv"].read_text()))]
+    yb = [r["yaw_deg"] for r in csv.DictReader(io.StringIO(b["attitude.csv"].read_text()))]
+    assert ya == yb and ya[0] != ""    # the same inputs by two routes: the same written attitude
