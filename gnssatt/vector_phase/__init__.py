@@ -5,7 +5,7 @@ One module per idea:
   with a non-symmetric phase pattern, a table on a grid) and its Cartesian form (eq. 12, 22-24).
 - `pattern_file`: antenna_pattern.json (docs/formats/antenna_vector_length.md) read and written.
 - `transmitter`: the satellite's field polarisation u - j v (eq. 15) from the satellite attitude.
-- `satellite_attitude`: a small default nominal yaw-steering model (sun position included) and the
+- `satellite_attitude`: nominal yaw steering (the project's ERFA Sun and IGS axes) and the
   orbit-frame axes; the transmitter attitude is otherwise any callable/array of rotations per epoch.
 - `phase_model`: delta_s (eq. 32) and the carrier phase of eq. 34-36 and the phase change of eq. 44.
 - `rotation`: the body rotation increments and the paper's Euler matrix D (eq. 26).
