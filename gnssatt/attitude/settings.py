@@ -248,6 +248,11 @@ class AttitudeSettings:
     systems: list[Literal["G", "E", "C", "J"]] | None = _f(
         None, "Preset replacing `signals`: the first two frequencies of each system (SYSTEM_SIGNALS, RTKLIB "
               "'L1+L2'), e.g. ['G', 'E', 'C', 'J']. GLONASS is not supported.", min_length=1, max_length=4)
+    length_constraint_sigma_m: float = _f(
+        0.0, "Dynamic mode: once a baseline has been fixed, its state is held to the known body length by a soft "
+             "constraint of this sigma after each update (gnssatt.attitude.length_constraint; without it the "
+             "lengths drift by mm over an hour; 5e-4 keeps them within 0.07 mm on the clean 106-min pass); 0: off "
+             "(m).", ge=0, le=1)
     rk4_step_s: float = _f(1.0, "Step of the Runge-Kutta propagation of the attitude between epochs (s).",
                            gt=0, le=60)
     initial_attitude: Literal["earth-pointing", "level", "given"] = _f(
