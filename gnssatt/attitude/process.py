@@ -13,6 +13,7 @@ import numpy as np
 from gnssatt.attitude.filter import FilterResult, run_filter
 from gnssatt.attitude.geometry import EpochGeometry, compute_geometry, platform_state_from_sp3
 from gnssatt.attitude.observations import PlatformObs, build_platform_obs
+from gnssatt.attitude.platform_defaults import apply_platform_defaults
 from gnssatt.attitude.settings import AttitudeSettings, effective_signals, signal_system
 from gnssatt.attitude.solution import attitude_from_baselines, attitude_quaternion, baseline_az_el, euler_and_sigma
 from gnssatt.attitude.update_kernels import quest_dcm
@@ -63,6 +64,8 @@ class AttitudeSolution:
     att_fixed: np.ndarray | None = None
     att_n_sats: np.ndarray | None = None
     baseline_table: dict = field(default_factory=dict)   # column arrays of baselines.csv
+    # the platform kind's defaults applied (gnssatt.attitude.platform_defaults): [{"setting", "value", "reason"}]
+    platform_defaults: list = field(default_factory=list)
     summary: dict = field(default_factory=dict)
 
     @property
@@ -218,6 +221,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
 
     plat = inputs.platform
     antennas = list(inputs.obs)
+    settings, defaults_applied = apply_platform_defaults(settings, plat.kind, inputs.obs)
     prog(0.02, "aligning observations")
     try:
         signals = effective_signals(settings)
@@ -282,7 +286,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
         from gnssatt.attitude.smoother import smooth_filter_result
         smooth_filter_result(fr, settings)
     prog(0.92, "attitude")
-    sol = AttitudeSolution(settings, inputs, pobs, geom, fr, baselines, body)
+    sol = AttitudeSolution(settings, inputs, pobs, geom, fr, baselines, body, platform_defaults=defaults_applied)
     # ---- baselines table ----
     n_ep, n_bl = fr.ok.shape
     jj, kk = np.nonzero(fr.ok.T)          # baseline-major -> sort by epoch after

@@ -248,6 +248,10 @@ class AttitudeSettings:
     systems: list[Literal["G", "E", "C", "J"]] | None = _f(
         None, "Preset replacing `signals`: the first two frequencies of each system (SYSTEM_SIGNALS, RTKLIB "
               "'L1+L2'), e.g. ['G', 'E', 'C', 'J']. GLONASS is not supported.", min_length=1, max_length=4)
+    platform_defaults: bool = _f(
+        True, "Defaults by platform kind for what is left as it is (gnssatt.attitude.platform_defaults): terrestrial "
+              "platforms use every system of G/E/C/J in the files and elevation weights; spacecraft keep seed 000 "
+              "Tables 1-2. False: the settings exactly as given.")
     length_constraint_sigma_m: float = _f(
         0.0, "Dynamic mode: once a baseline has been fixed, its state is held to the known body length by a soft "
              "constraint of this sigma after each update (gnssatt.attitude.length_constraint; without it the "
