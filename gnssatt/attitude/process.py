@@ -213,6 +213,23 @@ def _R_ref_from_ecef(kind: str, r: np.ndarray, v: np.ndarray) -> np.ndarray:
     return R_orbital_from_ecef(r, v)
 
 
+def single_baseline_attitude_fn(b_body_m: np.ndarray, R_ref_from_ecef: np.ndarray):
+    """attitude_fn(b_ecef (1, 3), fixed, k) -> R_body_from_ecef (3, 3) of a one-baseline platform, for its PCV maps
+    (which need the antennas' frame): TRIAD with the baseline exact and the body z axis on the reference frame's z
+    (NED down for terrestrial platforms, nadir of the orbital frame for spacecraft) at epoch k, i.e. no rotation
+    about the baseline out of level / Earth pointing (the one angle one baseline cannot give). None when the
+    baseline is along z. Implements: TRIAD (Shuster & Oh 1981 sec. II) via gnssatt.gnss.rotations.triad."""
+    z_body = np.array([0.0, 0.0, 1.0])
+    if np.linalg.norm(np.cross(b_body_m, z_body)) < 1e-3 * np.linalg.norm(b_body_m):
+        return None
+
+    def attitude_fn(b, fixed, k=None):
+        z_ecef = R_ref_from_ecef[0 if k is None else k][2]          # the reference frame's z axis in ECEF
+        q = rot.triad(b_body_m, z_body, np.asarray(b[0], float), z_ecef)
+        return rot.quat_to_dcm(q) if np.all(np.isfinite(q)) else None
+    return attitude_fn
+
+
 def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -> AttitudeSolution:
     """AttitudeSolution of the whole pass. progress(fraction, stage) is called often (cancellation point)."""
     def prog(f, stage=None):
@@ -262,13 +279,15 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
             w_len = w_len / w_len.sum()
             body_c = np.ascontiguousarray(body, dtype=np.float64)
 
-            def attitude_fn(b, fixed):
+            def attitude_fn(b, fixed, k=None):
                 # attitude_quaternion's QUEST (weights by length; also for "ml") for one epoch, compiled
                 return quest_dcm(np.ascontiguousarray(b, dtype=np.float64), body_c, w_len)
         else:
-            def attitude_fn(b, fixed):
+            def attitude_fn(b, fixed, k=None):
                 q, _ = attitude_quaternion(b[None], body, settings.attitude_method)
                 return rot.quat_to_dcm(q[0])
+    elif settings.calibration.pcv_maps:
+        attitude_fn = single_baseline_attitude_fn(body[0], R_ref_from_ecef)
     prog(0.15, "filtering")
     two_pass = settings.mode == "dynamic" and settings.smoothing.adaptive_noise
     span = 0.375 if two_pass else 0.75

@@ -113,6 +113,10 @@ class AmbiguityResolution:
     newcomers are ours, with reasons in docs/attitude.md and docs/ttff.md."""
 
     max_length_error_m: float = _f(0.03, "Ambiguity acceptance: |length - known| (m), Table 2.", gt=0, le=10)
+    length_validation: Literal["filter", "single-epoch", "both"] = _f(
+        "filter", "Which first-fix baseline the length test takes: filter = the filter's baseline conditioned on "
+                  "the candidate integers; single-epoch = the epoch's own phases with them (seed 000 sec. 2, "
+                  "gnssatt.attitude.single_epoch_length); both = both must pass. Both lengths are in the events.")
     min_ratio: float = _f(0.0, "Also require this ratio (0: ratio only reported; the paper validates by length).",
                           ge=0, le=1000)
     ambiguity_search: Literal["lambda", "constrained"] = _f(

@@ -68,11 +68,12 @@ def _first_fix(run: FilterRun, ep: EpochData, j: int, joint_ar: dict) -> None:
     groups = first_fix_groups(*_phase_rows_of(ep, j), run.n_sig)
     if not groups or sum(g.size - 1 for g, _ in groups) < s.ambiguity.min_dd:
         return
-    outcome = joint_ar.get(j) or resolve_first_fix(st.x, st.P, groups, run.b_idx[j], run.lengths[j], s)
+    outcome = joint_ar.get(j) or resolve_first_fix(st.x, st.P, groups, run.b_idx[j], run.lengths[j], run.s_search)
     run.out_ratio[k, j] = outcome.ratio
     validate_first_fix(run, ep, j, outcome)
     if not outcome.accepted:
-        run.events.add(k, "fix_rejected", j, detail=f"ratio {outcome.ratio:.2f}, {outcome.reason}")
+        run.events.add(k, "fix_rejected", j, detail=f"ratio {outcome.ratio:.2f}, {outcome.reason}"
+                                                    f"{outcome.length_note}")
         return
     run.angle_fail[j] = 0
     b_before = st.x[run.b_idx[j]].copy()
@@ -91,7 +92,7 @@ def _first_fix(run: FilterRun, ep: EpochData, j: int, joint_ar: dict) -> None:
         st.amb_fixed[g - st.n_fixed_part] = True
     ep.ar_changed = True
     run.events.add(k, "fix", j, detail=f"{outcome.n_dd} DD ambiguities, ratio {outcome.ratio:.2f}, "
-                                       f"length {outcome.length_m:.4f} m")
+                                       f"length {outcome.length_m:.4f} m (filter){outcome.length_note}")
     if run.first_fix[j] < 0:
         run.first_fix[j] = k
 
