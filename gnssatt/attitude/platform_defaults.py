@@ -12,38 +12,19 @@ antennas see no ground and the paper's weighting-free model is the one its figur
 
 A default is applied only to what the user did not set: `systems` None and `signals` the default GPS L1/L2, and
 noise.weighting "none" (the settings' default); `platform_defaults: false` switches it off. The table is data:
-the job type lists it in its config schema (/v1/job-types, "x-platform-defaults").
+the job type lists it in its config schema (/v1/job-types, "x-platform-defaults"); it lives in
+gnssatt.attitude.settings, which the service may import without the numerics.
 """
 from __future__ import annotations
 
 from dataclasses import replace
 
-from gnssatt.attitude.settings import AttitudeSettings
+from gnssatt.attitude.settings import PLATFORM_DEFAULTS, AttitudeSettings
 
 __all__ = ["PLATFORM_DEFAULTS", "apply_platform_defaults"]
 
 DEFAULT_SIGNALS = ["L1", "L2"]
 TERRESTRIAL_SYSTEMS = ("G", "E", "C", "J")
-
-#: kind -> default -> {value, reason}; the job's schema exposes it as it is
-PLATFORM_DEFAULTS: dict = {
-    "spacecraft": {
-        "signals": {"value": "GPS L1 C/A + L2 (signals ['L1', 'L2'])",
-                    "reason": "seed 000 Tables 1-2: the paper's configuration, its published figures"},
-        "noise.weighting": {"value": "none",
-                            "reason": "seed 000 Table 1 (no weighting); no ground multipath at a spacecraft"},
-    },
-    "terrestrial": {
-        "systems": {"value": "every system of G, E, C, J with satellites in every antenna's file",
-                    "reason": "real Nagoya 0.99 m baseline: GPS alone gives -3.4 mm length and -0.23 deg elevation, "
-                              "G/E/C/J within 0.3 mm / 0.03 deg of the known baseline (more satellites, better "
-                              "vertical geometry)"},
-        "noise.weighting": {"value": "elevation",
-                            "reason": "ground multipath grows at low elevation; with elevation weights the "
-                                      "Nagoya baseline meets 3 mm / 0.05 deg azimuth / 0.1 deg elevation"},
-    },
-}
-
 
 def _systems_in_files(obs_by_antenna: dict) -> list[str]:
     """The systems of TERRESTRIAL_SYSTEMS with at least one satellite in every antenna's observation file."""

@@ -319,6 +319,26 @@ class AttitudeSettings:
         return out
 
 
+#: defaults by platform kind (gnssatt.attitude.platform_defaults applies them): kind -> setting -> {value, reason};
+#: the attitude job's config schema exposes it as it is ("x-platform-defaults")
+PLATFORM_DEFAULTS: dict = {
+    "spacecraft": {
+        "signals": {"value": "GPS L1 C/A + L2 (signals ['L1', 'L2'])",
+                    "reason": "seed 000 Tables 1-2: the paper's configuration, its published figures"},
+        "noise.weighting": {"value": "none",
+                            "reason": "seed 000 Table 1 (no weighting); no ground multipath at a spacecraft"},
+    },
+    "terrestrial": {
+        "systems": {"value": "every system of G, E, C, J with satellites in every antenna's file",
+                    "reason": "real Nagoya 0.99 m baseline: GPS alone gives -3.4 mm length and -0.23 deg elevation, "
+                              "G/E/C/J within 0.3 mm / 0.03 deg of the known baseline (more satellites, better "
+                              "vertical geometry)"},
+        "noise.weighting": {"value": "elevation",
+                            "reason": "ground multipath grows at low elevation; with elevation weights the "
+                                      "Nagoya baseline meets 3 mm / 0.05 deg azimuth / 0.1 deg elevation"},
+    },
+}
+
 #: old flat field name -> "group.field" (every field that moved into a group)
 FLAT_TO_NESTED: dict[str, str] = _flat_to_nested()
 _TOP = {f.name for f in fields(AttitudeSettings) if f.name not in GROUPS}

@@ -13,9 +13,8 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator, model_validator
 
-from gnssatt.attitude.platform_defaults import PLATFORM_DEFAULTS
-from gnssatt.attitude.settings import (FLAT_TO_NESTED, GROUPS, PRESETS, SIGNAL_ALIASES, SIGNALS, AttitudeSettings,
-                                       cn0_mask_of)
+from gnssatt.attitude.settings import (FLAT_TO_NESTED, GROUPS, PLATFORM_DEFAULTS, PRESETS, SIGNAL_ALIASES, SIGNALS,
+                                       AttitudeSettings, cn0_mask_of)
 
 from worker.context import JobContext
 from worker.errors import JobInputError
