@@ -32,6 +32,7 @@ class ArOutcome:
     n_dd: int
     reason: str = ""
     groups: list | None = None    # the groups this outcome fixes when not all of the attempt's (joint search)
+    length_note: str = ""         # the single-epoch length (boxes.validation), appended to the fix event
 
 
 def dd_matrix(amb_idx: np.ndarray, ref_pos: int, n_state: int) -> np.ndarray:

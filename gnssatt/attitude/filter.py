@@ -52,8 +52,8 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         body_baselines_m: (n_bl, 3) known body-frame baselines (a priori or calibrated).
         boresight_body: (n_ant, 3) antenna boresights, for the antenna-frame elevation mask.
         R_body_from_ecef_0: (3, 3) initial attitude (Earth pointing or given) for the initial baselines.
-        attitude_fn: callable (b_ecef (n_bl, 3), fixed (n_bl,)) -> R_body_from_ecef (3, 3) or None; used for
-            the antenna-frame mask once every baseline is fixed. None: no antenna-frame mask.
+        attitude_fn: callable (b_ecef (n_bl, 3), fixed (n_bl,), epoch index k) -> R_body_from_ecef (3, 3) or None;
+            used for the antenna-frame mask and PCV maps once every baseline is fixed. None: no antenna-frame mask.
         progress: callable(fraction) called every ~100 epochs.
         q_omega: dynamic mode, (n_ep, 3, 3) omega random-walk rate (rad^2/s^3) of the propagation into each epoch,
             in place of Table 1's (and of the adapter's); None: Table 1's (smoother_adaptive_noise's second pass).

@@ -168,6 +168,10 @@ class FilterRun:
     def __init__(self, pobs, geom, baselines, body_baselines_m, boresight_body, settings: AttitudeSettings,
                  R_body_from_ecef_0, attitude_fn, q_omega):
         s = self.s = settings
+        # the settings of the first-fix search: with length_validation "single-epoch" the filter-baseline length
+        # test is left to boxes.validation (the search's own test made blind: 10 m, the field's limit)
+        self.s_search = s if s.ambiguity.length_validation != "single-epoch" else s.override(
+            ambiguity={"max_length_error_m": 10.0})
         self.pobs, self.geom, self.baselines = pobs, geom, baselines
         self.body_baselines_m, self.boresight_body = body_baselines_m, boresight_body
         self.R_body_from_ecef_0, self.attitude_fn = R_body_from_ecef_0, attitude_fn

@@ -13,6 +13,7 @@ import numpy as np
 from gnssatt.attitude.filter import FilterResult, run_filter
 from gnssatt.attitude.geometry import EpochGeometry, compute_geometry, platform_state_from_sp3
 from gnssatt.attitude.observations import PlatformObs, build_platform_obs
+from gnssatt.attitude.platform_defaults import apply_platform_defaults
 from gnssatt.attitude.settings import AttitudeSettings, effective_signals, signal_system
 from gnssatt.attitude.solution import attitude_from_baselines, attitude_quaternion, baseline_az_el, euler_and_sigma
 from gnssatt.attitude.update_kernels import quest_dcm
@@ -63,6 +64,8 @@ class AttitudeSolution:
     att_fixed: np.ndarray | None = None
     att_n_sats: np.ndarray | None = None
     baseline_table: dict = field(default_factory=dict)   # column arrays of baselines.csv
+    # the platform kind's defaults applied (gnssatt.attitude.platform_defaults): [{"setting", "value", "reason"}]
+    platform_defaults: list = field(default_factory=list)
     summary: dict = field(default_factory=dict)
 
     @property
@@ -210,6 +213,23 @@ def _R_ref_from_ecef(kind: str, r: np.ndarray, v: np.ndarray) -> np.ndarray:
     return R_orbital_from_ecef(r, v)
 
 
+def single_baseline_attitude_fn(b_body_m: np.ndarray, R_ref_from_ecef: np.ndarray):
+    """attitude_fn(b_ecef (1, 3), fixed, k) -> R_body_from_ecef (3, 3) of a one-baseline platform, for its PCV maps
+    (which need the antennas' frame): TRIAD with the baseline exact and the body z axis on the reference frame's z
+    (NED down for terrestrial platforms, nadir of the orbital frame for spacecraft) at epoch k, i.e. no rotation
+    about the baseline out of level / Earth pointing (the one angle one baseline cannot give). None when the
+    baseline is along z. Implements: TRIAD (Shuster & Oh 1981 sec. II) via gnssatt.gnss.rotations.triad."""
+    z_body = np.array([0.0, 0.0, 1.0])
+    if np.linalg.norm(np.cross(b_body_m, z_body)) < 1e-3 * np.linalg.norm(b_body_m):
+        return None
+
+    def attitude_fn(b, fixed, k=None):
+        z_ecef = R_ref_from_ecef[0 if k is None else k][2]          # the reference frame's z axis in ECEF
+        q = rot.triad(b_body_m, z_body, np.asarray(b[0], float), z_ecef)
+        return rot.quat_to_dcm(q) if np.all(np.isfinite(q)) else None
+    return attitude_fn
+
+
 def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -> AttitudeSolution:
     """AttitudeSolution of the whole pass. progress(fraction, stage) is called often (cancellation point)."""
     def prog(f, stage=None):
@@ -218,6 +238,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
 
     plat = inputs.platform
     antennas = list(inputs.obs)
+    settings, defaults_applied = apply_platform_defaults(settings, plat.kind, inputs.obs)
     prog(0.02, "aligning observations")
     try:
         signals = effective_signals(settings)
@@ -258,13 +279,15 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
             w_len = w_len / w_len.sum()
             body_c = np.ascontiguousarray(body, dtype=np.float64)
 
-            def attitude_fn(b, fixed):
+            def attitude_fn(b, fixed, k=None):
                 # attitude_quaternion's QUEST (weights by length; also for "ml") for one epoch, compiled
                 return quest_dcm(np.ascontiguousarray(b, dtype=np.float64), body_c, w_len)
         else:
-            def attitude_fn(b, fixed):
+            def attitude_fn(b, fixed, k=None):
                 q, _ = attitude_quaternion(b[None], body, settings.attitude_method)
                 return rot.quat_to_dcm(q[0])
+    elif settings.calibration.pcv_maps:
+        attitude_fn = single_baseline_attitude_fn(body[0], R_ref_from_ecef)
     prog(0.15, "filtering")
     two_pass = settings.mode == "dynamic" and settings.smoothing.adaptive_noise
     span = 0.375 if two_pass else 0.75
@@ -282,7 +305,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
         from gnssatt.attitude.smoother import smooth_filter_result
         smooth_filter_result(fr, settings)
     prog(0.92, "attitude")
-    sol = AttitudeSolution(settings, inputs, pobs, geom, fr, baselines, body)
+    sol = AttitudeSolution(settings, inputs, pobs, geom, fr, baselines, body, platform_defaults=defaults_applied)
     # ---- baselines table ----
     n_ep, n_bl = fr.ok.shape
     jj, kk = np.nonzero(fr.ok.T)          # baseline-major -> sort by epoch after

@@ -113,6 +113,10 @@ class AmbiguityResolution:
     newcomers are ours, with reasons in docs/attitude.md and docs/ttff.md."""
 
     max_length_error_m: float = _f(0.03, "Ambiguity acceptance: |length - known| (m), Table 2.", gt=0, le=10)
+    length_validation: Literal["filter", "single-epoch", "both"] = _f(
+        "filter", "Which first-fix baseline the length test takes: filter = the filter's baseline conditioned on "
+                  "the candidate integers; single-epoch = the epoch's own phases with them (seed 000 sec. 2, "
+                  "gnssatt.attitude.single_epoch_length); both = both must pass. Both lengths are in the events.")
     min_ratio: float = _f(0.0, "Also require this ratio (0: ratio only reported; the paper validates by length).",
                           ge=0, le=1000)
     ambiguity_search: Literal["lambda", "constrained"] = _f(
@@ -248,6 +252,15 @@ class AttitudeSettings:
     systems: list[Literal["G", "E", "C", "J"]] | None = _f(
         None, "Preset replacing `signals`: the first two frequencies of each system (SYSTEM_SIGNALS, RTKLIB "
               "'L1+L2'), e.g. ['G', 'E', 'C', 'J']. GLONASS is not supported.", min_length=1, max_length=4)
+    platform_defaults: bool = _f(
+        True, "Defaults by platform kind for what is left as it is (gnssatt.attitude.platform_defaults): terrestrial "
+              "platforms use every system of G/E/C/J in the files and elevation weights; spacecraft keep seed 000 "
+              "Tables 1-2. False: the settings exactly as given.")
+    length_constraint_sigma_m: float = _f(
+        0.0, "Dynamic mode: once a baseline has been fixed, its state is held to the known body length by a soft "
+             "constraint of this sigma after each update (gnssatt.attitude.length_constraint; without it the "
+             "lengths drift by mm over an hour; 5e-4 keeps them within 0.07 mm on the clean 106-min pass); 0: off "
+             "(m).", ge=0, le=1)
     rk4_step_s: float = _f(1.0, "Step of the Runge-Kutta propagation of the attitude between epochs (s).",
                            gt=0, le=60)
     initial_attitude: Literal["earth-pointing", "level", "given"] = _f(
@@ -305,6 +318,26 @@ class AttitudeSettings:
                 setattr(out, g, replace(getattr(out, g), **kw))
         return out
 
+
+#: defaults by platform kind (gnssatt.attitude.platform_defaults applies them): kind -> setting -> {value, reason};
+#: the attitude job's config schema exposes it as it is ("x-platform-defaults")
+PLATFORM_DEFAULTS: dict = {
+    "spacecraft": {
+        "signals": {"value": "GPS L1 C/A + L2 (signals ['L1', 'L2'])",
+                    "reason": "seed 000 Tables 1-2: the paper's configuration, its published figures"},
+        "noise.weighting": {"value": "none",
+                            "reason": "seed 000 Table 1 (no weighting); no ground multipath at a spacecraft"},
+    },
+    "terrestrial": {
+        "systems": {"value": "every system of G, E, C, J with satellites in every antenna's file",
+                    "reason": "real Nagoya 0.99 m baseline: GPS alone gives -3.4 mm length and -0.23 deg elevation, "
+                              "G/E/C/J within 0.3 mm / 0.03 deg of the known baseline (more satellites, better "
+                              "vertical geometry)"},
+        "noise.weighting": {"value": "elevation",
+                            "reason": "ground multipath grows at low elevation; with elevation weights the "
+                                      "Nagoya baseline meets 3 mm / 0.05 deg azimuth / 0.1 deg elevation"},
+    },
+}
 
 #: old flat field name -> "group.field" (every field that moved into a group)
 FLAT_TO_NESTED: dict[str, str] = _flat_to_nested()

@@ -70,6 +70,7 @@ def summarize(sol, R_ref_from_ecef: np.ndarray, orbit_source: str) -> dict:
         "frames": {"ecef_to_gcrf": "IAU 2006/2000A (ERFA), EOP zero",
                    "euler_reference": "orbital frame" if sol.inputs.platform.kind != "terrestrial" else "NED"},
         "baselines": [], "warnings": list(pobs.warnings) + list(sol.inputs.warnings),
+        "platform_defaults": list(getattr(sol, "platform_defaults", [])),
     }
     used = (res["reason"] == 0) & np.isfinite(res["residual_m"])
     for kind, name in ((0, "code"), (1, "phase")):

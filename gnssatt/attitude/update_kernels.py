@@ -296,16 +296,21 @@ def round_newcomers_rows(x, P, fix: FixState, n_fixed_part, idx_j, sig_j, el_j, 
 @njit(cache=True, nogil=True)
 def fix_newcomers(x, P, fix: FixState, n_fixed_part, cols, rows: UsedRows, el_loc_rad, n_sig, j,
                   limits: RoundingLimits):
-    """(new, ref, integers) as round_newcomers_rows over baseline j's phase rows of the update (row m_code + i of
-    cols with jp[i] == j: ambiguity state cols[., 4], signal fp[i], local elevation el_loc_rad[sp[i]] (n_sat,)),
+    """(new, ref, integers, applied) as round_newcomers_rows over baseline j's phase rows of the update (row
+    m_code + i of cols with jp[i] == j: ambiguity state cols[., 4], signal fp[i], local elevation el_loc_rad[sp[i]]
+    (n_sat,)),
     then x, P constrained in place to its DDs x[new] - x[ref] = integer by scalar pseudo-measurements of variance
-    limits.var_cyc2, each in the Joseph form (scalar updates in turn). Records: gnssatt.attitude.update_records.
+    limits.var_cyc2, each in the Joseph form (scalar updates in turn). applied False: an innovation variance was
+    not positive, x, P and fix.amb_fixed are left as they were (the newcomers stay float). Records:
+    gnssatt.attitude.update_records.
 
     Specification: gnssatt.attitude.reference_update.fix_newcomers (the batch Joseph DD constraint of
     boxes.ambiguity_resolution.pseudo_update; Gelb 1974 eq. 4.2-21).
     """
     jc, sc, fc, jp, sp, fp = rows
     max_sigma_cyc, max_frac_cyc, var_cyc2 = limits
+    amb_fixed, amb_key = fix
+    amb_fixed_before = amb_fixed.copy()
     mc_n = jc.size
     nr = 0
     for i in range(jp.size):
@@ -329,8 +334,10 @@ def fix_newcomers(x, P, fix: FixState, n_fixed_part, cols, rows: UsedRows, el_lo
         for i in range(r):
             c2[i, 0], c2[i, 1] = nw[i], rf[i]
             coef[i, 0], coef[i, 1] = 1.0, -1.0
-        sequential_update_sparse(x, P, c2, coef, np.full(r, var_cyc2), vals, 0.0)
-    return nw, rf, vals
+        if not sequential_update_sparse(x, P, c2, coef, np.full(r, var_cyc2), vals, 0.0):
+            amb_fixed[:] = amb_fixed_before       # x, P are as they were: the newcomers stay float
+            return nw, rf, vals, False
+    return nw, rf, vals, True
 
 
 @njit(cache=True, nogil=True)

@@ -118,7 +118,7 @@ def _filter_runs(ss: StudySet, cfg: str, method: str, opts: StudyOptions) -> lis
         from gnssatt.attitude.solution import attitude_from_baselines
         from gnssatt.gnss import rotations as rot
 
-        def attitude_fn(b, fixed):
+        def attitude_fn(b, fixed, k=None):
             q, _ = attitude_from_baselines(b[None], np.zeros((1, 3 * len(b), 3 * len(b))), ss.body_baselines_m,
                                            settings.attitude_method)
             return rot.quat_to_dcm(q[0])

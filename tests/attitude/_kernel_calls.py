@@ -351,8 +351,9 @@ def call_fix_newcomers(x, P, fix: FixState, n_fixed_part, cols, rows: UsedRows, 
                        limits: RoundingLimits):
     """(x, P, new, ref, integers, amb_fixed) on copies; the phase rows of the update as the filter passes them."""
     x1, P1, amb_fixed = x.copy(), P.copy(), fix.amb_fixed.copy()
-    new, ref, val = UK.fix_newcomers(x1, P1, _fix(fix, amb_fixed), n_fixed_part, cols, _rows(rows), el_loc_rad, n_sig,
-                                     j, _limits(limits))
+    new, ref, val, applied = UK.fix_newcomers(x1, P1, _fix(fix, amb_fixed), n_fixed_part, cols, _rows(rows),
+                                              el_loc_rad, n_sig, j, _limits(limits))
+    assert applied
     return x1, P1, new, ref, val, amb_fixed
 
 

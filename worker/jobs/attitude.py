@@ -13,8 +13,8 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator, model_validator
 
-from gnssatt.attitude.settings import (FLAT_TO_NESTED, GROUPS, PRESETS, SIGNAL_ALIASES, SIGNALS, AttitudeSettings,
-                                       cn0_mask_of)
+from gnssatt.attitude.settings import (FLAT_TO_NESTED, GROUPS, PLATFORM_DEFAULTS, PRESETS, SIGNAL_ALIASES, SIGNALS,
+                                       AttitudeSettings, cn0_mask_of)
 
 from worker.context import JobContext
 from worker.errors import JobInputError
@@ -59,9 +59,12 @@ class _AttitudeConfigBase(BaseModel):
     """Attitude job config. Canonical JSON: nested groups ({"table1": {...}, "table2": {...}, "ambiguity",
     "noise", "smoothing", "adaptive", "calibration"}) over a named `preset`; the old flat keys (e.g.
     "sigma_code_m", "smoother") are accepted too and translated by JOB_FLAT_TO_NESTED. Defaults shown are the
-    seed000 preset's; with another preset, unset fields take the preset's values."""
+    seed000 preset's; with another preset, unset fields take the preset's values. Terrestrial platforms change
+    two of them unless they are set (`platform_defaults`; the schema's "x-platform-defaults" lists each with its
+    reason)."""
 
-    model_config = ConfigDict(extra="forbid")
+    # the defaults by platform kind with their reasons, as data in the job type's schema (/v1/job-types)
+    model_config = ConfigDict(extra="forbid", json_schema_extra={"x-platform-defaults": PLATFORM_DEFAULTS})
 
     @model_validator(mode="before")
     @classmethod

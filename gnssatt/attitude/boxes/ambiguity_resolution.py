@@ -68,16 +68,21 @@ def _first_fix(run: FilterRun, ep: EpochData, j: int, joint_ar: dict) -> None:
     groups = first_fix_groups(*_phase_rows_of(ep, j), run.n_sig)
     if not groups or sum(g.size - 1 for g, _ in groups) < s.ambiguity.min_dd:
         return
-    outcome = joint_ar.get(j) or resolve_first_fix(st.x, st.P, groups, run.b_idx[j], run.lengths[j], s)
+    outcome = joint_ar.get(j) or resolve_first_fix(st.x, st.P, groups, run.b_idx[j], run.lengths[j], run.s_search)
     run.out_ratio[k, j] = outcome.ratio
     validate_first_fix(run, ep, j, outcome)
     if not outcome.accepted:
-        run.events.add(k, "fix_rejected", j, detail=f"ratio {outcome.ratio:.2f}, {outcome.reason}")
+        run.events.add(k, "fix_rejected", j, detail=f"ratio {outcome.ratio:.2f}, {outcome.reason}"
+                                                    f"{outcome.length_note}")
         return
     run.angle_fail[j] = 0
-    _log_fix(run, k, outcome.D, outcome.a_fix)
     b_before = st.x[run.b_idx[j]].copy()
-    pseudo_update(st, outcome.D, outcome.a_fix)
+    if not pseudo_update(st, outcome.D, outcome.a_fix):
+        # the constraint could not be applied (S not positive definite): no fix, the baseline stays float
+        run.events.add(k, "fix_constraint_failed", j, detail=f"{outcome.n_dd} DD ambiguities, ratio "
+                                                             f"{outcome.ratio:.2f}: constraint update not applied")
+        return
+    _log_fix(run, k, outcome.D, outcome.a_fix)
     b_after = st.x[run.b_idx[j]]
     turn_deg = np.degrees(np.arccos(_clip(b_before @ b_after / max(
         np.linalg.norm(b_before) * np.linalg.norm(b_after), 1e-12), -1.0, 1.0)))
@@ -87,7 +92,7 @@ def _first_fix(run: FilterRun, ep: EpochData, j: int, joint_ar: dict) -> None:
         st.amb_fixed[g - st.n_fixed_part] = True
     ep.ar_changed = True
     run.events.add(k, "fix", j, detail=f"{outcome.n_dd} DD ambiguities, ratio {outcome.ratio:.2f}, "
-                                       f"length {outcome.length_m:.4f} m")
+                                       f"length {outcome.length_m:.4f} m (filter){outcome.length_note}")
     if run.first_fix[j] < 0:
         run.first_fix[j] = k
 
@@ -110,9 +115,12 @@ def _fix_newcomers(run: FilterRun, ep: EpochData, j: int) -> None:
     in place (DD pseudo-measurements as in pseudo_update, as scalar Joseph updates)."""
     st, k = run.st, ep.k
     fix = FixState.plain(amb_fixed=st.amb_fixed, amb_key=st.amb_key)      # (st.x, st.P may have been replaced)
-    nw, rf, vals = fix_newcomers(st.x, st.P, fix, st.n_fixed_part, ep.cols, ep.rows, ep.el_loc, run.n_sig, j,
-                                 run.rounding_limits)
-    if nw.size:
+    nw, rf, vals, applied = fix_newcomers(st.x, st.P, fix, st.n_fixed_part, ep.cols, ep.rows, ep.el_loc, run.n_sig,
+                                          j, run.rounding_limits)
+    if nw.size and not applied:
+        run.events.add(k, "fix_constraint_failed", j, detail=f"{nw.size} newcomers rounded: constraint update "
+                                                             "not applied, they stay float")
+    elif nw.size:
         ep.ar_changed = True
         run.fix_rows.extend(zip([k] * nw.size, st.amb_arc[nw - st.n_fixed_part].tolist(),
                                 st.amb_arc[rf - st.n_fixed_part].tolist(), vals.tolist()))
@@ -129,9 +137,10 @@ def _log_fix(run: FilterRun, k: int, D: np.ndarray, a_fix: np.ndarray) -> None:
                                  int(st.amb_arc[neg[0] - st.n_fixed_part]), float(v)))
 
 
-def pseudo_update(st: FilterState, D: np.ndarray, a_fix: np.ndarray) -> None:
+def pseudo_update(st: FilterState, D: np.ndarray, a_fix: np.ndarray) -> bool:
     """Constrain DD ambiguities D x = a_fix with a (numerically) zero-variance pseudo-measurement (Joseph form):
-    seed 000 sec. 2 "the resolved double-difference ambiguities are used as observations with zero variance"."""
+    seed 000 sec. 2 "the resolved double-difference ambiguities are used as observations with zero variance".
+    False (st unchanged) when the update could not be applied (its S not positive definite)."""
     r, c = np.nonzero(D)                         # row-major: each row's columns ascending
     cnt = np.bincount(r, minlength=D.shape[0])
     kmax = int(cnt.max())
@@ -145,3 +154,4 @@ def pseudo_update(st: FilterState, D: np.ndarray, a_fix: np.ndarray) -> None:
     x1, P1, _, good = joseph_update_sparse(st.x, st.P, cols, coef, np.full(D.shape[0], PSEUDO_VAR_CYC2), innov)
     if good:
         st.x, st.P = x1, P1
+    return bool(good)

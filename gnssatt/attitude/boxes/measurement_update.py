@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from gnssatt.attitude.filter_state import JOSEPH_RATIO, MP_SCALE_MAX, MP_SCALE_MIN, NOISE_EPOCHS, EpochData, FilterRun
+from gnssatt.attitude.length_constraint import project_lengths
 from gnssatt.attitude.update_kernels import update_epoch
 from gnssatt.attitude.update_records import FixState, UpdateObs, UpdateOutputs
 
@@ -53,6 +54,9 @@ def _update(run: FilterRun, ep: EpochData) -> UpdateOutputs:
     fix = FixState.plain(amb_fixed=st.amb_fixed, amb_key=st.amb_key)       # (arrays replaced with the states)
     ep.vc_f, ep.vp_f, res = update_epoch(st.x, st.P, ep.rows, run.update_layout, obs, run.noise_model, mp_mult, fix,
                                          st.amb_last_t, ep.t, JOSEPH_RATIO)
+    if run.dynamic and s.length_constraint_sigma_m > 0:     # the rigid length (gnssatt.attitude.length_constraint)
+        project_lengths(st.x, st.P, run.b_idx, run.lengths, s.length_constraint_sigma_m,
+                        run.ever_fixed)
     out = UpdateOutputs._make(res)
     ep.cols, ep.post, ep.has_fix = out.cols, out.post_m, out.has_fix
     ep.n_used, ep.n_fixed_used, ep.n_unfixed, ep.n_fix_rows, ep.ms_fix = (out.n_used, out.n_fixed_used, out.n_unfixed,

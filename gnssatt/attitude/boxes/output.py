@@ -28,8 +28,9 @@ def output(run: FilterRun, ep: EpochData) -> None:
     if run.record:
         run.sm_xf[k], run.sm_Pf[k] = st.x[run.sub_w_b], st.P[run.ix_sub]
     if run.attitude_fn is not None and k % (1 if run.pcv_tables else 10) == 0 and fixed_now.all():
-        run.R_mask = run.attitude_fn(run.out_b[k], fixed_now)
-        run.R_mask_t = ep.t
+        R = run.attitude_fn(run.out_b[k], fixed_now, k)
+        if R is not None:
+            run.R_mask, run.R_mask_t = R, ep.t
     # residual records (used and rejected): the epoch's code rows, then its phase rows; and the memory for the
     # triple differences (clock-corrected SDs where available)
     epoch = output_epoch(k=k, i=ep.i, cn0_dbhz=ep.cn0, u=ep.u, b_out_m=run.out_b[k])

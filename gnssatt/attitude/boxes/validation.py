@@ -7,7 +7,10 @@ ratio, settings.ar_min_ratio_first_fix) and, with fixed partner baselines, the a
 """
 from __future__ import annotations
 
+import numpy as np
+
 from gnssatt.attitude.filter_state import ANGLE_FAIL_RESET, EpochData, FilterRun
+from gnssatt.attitude.single_epoch_length import single_epoch_baseline
 from gnssatt.attitude.validation import angle_test_against_fixed, fixed_baseline_vector
 
 
@@ -19,6 +22,7 @@ def validate_first_fix(run: FilterRun, ep: EpochData, j: int, outcome) -> None:
     if outcome.accepted and not (outcome.ratio >= s.ambiguity.min_ratio_first_fix):
         outcome.accepted = False
         outcome.reason = f"ratio {outcome.ratio:.2f} < {s.ambiguity.min_ratio_first_fix:.2f} (first fix)"
+    _length_tests(run, ep, j, outcome)
     if not (outcome.accepted and run.n_bl > 1 and s.ambiguity.max_angle_error_m > 0):
         return
     partners = [j2 for j2 in range(run.n_bl) if j2 != j and st.baseline_has_fix(j2)]
@@ -41,3 +45,27 @@ def validate_first_fix(run: FilterRun, ep: EpochData, j: int, outcome) -> None:
             run.pending_reset[j2] = f"{ANGLE_FAIL_RESET} candidates of baseline {j} in a row failed the angle test " \
                                     f"against it"
         run.angle_fail[j] = 0
+
+
+def _length_tests(run: FilterRun, ep: EpochData, j: int, outcome) -> None:
+    """The length test of settings.ambiguity.length_validation on a candidate: the filter's conditional baseline
+    (already tested by the search unless "single-epoch"), the epoch's own single-epoch baseline
+    (gnssatt.attitude.single_epoch_length) for "single-epoch" / "both"; the single-epoch length goes into the
+    fix event (outcome.length_note) and the rejection reason in every mode where it is computed."""
+    s, st = run.s, run.st
+    mode = s.ambiguity.length_validation
+    if outcome.D is None or outcome.a_fix is None:
+        return
+    tol, L = s.ambiguity.max_length_error_m, run.lengths[j]
+    b1 = single_epoch_baseline(outcome.D, outcome.a_fix, st.x, st.n_fixed_part, st.amb_key, ep.sdp_c, ep.pcv_m,
+                               ep.u, ep.cfac, run.lam)
+    l1 = float(np.linalg.norm(b1)) if b1 is not None else float("nan")
+    outcome.length_note = (f"; single-epoch length {l1:.4f} m" if b1 is not None
+                           else "; single-epoch length: too few DDs with data")
+    if not outcome.accepted or mode == "filter":
+        return
+    if mode == "single-epoch" and abs(outcome.length_m - L) > tol:
+        outcome.length_note += " (the filter length is not tested in this mode)"
+    if not abs(l1 - L) <= tol:
+        outcome.accepted = False
+        outcome.reason = f"single-epoch length test failed vs known {L:.4f} m"

@@ -1,0 +1,139 @@
+"""Dynamic-mode baseline lengths (issue 21 item 2): the length error against the body length over the four
+106-minute passes, without and with the soft length constraint (settings.length_constraint_sigma_m,
+gnssatt/attitude/length_constraint.py), forward filter and smoother_adaptive_noise, with the attitude errors of
+the same runs (so a change of the length handling shows what it costs or gives the attitude).
+
+Passes (simulator seed 0, 106 min at 1 Hz, three antennas, L1 C/A + L2 P(Y)): `clean` (preset `earth-pointing`
+without PCV/PCO/multipath: the body length is the truth), `realistic` (`earth-pointing` as it is: PCO scatter and
+PCV make the phase-centre baselines 2-3 mm (L1) off the body lengths), `hard` (preset `hard`, 25 mm PCV), `slew`
+(preset `slew`, clean). Selection "all phases" (settings.ALL_PHASES), as bench_attitude.py.
+
+Per run and baseline: mean length error over fixed epochs, min / max of its 5-minute means (every 300 epochs),
+the mean over the last 5 minutes; attitude: yaw / pitch / roll error std over fixed epochs, max error.
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_lengths.py [--minutes 106] [--write]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+
+from bench._report import machine_line, replace_section  # noqa: E402
+from bench.bench_attitude import files_of  # noqa: E402
+
+SEED = 0
+CLEAN = {"pcv": False, "pco": False, "multipath": False, "noise_grows_with_cn0": False}
+PASSES = {"clean": ("earth-pointing", CLEAN), "realistic": ("earth-pointing", {}), "hard": ("hard", {}),
+          "slew": ("slew", CLEAN)}
+SIGMA_M = 5e-4
+RUNS = {"forward, no constraint": {"length_constraint_sigma_m": 0.0},
+        f"forward, constraint {SIGMA_M * 1e3:.1f} mm": {"length_constraint_sigma_m": SIGMA_M},
+        "smoother_adaptive_noise, no constraint": {"length_constraint_sigma_m": 0.0, "smoother": True,
+                                                   "smoother_adaptive_noise": True},
+        f"smoother_adaptive_noise, constraint {SIGMA_M * 1e3:.1f} mm": {"length_constraint_sigma_m": SIGMA_M,
+                                                                        "smoother": True,
+                                                                        "smoother_adaptive_noise": True}}
+
+
+def run(d: Path, cfg: dict) -> list[dict]:
+    """Length and attitude figures of one dynamic-mode run on the set d (one dict per baseline)."""
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
+    from gnssatt.attitude.truth import attitude_errors_deg
+
+    sol = process(load_inputs(files_of(d)), AttitudeSettings.preset("seed000", **{**ALL_PHASES, "mode": "dynamic",
+                                                                                  **cfg}))
+    fr = sol.fr
+    pl = json.loads((d / "platform.json").read_text())
+    pos = {k: np.array(v["position_m"]) for k, v in pl["antennas"].items()}
+    ang, de = attitude_errors_deg(d, sol)
+    f_att = sol.att_fixed
+    out = []
+    for j, (a, b) in enumerate(pl["baselines"]):
+        L = np.linalg.norm(pos[b] - pos[a])
+        e = np.where(fr.fixed[:, j], (np.linalg.norm(fr.b_ecef_m[:, j], axis=1) - L) * 1e3, np.nan)
+        means = np.array([np.nanmean(e[i:i + 300]) for i in range(0, e.size - 299, 300)
+                          if np.isfinite(e[i:i + 300]).any()])
+        out.append({"baseline": f"{a}>{b}", "mean": np.nanmean(e), "min5": means.min(), "max5": means.max(),
+                    "last5": np.nanmean(e[-300:]), "att_std": de[f_att].std(0), "att_max": float(ang[f_att].max())})
+    return out
+
+
+def validation_rows(d: Path, label: str) -> list[str]:
+    """ambiguity.length_validation filter / single-epoch / both in both modes on the set d (the job's default data
+    selection): fix and fix_rejected events, wrong integers against truth/arcs.csv, attitude fix rate."""
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.settings import AttitudeSettings
+    from gnssatt.attitude.truth import score_fixes
+
+    out = []
+    inputs = load_inputs(files_of(d))
+    for mode in ("dynamic", "kinematic"):
+        for val in ("filter", "single-epoch", "both"):
+            sol = process(inputs, AttitudeSettings.preset("seed000", mode=mode,
+                                                          ambiguity={"length_validation": val}))
+            ev = [e["event"] for e in sol.fr.events]
+            sc = score_fixes(sol, d / "truth")
+            out.append(f"| {label} | {mode} | {val} | {ev.count('fix')} | {ev.count('fix_rejected')} | "
+                       f"{sc['wrong_constraints']} of {sc['constraints']} | {sol.att_fixed.mean():.4f} |")
+            print(out[-1], flush=True)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--minutes", type=float, default=106.0)
+    ap.add_argument("--write", action="store_true")
+    ap.add_argument("--validation-only", action="store_true", help="only the length-validation table (all passes)")
+    args = ap.parse_args()
+    from gnssatt.sim import simulate_scenario
+
+    lines = [f"Machine: {machine_line()}. One BLAS thread. Simulator seed {SEED}, {args.minutes:.0f} min at 1 Hz, "
+             "three antennas, L1 C/A + L2 P(Y), dynamic mode, \"all phases\". Length error = |b| - body length "
+             "(platform.json) over fixed epochs, mm: mean, min / max of the 5-minute means, last 5 minutes; "
+             "attitude: error std yaw / pitch / roll over fixed epochs and the max error (deg).", "",
+             "| pass | run | baseline | mean mm | 5-min means min / max mm | last 5 min mm | std yaw / pitch / roll "
+             "deg | max deg |", "|---|---|---|---|---|---|---|---|"]
+    val_lines = ["Length validation of first fixes (`ambiguity.length_validation`: filter = today's test on the "
+                 "filter's conditional baseline; single-epoch = seed 000's, the epoch's own phases with the "
+                 "candidate integers; both), the job's default data selection (Table 2 masks), same passes:", "",
+                 "| pass | mode | length validation | fix events | fix_rejected events | wrong integers (truth) | "
+                 "attitude fix rate |", "|---|---|---|---|---|---|---|"]
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, (preset, over) in PASSES.items():
+            d = Path(tmp) / label
+            simulate_scenario(preset, d, seed=SEED, overrides={"duration_s": args.minutes * 60.0, **over})
+            if args.validation_only or label in ("realistic", "hard"):
+                val_lines += validation_rows(d, label)
+            if args.validation_only:
+                continue
+            for name, cfg in RUNS.items():
+                for r in run(d, cfg):
+                    s = r["att_std"]
+                    lines.append(f"| {label} | {name} | {r['baseline']} | {r['mean']:+.3f} | {r['min5']:+.3f} / "
+                                 f"{r['max5']:+.3f} | {r['last5']:+.3f} | {s[0]:.4f} / {s[1]:.4f} / {s[2]:.4f} | "
+                                 f"{r['att_max']:.2f} |")
+                    print(lines[-1], flush=True)
+    lines += ["", "Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_lengths.py --write`."]
+    val_lines[0] = f"Machine: {machine_line()}. " + val_lines[0]
+    val_lines += ["", "Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_lengths.py --validation-only "
+                  "--write` (or without --validation-only, with the lengths above)."]
+    print("\n".join(val_lines))
+    if args.write:
+        if not args.validation_only:
+            replace_section(ROOT / "docs" / "BENCHMARKS.md", "Dynamic-mode lengths", "\n".join(lines))
+        replace_section(ROOT / "docs" / "BENCHMARKS.md", "Single-epoch length validation", "\n".join(val_lines))
+
+
+if __name__ == "__main__":
+    main()

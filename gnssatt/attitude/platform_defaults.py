@@ -1,0 +1,56 @@
+"""Defaults by platform kind (issue 21 item 4): what the attitude job uses when the user leaves the signals and the
+weighting as they are.
+
+Spacecraft keep seed 000 Tables 1-2 (GPS L1 C/A + L2, no weighting: the paper's configuration and the figures it
+publishes). Terrestrial platforms get every system of the `systems` preset (G, E, C, J: the first two frequencies
+of each, gnssatt.gnss.signals.SYSTEM_SIGNALS) that every antenna's file carries, and elevation weights: on the real
+Nagoya 0.99 m baseline (docs/attitude.md "Real data") GPS L1/L2 without weights gives the length 3.4 mm and the
+elevation 0.23 deg off the known values, G/E/C/J with elevation weights 0.3 mm / 0.03 deg (dynamic mode). A
+terrestrial antenna sees the ground's multipath at low elevation, which the elevation weights tame, and more
+satellites make the short-baseline geometry (and so the elevation of the baseline) better; a spacecraft's
+antennas see no ground and the paper's weighting-free model is the one its figures were measured with.
+
+A default is applied only to what the user did not set: `systems` None and `signals` the default GPS L1/L2, and
+noise.weighting "none" (the settings' default); `platform_defaults: false` switches it off. The table is data:
+the job type lists it in its config schema (/v1/job-types, "x-platform-defaults"); it lives in
+gnssatt.attitude.settings, which the service may import without the numerics.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+from gnssatt.attitude.settings import PLATFORM_DEFAULTS, AttitudeSettings
+
+__all__ = ["PLATFORM_DEFAULTS", "apply_platform_defaults"]
+
+DEFAULT_SIGNALS = ["L1", "L2"]
+TERRESTRIAL_SYSTEMS = ("G", "E", "C", "J")
+
+def _systems_in_files(obs_by_antenna: dict) -> list[str]:
+    """The systems of TERRESTRIAL_SYSTEMS with at least one satellite in every antenna's observation file."""
+    out = []
+    for x in TERRESTRIAL_SYSTEMS:
+        if obs_by_antenna and all(any(s[0] == x for s in o.sats) for o in obs_by_antenna.values()):
+            out.append(x)
+    return out
+
+
+def apply_platform_defaults(settings: AttitudeSettings, kind: str, obs_by_antenna: dict
+                            ) -> tuple[AttitudeSettings, list[dict]]:
+    """(settings with the platform kind's defaults applied where the user left the setting as it was, the defaults
+    applied as [{"setting", "value", "reason"}]); unchanged when settings.platform_defaults is False."""
+    if not settings.platform_defaults or kind != "terrestrial":
+        return settings, []
+    applied = []
+    out = settings
+    table = PLATFORM_DEFAULTS["terrestrial"]
+    if out.systems is None and list(out.signals) == DEFAULT_SIGNALS:
+        systems = _systems_in_files(obs_by_antenna)
+        if systems and systems != ["G"]:
+            out = replace(out, systems=systems)
+            applied.append({"setting": "systems", "value": systems, "reason": table["systems"]["reason"]})
+    if out.noise.weighting == "none":
+        out = out.override(noise={"weighting": "elevation"})
+        applied.append({"setting": "noise.weighting", "value": "elevation",
+                        "reason": table["noise.weighting"]["reason"]})
+    return out, applied
