@@ -6,6 +6,7 @@ from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
 
+from app.limits import JsonBodyLimit, TeamSlots
 from app.problems import install_problem_handlers
 from app.routes import health, job_types, jobs, observation_sets, pcv_maps
 from app.routes.pages import install_pages
@@ -43,6 +44,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     logging.basicConfig(level=settings.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     app = FastAPI(title="gnssatt", version=API_VERSION, description=DESCRIPTION, lifespan=lifespan)
     app.state.settings = settings
+    app.state.upload_slots = TeamSlots("uploads", settings.max_uploads_per_team, "GNSSATT_MAX_UPLOADS_PER_TEAM")
+    app.add_middleware(JsonBodyLimit, max_bytes=settings.max_json_body_bytes, max_depth=settings.max_json_depth)
     install_problem_handlers(app)
     app.include_router(health.router)
     app.include_router(observation_sets.router)

@@ -8,6 +8,7 @@ from sqlalchemy import func, select
 from starlette.concurrency import run_in_threadpool
 
 from app.deps import SessionDep, TeamDep
+from app.http_headers import content_disposition
 from app.problems import Problem, ProblemError, not_found
 from app.schemas.common import Page
 from app.schemas.pcv_maps import PcvMapCreate, PcvMapPublic
@@ -105,10 +106,10 @@ async def download_map(map_id: str, request: Request, team: TeamDep, session: Se
     if format == "json":
         data = await run_in_threadpool(request.app.state.blobs.path(row.sha256).read_bytes)
         return Response(data, media_type="application/json",
-                        headers={"Content-Disposition": f'attachment; filename="{stem}.json"'})
+                        headers={"Content-Disposition": content_disposition(f"{stem}.json")})
     grid = await run_in_threadpool(_load_grid, request, row)
     return Response(write_pcv_antex([grid]), media_type="text/plain",
-                    headers={"Content-Disposition": f'attachment; filename="{stem}.atx"'})
+                    headers={"Content-Disposition": content_disposition(f"{stem}.atx")})
 
 
 @router.delete("/{map_id}", status_code=204, responses=ERRORS, summary="Delete a PCV map version")
