@@ -18,7 +18,8 @@ import traceback
 import uuid
 from datetime import datetime, timedelta
 
-from sqlalchemy import select, update
+from sqlalchemy import func, select, update
+from sqlalchemy.orm import aliased
 
 from core.models import Job, Product, utcnow
 from core.pcv_store import add_pcv_map
@@ -49,12 +50,17 @@ def _lease_until(rt: Runtime) -> datetime:
 
 
 def claim(rt: Runtime, job_id: str) -> tuple[str, int] | None:
-    """Claim a queued job: returns (lease token, attempt number) or None if someone else has it."""
+    """Claim a queued job: returns (lease token, attempt number) or None if someone else has it, or when its
+    team already runs GNSSATT_MAX_RUNNING_JOBS_PER_TEAM jobs (it stays queued; `ring_waiting` wakes it)."""
     token = f"{rt.worker_name}/{uuid.uuid4().hex[:8]}"
     now = utcnow()
+    running = aliased(Job)
+    team_running = (select(func.count()).select_from(running)
+                    .where(running.team_id == Job.team_id, running.state == "running").scalar_subquery())
     with rt.Session.begin() as s:
         res = s.execute(update(Job).where(Job.id == job_id, Job.state == "queued",
-                                          Job.cancel_requested.is_(False))
+                                          Job.cancel_requested.is_(False),
+                                          team_running < rt.settings.max_running_jobs_per_team)
                         .values(state="running", attempts=Job.attempts + 1, lease_owner=token,
                                 lease_expires_at=_lease_until(rt), heartbeat_at=now, started_at=now,
                                 finished_at=None, progress=0.0, stage="starting", error=None)
@@ -100,6 +106,19 @@ class Heartbeat(threading.Thread):
             if s.execute(select(Job.cancel_requested).where(Job.id == self.job_id)).scalar_one():
                 self.ctx.cancel_requested.set()
         return True
+
+
+def ring_waiting(rt: Runtime, job_id: str) -> str | None:
+    """After a job of a team stops running, enqueue that team's oldest queued job again (it may have been
+    refused a claim at the team's limit); a duplicate message is harmless, the claim is conditional."""
+    with rt.Session() as s:
+        team_id = s.execute(select(Job.team_id).where(Job.id == job_id)).scalar_one_or_none()
+        waiting = s.execute(select(Job.id).where(Job.team_id == team_id, Job.state == "queued",
+                                                 Job.cancel_requested.is_(False))
+                            .order_by(Job.created_at, Job.id).limit(1)).scalar_one_or_none()
+    if waiting is not None:
+        enqueue(rt.huey, waiting)
+    return waiting
 
 
 def _finish(rt: Runtime, job_id: str, token: str, **values) -> bool:
@@ -201,6 +220,10 @@ def execute_job(rt: Runtime, job_id: str) -> str | None:
         beat.stop_event.set()
         beat.join(timeout=5)
         shutil.rmtree(workdir, ignore_errors=True)
+        try:
+            ring_waiting(rt, job_id)
+        except Exception:  # noqa: BLE001 - the reaper re-rings queued jobs anyway
+            log.warning("could not ring the next queued job of job %s's team", job_id, exc_info=True)
 
 
 # --- the reaper -----------------------------------------------------------------------------------
