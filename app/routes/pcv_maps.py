@@ -13,7 +13,7 @@ from app.problems import Problem, ProblemError, not_found
 from app.schemas.common import Page
 from app.schemas.pcv_maps import PcvMapCreate, PcvMapPublic
 from core.models import PcvMap
-from core.pcv_store import add_pcv_map
+from core.pcv_store import PcvFieldTooLong, add_pcv_map
 from gnssatt.gnss.io.errors import ParseError
 from gnssatt.gnss.io.pcv_map import PcvMap as PcvGrid
 from gnssatt.gnss.io.pcv_map import parse_pcv_map, read_pcv_antex, write_pcv_antex
@@ -67,7 +67,10 @@ def create_map(body: PcvMapCreate, request: Request, response: Response, team: T
     except ParseError as exc:
         raise ProblemError(422, "invalid-pcv-map", "Invalid PCV map", str(exc), field="map" if body.map else "antex",
                            line=exc.line_no) from exc
-    row = add_pcv_map(session, request.app.state.blobs, team.id, body.name, grid)
+    try:
+        row = add_pcv_map(session, request.app.state.blobs, team.id, body.name, grid)
+    except PcvFieldTooLong as exc:
+        raise ProblemError(422, "invalid-pcv-map", "Invalid PCV map", str(exc), field=f"map.{exc.field}") from exc
     session.commit()
     response.headers["Location"] = f"/v1/pcv-maps/{row.id}"
     return to_public(request, row, grid)
