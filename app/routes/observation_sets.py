@@ -64,6 +64,9 @@ async def upload_set(request: Request, response: Response, team: TeamDep, sessio
             await run_in_threadpool(expand_bundles, staged, settings)
             files, summary = await run_in_threadpool(validate_staged, staged, settings)
             name = staged.fields.get("name") or None
+            if name is not None and len(name) > 300:  # observation_sets.name
+                raise ProblemError(422, "name-too-long", "Set name too long",
+                                   f"The set name has {len(name)} characters; at most 300.", field="name")
             obs_set = await run_in_threadpool(store_set, session, request.app.state.blobs, team.id, name,
                                               files, summary)
         finally:

@@ -1,9 +1,10 @@
 from __future__ import annotations
 
+import math
 from datetime import datetime
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 JobState = Literal["queued", "running", "succeeded", "failed", "cancelled"]
 
@@ -13,6 +14,21 @@ class JobCreate(BaseModel):
     type: str = Field(description="A job type from GET /v1/job-types.", min_length=1, max_length=60)
     observation_set_ids: list[str] = Field(default_factory=list, max_length=10000)
     config: dict[str, Any] = Field(default_factory=dict, description="Validated against the type's config schema.")
+
+    @field_validator("config")
+    @classmethod
+    def _finite(cls, value: dict[str, Any]) -> dict[str, Any]:
+        """NaN and Infinity (which Python's JSON reader accepts) are no JSON numbers: refused everywhere."""
+        stack = [value]
+        while stack:
+            item = stack.pop()
+            if isinstance(item, dict):
+                stack.extend(item.values())
+            elif isinstance(item, list):
+                stack.extend(item)
+            elif isinstance(item, float) and not math.isfinite(item):
+                raise ValueError(f"{item} is not a JSON number; give a finite value")
+        return value
 
 
 class JobPublic(BaseModel):

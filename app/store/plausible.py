@@ -5,7 +5,8 @@ instead of failing later inside a job as an internal error.
   1e18 would give a year of 31688740525);
 - numbers: every number in a summary is finite;
 - platform.json: antenna positions and boresights are finite, positions within 10 km of the body origin
-  (a rigid platform's lever arms; CONVENTIONS.md), boresights not zero.
+  (a rigid platform's lever arms; CONVENTIONS.md), boresights not zero; its name and antenna ids fit the
+  columns that keep them (so PostgreSQL, which refuses longer strings, and SQLite, which keeps them, agree).
 """
 from __future__ import annotations
 
@@ -17,6 +18,8 @@ from pathlib import Path
 from app.problems import ProblemError
 
 MAX_LEVER_ARM_M = 10_000.0
+MAX_PLATFORM_NAME = 300  # observation_sets.platform_name
+MAX_ANTENNA_ID = 100  # as pcv_maps.first_antenna
 FIRST_YEAR, LAST_YEAR = 1980, 2200
 _ISO_YEAR = re.compile(r"^(-?\d+)-\d\d-\d\dT")
 
@@ -52,7 +55,12 @@ def check_plausible(kind: str, summary: dict, plain_path: Path, name: str) -> No
 
 
 def _check_platform(doc: dict, name: str) -> None:
+    if isinstance(doc.get("name"), str) and len(doc["name"]) > MAX_PLATFORM_NAME:
+        raise _refuse(name, "name", f"has {len(doc['name'])} characters; at most {MAX_PLATFORM_NAME}")
     for antenna, spec in (doc.get("antennas") or {}).items():
+        if len(antenna) > MAX_ANTENNA_ID:
+            raise _refuse(name, "antennas", f"has an antenna id of {len(antenna)} characters; at most "
+                          f"{MAX_ANTENNA_ID}")
         if not isinstance(spec, dict):
             continue
         for key, limit in (("position_m", MAX_LEVER_ARM_M), ("boresight", None)):

@@ -24,6 +24,7 @@ from app.problems import ProblemError
 from core.settings import Settings
 
 COPY_CHUNK = 1024 * 1024
+MAX_NAME_CHARS = 500  # set_files.name
 
 
 @dataclass
@@ -55,6 +56,10 @@ def safe_member_name(raw: str, *, where: str) -> str:
     """A relative POSIX path with no '..', no absolute root, no drive letter; else a 422 problem."""
     name = raw.replace("\\", "/")
     parts = [p for p in name.split("/") if p not in ("", ".")]
+    if len(raw) > MAX_NAME_CHARS:
+        raise ProblemError(422, "name-too-long", "File name too long",
+                           f"{where}: a file name of {len(raw)} characters; at most {MAX_NAME_CHARS} are kept.",
+                           file=raw[:100])
     if name.startswith("/") or re.match(r"^[A-Za-z]:", name) or ".." in parts or not parts:
         raise ProblemError(422, "unsafe-path", "Unsafe file name",
                            f"{where}: the name {raw!r} is empty, absolute or climbs out of the set with '..'; "
