@@ -10,6 +10,7 @@ from app.limits import JsonBodyLimit, TeamSlots
 from app.problems import install_problem_handlers
 from app.routes import health, job_types, jobs, observation_sets, pcv_maps
 from app.routes.pages import install_pages
+from app.store import summarizer
 from core.blobs import BlobStore
 from core.db import make_engine, make_sessionmaker
 from core.migrate import migrate
@@ -39,6 +40,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         app.state.blobs = BlobStore(settings.blobs_dir)
         app.state.huey = make_huey(settings)
         yield
+        summarizer.shutdown()
         engine.dispose()
 
     logging.basicConfig(level=settings.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")

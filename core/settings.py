@@ -38,6 +38,9 @@ class Settings(BaseSettings):
     max_header_bytes: int = Field(4 * 1024**2, ge=1024, description="Largest RINEX/SP3/ANTEX header accepted.")
     max_reference_csv_bytes: int = Field(32 * 1024**2, ge=1024, description="Largest reference attitude CSV "
                                          "accepted in an upload (about four days at 1 Hz).")
+    summarizer_memory_mb: int = Field(1024, ge=0, description="Memory of the API's helper process that "
+                                      "summarises navigation, SP3, clock and ANTEX files with their full readers "
+                                      "(0: in the API process itself).")
     max_json_body_bytes: int = Field(4 * 1024**2, ge=1024, description="Largest JSON request body (413 beyond).")
     max_json_depth: int = Field(64, ge=4, description="Deepest nesting of a JSON request body (422 beyond).")
     job_memory_mb: int = Field(4096, ge=64, description="Memory (resident set) one job may use; a job over it "

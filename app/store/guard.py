@@ -215,8 +215,9 @@ def _peel_hatanaka(src: Path, out: Path, account) -> None:
 _PEEL = {"gzip": _peel_gzip, "bzip2": _peel_bzip2, "lzw": _peel_lzw, "zip": _peel_zip, "hatanaka": _peel_hatanaka}
 
 
-def scan_plain(path: Path, name: str, settings: Settings) -> None:
-    """Line length, NUL bytes, header size and small-kind limits of a plain file, in one streaming pass."""
+def scan_plain(path: Path, name: str, settings: Settings) -> bool:
+    """Line length, NUL bytes, header size and small-kind limits of a plain file, in one streaming pass.
+    Returns whether the file is of a kind summarised by a full reader (navigation, SP3, clock, ANTEX)."""
     max_line = settings.max_line_bytes
     max_header = settings.max_header_bytes
     with open(path, "rb") as fh:
@@ -224,6 +225,8 @@ def scan_plain(path: Path, name: str, settings: Settings) -> None:
         first = head.split(b"\n", 1)[0]
         label = first[60:80].strip()
         has_header = label in (b"RINEX VERSION / TYPE", b"ANTEX VERSION / SYST", b"CRINEX VERS   / TYPE")
+        full_read = (label == b"RINEX VERSION / TYPE" and first[20:21] != b"O") or label == b"ANTEX VERSION / SYST" \
+            or (first[:1] == b"#" and first[1:2] in (b"a", b"b", b"c", b"d"))
         stripped = head.lstrip()
         kind_limit = None
         if stripped[:1] in (b"{", b"["):
@@ -270,3 +273,4 @@ def scan_plain(path: Path, name: str, settings: Settings) -> None:
     if kind_limit is not None and kind_limit[0] == "platform.json":
         if json_depth_exceeds(path.read_bytes(), MAX_PLATFORM_DEPTH):
             raise _rejected(name, f"platform.json nests deeper than {MAX_PLATFORM_DEPTH} levels")
+    return full_read

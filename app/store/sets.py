@@ -8,6 +8,7 @@ from sqlalchemy.orm import Session
 from app.problems import ProblemError
 from app.store.guard import ExpansionBudget, plain_file, scan_plain
 from app.store.plausible import check_plausible
+from app.store.summarizer import identify_elsewhere
 from app.store.uploads import StagedUpload
 from core.blobs import BlobStore
 from core.models import ObservationSet, SetFile
@@ -44,9 +45,12 @@ def validate_staged(staged: StagedUpload, settings: Settings,
     scratch.mkdir(exist_ok=True)
     for f in staged.files:
         plain, layers = plain_file(f.path, f.name, budget, scratch)
-        scan_plain(plain, f.name, settings)
+        full_read = scan_plain(plain, f.name, settings)
         try:
-            kind, summary = identify(plain, f.name)
+            if full_read and settings.summarizer_memory_mb:
+                kind, summary = identify_elsewhere(plain, f.name, settings.summarizer_memory_mb)
+            else:
+                kind, summary = identify(plain, f.name)
             check_plausible(kind, summary, plain, f.name)
         except ParseError as exc:
             raise _parse_problem(exc) from exc

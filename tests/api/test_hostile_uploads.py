@@ -224,3 +224,31 @@ def test_strings_with_brackets_do_not_count_as_depth(api):
                                       "x": "[" * 1000})
     assert resp.status_code == 422 and "x" in resp.text  # refused by the schema (extra field), not the guard
     assert "json-too-deep" not in resp.text
+
+
+# --- files read whole (navigation, SP3, clock, ANTEX) are summarised outside the API process ---------
+
+def test_navigation_file_is_summarised_by_the_helper_process(api, real_data_dir):
+    nav = real_data_dir / "geonet_0759_3040_3km_2005" / "07590920.05n"
+    resp = api.post("/v1/observation-sets", files=_files(("brdc.05n", nav.read_bytes())))
+    assert resp.status_code == 422, resp.text  # a lone nav file is no set, but it was read and summarised:
+    assert "brdc.05n" not in resp.json().get("file", "")  # the refusal is about the set, not this file
+    from app.store import summarizer
+
+    assert summarizer._POOL is not None  # the helper process read it
+    broken = nav.read_bytes().replace(b"END OF HEADER", b"END OF HEADXX")
+    resp = api.post("/v1/observation-sets", files=_files(("brdc.05n", broken)))
+    assert resp.status_code == 422 and resp.json()["file"] == "brdc.05n", resp.text
+
+
+def test_a_file_too_big_for_the_helper_s_memory_is_413(api, settings, real_data_dir):
+    settings.summarizer_memory_mb = 1  # the helper cannot even start its reader
+    from app.store import summarizer
+
+    summarizer.shutdown()
+    nav = real_data_dir / "geonet_0759_3040_3km_2005" / "07590920.05n"
+    try:
+        resp = api.post("/v1/observation-sets", files=_files(("brdc.05n", nav.read_bytes())))
+    finally:
+        summarizer.shutdown()
+    assert resp.status_code == 413 and resp.json()["type"].endswith("/file-too-large"), resp.text

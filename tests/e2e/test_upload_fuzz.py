@@ -2,7 +2,7 @@
 Hatanaka, SP3, ANTEX, reference attitude CSV and platform.json from ../shared/data, with bytes flipped, lines
 cut, repeated or stretched, numbers replaced by extremes, NUL bytes, compression layers added. Every answer is
 201 or a 4xx problem document (never a 5xx), each within 10 s, and the API's resident memory stays under 250 MB
-throughout. The run is seeded and bounded: at most 25 s of uploads (about 30 s in all)."""
+throughout. The run is seeded and bounded: 15 s of uploads (about 30 s in all)."""
 from __future__ import annotations
 
 import bz2
@@ -36,7 +36,7 @@ SEEDS = [
     THIRD_PARTY / "georust+rinex" / "test_resources" / "CRNX" / "V1" / "npaz3550.21d",
     THIRD_PARTY / "georust+rinex" / "test_resources" / "ATX" / "V1" / "TROSAR25.R4__LEIT_2020_09_23.atx",
 ]
-BUDGET_S = 25.0
+BUDGET_S = 15.0
 MAX_REQUEST_S = 10.0
 MAX_RSS_MB = 250.0
 
@@ -183,7 +183,7 @@ def test_mutated_real_files_get_201_or_4xx_in_bounded_time_and_memory(tmp_path):
         n = sum(statuses.values())
         print(f"fuzz: {n} uploads in {BUDGET_S:g} s, statuses {statuses}, slowest {slowest:.2f} s, "
               f"API peak RSS {sampler.peak_mb:.0f} MB")
-        assert n >= 40, statuses
+        assert n >= 30, statuses
         assert sampler.peak_mb < MAX_RSS_MB
         staging = [p for p in (tmp_path / "var" / "staging").rglob("*")]
         assert not staging, f"a rejected upload left {staging[:3]} in staging"
