@@ -30,6 +30,7 @@ from worker.runtime import Runtime, set_runtime
 log = logging.getLogger("gnssatt.worker")
 
 POLL_S = 0.2
+START_TIMEOUT_S = 30.0
 
 
 class ChildFailed(Exception):
@@ -81,6 +82,7 @@ def _child_main(rt: Runtime, target: Callable[[Runtime], dict], conn, budget_byt
     rt.engine.dispose(close=False)  # the parent's pooled connections stay the parent's
     child = dataclasses.replace(rt, huey=make_huey(rt.settings))
     set_runtime(child)
+    conn.send(("started",))
     names: dict[str, str] = {}
     try:
         out = target(child, names)
@@ -111,6 +113,7 @@ def run_budgeted(rt: Runtime, ctx: JobContext, target: Callable[[Runtime, dict],
     proc.start()
     send.close()
     peak = 0
+    started = False
     try:
         while True:
             if recv.poll(POLL_S):
@@ -118,6 +121,9 @@ def run_budgeted(rt: Runtime, ctx: JobContext, target: Callable[[Runtime, dict],
                     message = recv.recv()
                 except EOFError:
                     message = None
+                if message is not None and message[0] == "started":
+                    started = True
+                    continue
                 proc.join(timeout=10)
                 if message is None:
                     break
@@ -128,6 +134,9 @@ def run_budgeted(rt: Runtime, ctx: JobContext, target: Callable[[Runtime, dict],
                 raise ChildFailed(problem, permanent)
             if not proc.is_alive():
                 break
+            if not started and time.monotonic() - start > START_TIMEOUT_S:
+                # a lock another thread held at fork time (an import in progress): another attempt will do
+                raise RuntimeError(f"the job's process did not start within {START_TIMEOUT_S:g} s")
             if ctx.cancel_requested.is_set():
                 raise JobCancelled(ctx.job_id)
             if ctx.lease_lost.is_set():

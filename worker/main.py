@@ -100,7 +100,10 @@ def run_worker(settings: Settings, concurrency: int | None = None) -> None:
     _warm_up_kernels()
     reaper = Reaper(rt)
     reaper.start()
-    threading.Thread(target=preload_pipelines, name="preload", daemon=True).start()
+    if settings.job_isolation == "process":
+        preload_pipelines()  # before any job child is forked: no import may be half done in another thread
+    else:
+        threading.Thread(target=preload_pipelines, name="preload", daemon=True).start()
     workers = concurrency or settings.worker_concurrency
     log.info("worker %s: %d job slot(s), database %s, queue %s", rt.worker_name, workers,
              rt.engine.url.render_as_string(hide_password=True), settings.queue_url or "huey-sqlite")
