@@ -1,7 +1,7 @@
 """Request dependencies: the database session and the caller's team (from the API key)."""
 from __future__ import annotations
 
-from typing import Annotated, Iterator
+from typing import Annotated, Callable, Iterator
 
 from fastapi import Depends, Request
 from fastapi.security import APIKeyHeader, HTTPAuthorizationCredentials, HTTPBearer
@@ -43,7 +43,28 @@ def get_team(request: Request, session: SessionDep,
     if team is None:
         raise ProblemError(401, "unauthorized", "Invalid API key",
                            "This API key is unknown or revoked. Ask your operator for a new one.")
+    # End the read transaction: the connection goes back to the pool now, not when the request ends, so a
+    # long request (a slow upload, an event stream) never holds one while it waits on its client.
+    session.commit()
     return team
 
 
 TeamDep = Annotated[Team, Depends(get_team)]
+
+
+KEY_REVOKED = {"type": "https://gnssatt.dev/problems/unauthorized", "title": "Invalid API key", "status": 401,
+               "detail": "This API key was revoked while the stream was open."}
+
+
+def key_checker(request: Request, team_id: str) -> Callable[[Session], bool]:
+    """A check that the request's API key is still valid for `team_id` (long-lived streams call it again)."""
+    from app.limits import request_key
+
+    headers = {k.lower(): v for k, v in request.headers.items()}
+    key = request_key(headers, headers.get("cookie"))
+
+    def still_allowed(session: Session) -> bool:
+        team = team_for_key(session, key) if key else None
+        return team is not None and team.id == team_id
+
+    return still_allowed

@@ -6,9 +6,11 @@ from contextlib import asynccontextmanager
 
 from fastapi import FastAPI
 
+from app.limits import JsonBodyLimit, TeamSlots
 from app.problems import install_problem_handlers
 from app.routes import health, job_types, jobs, observation_sets, pcv_maps
 from app.routes.pages import install_pages
+from app.store import summarizer
 from core.blobs import BlobStore
 from core.db import make_engine, make_sessionmaker
 from core.migrate import migrate
@@ -38,11 +40,14 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         app.state.blobs = BlobStore(settings.blobs_dir)
         app.state.huey = make_huey(settings)
         yield
+        summarizer.shutdown()
         engine.dispose()
 
     logging.basicConfig(level=settings.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     app = FastAPI(title="gnssatt", version=API_VERSION, description=DESCRIPTION, lifespan=lifespan)
     app.state.settings = settings
+    app.state.upload_slots = TeamSlots("uploads", settings.max_uploads_per_team, "GNSSATT_MAX_UPLOADS_PER_TEAM")
+    app.add_middleware(JsonBodyLimit, max_bytes=settings.max_json_body_bytes, max_depth=settings.max_json_depth)
     install_problem_handlers(app)
     app.include_router(health.router)
     app.include_router(observation_sets.router)
@@ -83,8 +88,39 @@ def _openapi_with_problems(app: FastAPI) -> dict:
                 if code[0] in "45":
                     resp["content"] = problem
                     resp["description"] = resp.get("description") or "Problem"
+    _add_links(spec)
     app.openapi_schema = spec
     return spec
+
+
+#: OpenAPI links (3.1 sec. 4.8.20): what a created resource's id leads to, so clients and stateful testers
+#: (schemathesis) can follow upload -> get/delete, submit -> get/cancel/products, map -> get/download/delete.
+_LINKS = {
+    ("/v1/observation-sets", "post", "201"): {
+        "GetSet": ("/v1/observation-sets/{set_id}", "get", "set_id"),
+        "DeleteSet": ("/v1/observation-sets/{set_id}", "delete", "set_id")},
+    ("/v1/jobs", "post", "202"): {
+        "GetJob": ("/v1/jobs/{job_id}", "get", "job_id"),
+        "CancelJob": ("/v1/jobs/{job_id}/cancel", "post", "job_id"),
+        "ListProducts": ("/v1/jobs/{job_id}/products", "get", "job_id")},
+    ("/v1/pcv-maps", "post", "201"): {
+        "GetMap": ("/v1/pcv-maps/{map_id}", "get", "map_id"),
+        "DownloadMap": ("/v1/pcv-maps/{map_id}/download", "get", "map_id"),
+        "DeleteMap": ("/v1/pcv-maps/{map_id}", "delete", "map_id")},
+}
+
+
+def _add_links(spec: dict) -> None:
+    paths = spec.get("paths", {})
+    for (path, method, status), links in _LINKS.items():
+        response = paths.get(path, {}).get(method, {}).get("responses", {}).get(status)
+        if response is None:
+            continue
+        out = response.setdefault("links", {})
+        for name, (target, target_method, param) in links.items():
+            operation_id = paths.get(target, {}).get(target_method, {}).get("operationId")
+            if operation_id:
+                out[name] = {"operationId": operation_id, "parameters": {param: "$response.body#/id"}}
 
 
 def app_from_env() -> FastAPI:

@@ -89,6 +89,8 @@ def install_problem_handlers(app: FastAPI) -> None:
     @app.exception_handler(ProblemError)
     async def _problem(request: Request, exc: ProblemError):
         headers = {"WWW-Authenticate": "Bearer"} if exc.status == 401 else None
+        if exc.status in (429, 503) and "retry_after_s" in exc.extra:
+            headers = {"Retry-After": str(int(exc.extra["retry_after_s"]))}
         return problem_response(exc.status, exc.body(str(request.url.path)), headers)
 
     @app.exception_handler(RequestValidationError)

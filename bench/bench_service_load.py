@@ -158,6 +158,7 @@ def main() -> None:
             svc = LocalService(tmp / f"svc{run}", "sqlite", None, None)
             (tmp / f"svc{run}").mkdir()
             svc.env["GNSSATT_MAX_UPLOAD_BYTES"] = str(3 * 2**30)
+            svc.env["GNSSATT_MAX_UPLOADS_PER_TEAM"] = str(args.clients)  # the clients share one team's key
             try:
                 svc.start_api()
                 svc.start_worker()
@@ -184,7 +185,7 @@ loopback HTTP. Medians of {args.runs} runs; inputs generated from seed {SEED}.
 
 | measure | value |
 |---|---|
-| clients | {args.clients}, each uploading a {set_mb:.1f} MB set (3 RINEX 3.04 files + platform.json), submitting `inspect`, polling every 0.2 s |
+| clients | {args.clients} of one team (GNSSATT_MAX_UPLOADS_PER_TEAM={args.clients}), each uploading a {set_mb:.1f} MB set (3 RINEX 3.04 files + platform.json), submitting `inspect`, polling every 0.2 s |
 | uploads/s (16 uploads / time until the last finished) | {med['uploads_per_s']:.2f} |
 | upload latency p50 / p99 | {med['upload_p50_s']:.2f} s / {med['upload_p99_s']:.2f} s |
 | job poll latency p50 / p99 (under load) | {med['poll_p50_ms']:.1f} ms / {med['poll_p99_ms']:.1f} ms |

@@ -5,12 +5,14 @@ directory fsynced, so a crash leaves either no blob or a whole one, never half a
 """
 from __future__ import annotations
 
+import fcntl
 import hashlib
 import os
 import shutil
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
-from typing import BinaryIO
+from typing import BinaryIO, Iterator
 
 CHUNK_BYTES = 1024 * 1024
 
@@ -68,18 +70,35 @@ class BlobStore:
         return self.put_stream(io.BytesIO(data))
 
     def _commit(self, tmp: Path, sha256: str) -> str:
+        """Move `tmp` into place (or keep the copy already there) and touch it, under the store's shared lock:
+        the janitor (core/janitor.py) deletes unreferenced blobs only under the exclusive lock and only when
+        untouched for its grace period, so a blob about to be referenced by a new row is never removed."""
         final = self.path(sha256)
         final.parent.mkdir(parents=True, exist_ok=True)
-        if final.exists():
-            tmp.unlink(missing_ok=True)
-        else:
-            os.replace(tmp, final)
-            dir_fd = os.open(final.parent, os.O_RDONLY)
-            try:
-                os.fsync(dir_fd)
-            finally:
-                os.close(dir_fd)
+        with self.lock(exclusive=False):
+            if final.exists():
+                tmp.unlink(missing_ok=True)
+                os.utime(final)
+            else:
+                os.replace(tmp, final)
+                os.utime(final)
+                dir_fd = os.open(final.parent, os.O_RDONLY)
+                try:
+                    os.fsync(dir_fd)
+                finally:
+                    os.close(dir_fd)
         return sha256
+
+    @contextmanager
+    def lock(self, exclusive: bool) -> Iterator[None]:
+        """The store-wide lock (flock on blobs/.lock): shared while blobs are added, exclusive while the
+        janitor deletes."""
+        fd = os.open(self.root / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+            yield
+        finally:
+            os.close(fd)  # closing releases the lock
 
     def copy_to(self, sha256: str, dest: Path) -> Path:
         dest.parent.mkdir(parents=True, exist_ok=True)

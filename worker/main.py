@@ -5,6 +5,7 @@ import logging
 import threading
 import time
 
+from core import janitor
 from core.blobs import BlobStore
 from core.db import make_engine, make_sessionmaker
 from core.migrate import migrate
@@ -36,11 +37,19 @@ class Reaper(threading.Thread):
         self.interval_s = max(0.5, min(rt.settings.lease_seconds / 3, 10.0))
 
     def run(self) -> None:
+        next_sweep = time.monotonic()
+        janitor_every_s = min(300.0, max(30.0, self.rt.settings.janitor_grace_s / 4))
         while True:
             try:
                 runner.reap(self.rt)
             except Exception:
                 log.exception("reaper pass failed; trying again")
+            if time.monotonic() >= next_sweep:
+                next_sweep = time.monotonic() + janitor_every_s
+                try:
+                    janitor.sweep(self.rt.settings, self.rt.Session, self.rt.blobs)
+                except Exception:
+                    log.exception("janitor pass failed; trying again later")
             if self.stop_event.wait(self.interval_s):
                 return
 
@@ -91,7 +100,10 @@ def run_worker(settings: Settings, concurrency: int | None = None) -> None:
     _warm_up_kernels()
     reaper = Reaper(rt)
     reaper.start()
-    threading.Thread(target=preload_pipelines, name="preload", daemon=True).start()
+    if settings.job_isolation == "process":
+        preload_pipelines()  # before any job child is forked: no import may be half done in another thread
+    else:
+        threading.Thread(target=preload_pipelines, name="preload", daemon=True).start()
     workers = concurrency or settings.worker_concurrency
     log.info("worker %s: %d job slot(s), database %s, queue %s", rt.worker_name, workers,
              rt.engine.url.render_as_string(hide_password=True), settings.queue_url or "huey-sqlite")

@@ -18,14 +18,16 @@ import traceback
 import uuid
 from datetime import datetime, timedelta
 
-from sqlalchemy import select, update
+from sqlalchemy import func, select, update
+from sqlalchemy.orm import aliased
 
 from core.models import Job, Product, utcnow
 from core.pcv_store import add_pcv_map
 from core.settings import Settings
 from worker.context import JobContext
-from worker.errors import JobCancelled, LeaseLost, is_permanent, problem_for_exception
+from worker.errors import JobCancelled, LeaseLost, is_permanent, log_text_for_exception, problem_for_exception
 from worker.fanout import gather, reap_tasks
+from worker.isolation import ChildFailed, isolation_available, run_budgeted
 from worker.jobs.registry import get_job_type
 from worker.queue import enqueue
 from worker.runtime import Runtime, get_runtime, load_inputs, load_pcv_map, set_runtime
@@ -49,12 +51,17 @@ def _lease_until(rt: Runtime) -> datetime:
 
 
 def claim(rt: Runtime, job_id: str) -> tuple[str, int] | None:
-    """Claim a queued job: returns (lease token, attempt number) or None if someone else has it."""
+    """Claim a queued job: returns (lease token, attempt number) or None if someone else has it, or when its
+    team already runs GNSSATT_MAX_RUNNING_JOBS_PER_TEAM jobs (it stays queued; `ring_waiting` wakes it)."""
     token = f"{rt.worker_name}/{uuid.uuid4().hex[:8]}"
     now = utcnow()
+    running = aliased(Job)
+    team_running = (select(func.count()).select_from(running)
+                    .where(running.team_id == Job.team_id, running.state == "running").scalar_subquery())
     with rt.Session.begin() as s:
         res = s.execute(update(Job).where(Job.id == job_id, Job.state == "queued",
-                                          Job.cancel_requested.is_(False))
+                                          Job.cancel_requested.is_(False),
+                                          team_running < rt.settings.max_running_jobs_per_team)
                         .values(state="running", attempts=Job.attempts + 1, lease_owner=token,
                                 lease_expires_at=_lease_until(rt), heartbeat_at=now, started_at=now,
                                 finished_at=None, progress=0.0, stage="starting", error=None)
@@ -68,9 +75,10 @@ def claim(rt: Runtime, job_id: str) -> tuple[str, int] | None:
 class Heartbeat(threading.Thread):
     """Renews the lease every heartbeat_seconds and polls for a cancel request every second."""
 
-    def __init__(self, rt: Runtime, job_id: str, token: str, ctx: JobContext):
+    def __init__(self, rt: Runtime, job_id: str, token: str, ctx: JobContext, write_progress: bool = True):
         super().__init__(name=f"heartbeat-{job_id[:8]}", daemon=True)
         self.rt, self.job_id, self.token, self.ctx = rt, job_id, token, ctx
+        self.write_progress = write_progress  # False: a job child writes its own progress
         self.stop_event = threading.Event()
 
     def run(self) -> None:
@@ -89,17 +97,35 @@ class Heartbeat(threading.Thread):
 
     def beat(self, renew: bool) -> bool:
         with self.rt.Session.begin() as s:
-            values = {"progress": self.ctx.fraction, "stage": self.ctx.stage}
+            values = {"progress": self.ctx.fraction, "stage": self.ctx.stage} if self.write_progress else {}
             if renew:
                 values.update(lease_expires_at=_lease_until(self.rt), heartbeat_at=utcnow())
-            res = s.execute(update(Job).where(Job.id == self.job_id, Job.lease_owner == self.token,
-                                              Job.state == "running").values(**values)
-                            .execution_options(synchronize_session=False))
-            if res.rowcount != 1:
+            if values:
+                res = s.execute(update(Job).where(Job.id == self.job_id, Job.lease_owner == self.token,
+                                                  Job.state == "running").values(**values)
+                                .execution_options(synchronize_session=False))
+                held = res.rowcount == 1
+            else:
+                held = s.execute(select(Job.id).where(Job.id == self.job_id, Job.lease_owner == self.token,
+                                                      Job.state == "running")).first() is not None
+            if not held:
                 return False
             if s.execute(select(Job.cancel_requested).where(Job.id == self.job_id)).scalar_one():
                 self.ctx.cancel_requested.set()
         return True
+
+
+def ring_waiting(rt: Runtime, job_id: str) -> str | None:
+    """After a job of a team stops running, enqueue that team's oldest queued job again (it may have been
+    refused a claim at the team's limit); a duplicate message is harmless, the claim is conditional."""
+    with rt.Session() as s:
+        team_id = s.execute(select(Job.team_id).where(Job.id == job_id)).scalar_one_or_none()
+        waiting = s.execute(select(Job.id).where(Job.team_id == team_id, Job.state == "queued",
+                                                 Job.cancel_requested.is_(False))
+                            .order_by(Job.created_at, Job.id).limit(1)).scalar_one_or_none()
+    if waiting is not None:
+        enqueue(rt.huey, waiting)
+    return waiting
 
 
 def _finish(rt: Runtime, job_id: str, token: str, **values) -> bool:
@@ -139,6 +165,57 @@ def _log_text(ctx: JobContext) -> str | None:
 
 # --- the whole life of one attempt ----------------------------------------------------------------
 
+def _make_context(rt: Runtime, job_id: str, attempt: int, token: str, workdir) -> JobContext:
+    """The pipeline's context, its callbacks bound to `rt` (the worker's, or a job child's own)."""
+    def flush(fraction: float, stage: str | None) -> None:
+        with rt.Session.begin() as s2:
+            s2.execute(update(Job).where(Job.id == job_id, Job.lease_owner == token)
+                       .values(progress=fraction, stage=stage).execution_options(synchronize_session=False))
+
+    ctx = JobContext(job_id=job_id, attempt=attempt, sets=[], workdir=workdir,
+                     _store_blob=lambda p: rt.blobs.put_file(p), _flush_progress=flush,
+                     _store_hashed_blob=lambda p, sha: rt.blobs.put_file(p, sha))
+    ctx._map = lambda function, payloads, span, stage, offset: gather(rt, ctx, function, payloads, span, stage,
+                                                                      offset)
+    ctx._load_pcv_map = lambda map_id: load_pcv_map(rt, job_id, map_id)
+    return ctx
+
+
+def _input_names(ctx: JobContext) -> dict[str, str]:
+    """Blob path -> the file's name in its set (job errors name files as the user knows them)."""
+    return {str(f.path): f.name for s in ctx.sets for f in s.files}
+
+
+def _isolated(rt: Runtime) -> bool:
+    """Whether attempts run in a budgeted child (not with Huey's immediate mode: tests run jobs inline)."""
+    return rt.settings.job_isolation == "process" and isolation_available() and not getattr(rt.huey, "immediate",
+                                                                                                 False)
+
+
+def _run_pipeline(rt: Runtime, ctx: JobContext, spec, config, token: str) -> None:
+    """The pipeline, in a child process under the job budget (GNSSATT_JOB_ISOLATION=process) or in this thread."""
+    if not _isolated(rt):
+        ctx.sets.extend(load_inputs(rt, ctx.job_id))
+        ctx.progress(0.0, "running")
+        spec.load_pipeline()(ctx, config)
+        return
+
+    def in_child(child_rt: Runtime, names: dict) -> dict:
+        cctx = _make_context(child_rt, ctx.job_id, ctx.attempt, token, ctx.workdir)
+        cctx.sets.extend(load_inputs(child_rt, ctx.job_id))
+        names.update(_input_names(cctx))
+        cctx.progress(0.0, "running")
+        spec.load_pipeline()(cctx, config)
+        return {"products": cctx.products, "pcv_maps": cctx.pcv_maps, "log_lines": cctx.log_lines,
+                "task_records": cctx.task_records}
+
+    out = run_budgeted(rt, ctx, in_child)
+    ctx.products.update(out["products"])
+    ctx.pcv_maps.extend(out["pcv_maps"])
+    ctx.log_lines.extend(out["log_lines"])
+    ctx.task_records.extend(out["task_records"])
+
+
 def execute_job(rt: Runtime, job_id: str) -> str | None:
     """Claim and run one job; returns the state it was left in, or None when it could not be claimed. A job that
     ended (succeeded, failed, cancelled) has its webhook, if any, sent (worker.webhooks)."""
@@ -161,19 +238,8 @@ def _execute_job(rt: Runtime, job_id: str) -> str | None:
     workdir = rt.settings.data_dir / "work" / f"{job_id}-{attempt}"
     shutil.rmtree(workdir, ignore_errors=True)
     workdir.mkdir(parents=True)
-
-    def flush(fraction: float, stage: str | None) -> None:
-        with rt.Session.begin() as s2:
-            s2.execute(update(Job).where(Job.id == job_id, Job.lease_owner == token)
-                       .values(progress=fraction, stage=stage).execution_options(synchronize_session=False))
-
-    ctx = JobContext(job_id=job_id, attempt=attempt, sets=[], workdir=workdir,
-                     _store_blob=lambda p: rt.blobs.put_file(p), _flush_progress=flush,
-                     _store_hashed_blob=lambda p, sha: rt.blobs.put_file(p, sha))
-    ctx._map = lambda function, payloads, span, stage, offset: gather(rt, ctx, function, payloads, span, stage,
-                                                                      offset)
-    ctx._load_pcv_map = lambda map_id: load_pcv_map(rt, job_id, map_id)
-    beat = Heartbeat(rt, job_id, token, ctx)
+    ctx = _make_context(rt, job_id, attempt, token, workdir)
+    beat = Heartbeat(rt, job_id, token, ctx, write_progress=not _isolated(rt))
     beat.start()
     log.info("job %s (%s) attempt %d claimed by %s", job_id, job_type, attempt, token)
     try:
@@ -181,9 +247,7 @@ def _execute_job(rt: Runtime, job_id: str) -> str | None:
         if spec is None:
             raise RuntimeError(f"unknown job type {job_type!r} in this worker")
         config = spec.config_model.model_validate(raw_config)
-        ctx.sets.extend(load_inputs(rt, job_id))
-        ctx.progress(0.0, "running")
-        spec.load_pipeline()(ctx, config)
+        _run_pipeline(rt, ctx, spec, config, token)
         ctx.check()
         if _publish_success(rt, job_id, token, ctx):
             log.info("job %s succeeded with %d products", job_id, len(ctx.products))
@@ -198,19 +262,31 @@ def _execute_job(rt: Runtime, job_id: str) -> str | None:
         log.info("job %s cancelled", job_id)
         return "cancelled"
     except Exception as exc:  # noqa: BLE001 - every failure becomes a stored problem document
-        problem = problem_for_exception(exc, job_id, attempt)
-        if is_permanent(exc) or attempt >= max_attempts:
+        if isinstance(exc, ChildFailed):
+            problem, permanent = exc.problem, exc.permanent
+        else:
+            problem, permanent = problem_for_exception(exc, job_id, attempt, _input_names(ctx)), is_permanent(exc)
+            if not permanent:
+                ctx.log(log_text_for_exception(exc))
+        if not permanent:
+            log.warning("job %s attempt %d: internal error\n%s", job_id, attempt, ctx.log_lines[-1:])
+        if permanent or attempt >= max_attempts:
             _finish(rt, job_id, token, state="failed", finished_at=utcnow(), error=problem, log=_log_text(ctx))
             log.info("job %s failed: %s", job_id, problem.get("detail"))
             return "failed"
         log.warning("job %s attempt %d failed, will retry: %s", job_id, attempt, problem.get("detail"))
-        if _finish(rt, job_id, token, state="queued", error=problem, enqueued_at=utcnow(), stage="retrying"):
+        if _finish(rt, job_id, token, state="queued", error=problem, enqueued_at=utcnow(), stage="retrying",
+                   log=_log_text(ctx)):
             enqueue(rt.huey, job_id, delay_s=min(2.0 * attempt, 30.0))
         return "queued"
     finally:
         beat.stop_event.set()
         beat.join(timeout=5)
         shutil.rmtree(workdir, ignore_errors=True)
+        try:
+            ring_waiting(rt, job_id)
+        except Exception:  # noqa: BLE001 - the reaper re-rings queued jobs anyway
+            log.warning("could not ring the next queued job of job %s's team", job_id, exc_info=True)
 
 
 # --- the reaper -----------------------------------------------------------------------------------

@@ -10,9 +10,10 @@ from fastapi import APIRouter, Query, Request, Response
 from fastapi.responses import FileResponse, StreamingResponse
 from pydantic import ValidationError
 from sqlalchemy import func, select, update
+from sqlalchemy.exc import IntegrityError
 from starlette.concurrency import run_in_threadpool
 
-from app.deps import SessionDep, TeamDep
+from app.deps import KEY_REVOKED, SessionDep, TeamDep, key_checker
 from app.problems import Problem, ProblemError, not_found
 from app.schemas.common import Page
 from app.schemas.jobs import JobCreate, JobPublic, JobState, ProductPublic
@@ -41,7 +42,7 @@ def get_owned_job(session, team_id: str, job_id: str) -> Job:
 
 
 @router.post("", status_code=202, response_model=JobPublic,
-             responses={**ERRORS, 202: {"headers": {"Location": {"schema": {"type": "string"},
+             responses={**ERRORS, 409: {"model": Problem}, 202: {"headers": {"Location": {"schema": {"type": "string"},
                                                                  "description": "URL of the new job"}}}},
              summary="Submit a job")
 def submit_job(body: JobCreate, request: Request, response: Response, team: TeamDep,
@@ -97,9 +98,15 @@ def submit_job(body: JobCreate, request: Request, response: Response, team: Team
               max_attempts=settings.max_attempts, cancel_requested=False)
     job.sets = [JobSet(set_id=sid, position=i) for i, sid in enumerate(ids)]
     session.add(job)
-    session.flush()
-    made_secret = register(session, job, body.webhook_url, body.webhook_secret)
-    session.commit()
+    try:
+        session.flush()
+        made_secret = register(session, job, body.webhook_url, body.webhook_secret)
+        session.commit()
+    except IntegrityError as exc:  # a set deleted between the check above and this commit
+        session.rollback()
+        raise ProblemError(409, "set-deleted", "Observation set deleted meanwhile",
+                           "One of the observation sets was deleted while the job was being submitted; "
+                           "upload it again or choose another.", field="observation_set_ids") from exc
     try:
         enqueue(request.app.state.huey, job.id)
     except Exception:  # noqa: BLE001 - the job row is the truth: the reaper re-rings queued jobs
@@ -160,20 +167,28 @@ async def job_events(job_id: str, request: Request, team: TeamDep, session: Sess
     get_owned_job(session, team.id, job_id)
     session.close()  # hand the connection back: the stream may last for hours
     Session = request.app.state.Session
+    still_allowed = key_checker(request, team.id)
 
-    def snapshot() -> dict | None:
+    def snapshot(check_key: bool) -> dict | None:
         with Session() as s:
+            if check_key and not still_allowed(s):
+                return {"revoked": True}
             job = s.get(Job, job_id)
             return to_public(job).model_dump(mode="json") if job else None
 
     async def stream():
         last = None
         idle = 0.0
+        polls = 0
         while True:
             if await request.is_disconnected():
                 return
-            doc = await run_in_threadpool(snapshot)
+            doc = await run_in_threadpool(snapshot, polls % 4 == 0)  # the key is re-checked every second
+            polls += 1
             if doc is None:
+                return
+            if doc.get("revoked"):
+                yield f"event: error\ndata: {json.dumps(KEY_REVOKED)}\n\n"
                 return
             key = (doc["state"], round(doc["progress"], 4), doc["stage"], doc["attempts"])
             if key != last:

@@ -4,7 +4,7 @@ from __future__ import annotations
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request, Response
-from sqlalchemy import func, select
+from sqlalchemy import func, select, update
 from starlette.concurrency import run_in_threadpool
 
 from app.deps import SessionDep, SettingsDep, TeamDep
@@ -50,22 +50,27 @@ def get_owned_set(session, team_id: str, set_id: str) -> ObservationSet:
 
 
 @router.post("", status_code=201, response_model=ObservationSetPublic, openapi_extra=UPLOAD_BODY,
-             responses={**ERRORS, 400: {"model": Problem}, 413: {"model": Problem}, 415: {"model": Problem}},
+             responses={**ERRORS, 400: {"model": Problem}, 413: {"model": Problem}, 415: {"model": Problem},
+                        429: {"model": Problem}},
              summary="Upload an observation set")
 async def upload_set(request: Request, response: Response, team: TeamDep, session: SessionDep,
                      settings: SettingsDep) -> ObservationSetPublic:
     """Stream the files to disk, validate every one (format, version, time span, satellites; platform.json
     against the conventions, antennas matched to observation files) and keep the set. Nothing of a
     rejected upload is stored."""
-    staged = await receive_multipart(request, settings)
-    try:
-        await run_in_threadpool(expand_bundles, staged, settings)
-        files, summary = await run_in_threadpool(validate_staged, staged)
-        name = staged.fields.get("name") or None
-        obs_set = await run_in_threadpool(store_set, session, request.app.state.blobs, team.id, name,
-                                          files, summary)
-    finally:
-        staged.discard()
+    async with request.app.state.upload_slots.hold(team.id):  # no database connection is held meanwhile
+        staged = await receive_multipart(request, settings)
+        try:
+            await run_in_threadpool(expand_bundles, staged, settings)
+            files, summary = await run_in_threadpool(validate_staged, staged, settings)
+            name = staged.fields.get("name") or None
+            if name is not None and len(name) > 300:  # observation_sets.name
+                raise ProblemError(422, "name-too-long", "Set name too long",
+                                   f"The set name has {len(name)} characters; at most 300.", field="name")
+            obs_set = await run_in_threadpool(store_set, session, request.app.state.blobs, team.id, name,
+                                              files, summary)
+        finally:
+            await run_in_threadpool(staged.discard)
     response.headers["Location"] = f"/v1/observation-sets/{obs_set.id}"
     return to_public(obs_set)
 
@@ -91,6 +96,14 @@ def get_set(set_id: str, team: TeamDep, session: SessionDep) -> ObservationSetPu
 def delete_set(set_id: str, team: TeamDep, session: SessionDep) -> Response:
     """Refused with 409 while a queued or running job uses the set. Its files stay in the content store
     while other sets or products share them."""
+    # Lock the set's row first (SQLite: the write lock; PostgreSQL: FOR UPDATE, which a job's foreign key
+    # check waits on), so a job submitted meanwhile is either seen below (409) or fails its own commit (409).
+    lock = select(ObservationSet.id).where(ObservationSet.id == set_id)
+    if session.get_bind().dialect.name == "sqlite":
+        session.execute(update(ObservationSet).where(ObservationSet.id == set_id)
+                        .values(name=ObservationSet.name).execution_options(synchronize_session=False))
+    else:
+        session.execute(lock.with_for_update())
     obs_set = get_owned_set(session, team.id, set_id)
     busy = session.execute(select(Job.id).join(JobSet, JobSet.job_id == Job.id)
                            .where(JobSet.set_id == set_id, Job.state.in_(("queued", "running")))).first()

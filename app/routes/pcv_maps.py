@@ -8,11 +8,12 @@ from sqlalchemy import func, select
 from starlette.concurrency import run_in_threadpool
 
 from app.deps import SessionDep, TeamDep
+from app.http_headers import content_disposition
 from app.problems import Problem, ProblemError, not_found
 from app.schemas.common import Page
 from app.schemas.pcv_maps import PcvMapCreate, PcvMapPublic
 from core.models import PcvMap
-from core.pcv_store import add_pcv_map
+from core.pcv_store import PcvFieldTooLong, add_pcv_map
 from gnssatt.gnss.io.errors import ParseError
 from gnssatt.gnss.io.pcv_map import PcvMap as PcvGrid
 from gnssatt.gnss.io.pcv_map import parse_pcv_map, read_pcv_antex, write_pcv_antex
@@ -66,7 +67,10 @@ def create_map(body: PcvMapCreate, request: Request, response: Response, team: T
     except ParseError as exc:
         raise ProblemError(422, "invalid-pcv-map", "Invalid PCV map", str(exc), field="map" if body.map else "antex",
                            line=exc.line_no) from exc
-    row = add_pcv_map(session, request.app.state.blobs, team.id, body.name, grid)
+    try:
+        row = add_pcv_map(session, request.app.state.blobs, team.id, body.name, grid)
+    except PcvFieldTooLong as exc:
+        raise ProblemError(422, "invalid-pcv-map", "Invalid PCV map", str(exc), field=f"map.{exc.field}") from exc
     session.commit()
     response.headers["Location"] = f"/v1/pcv-maps/{row.id}"
     return to_public(request, row, grid)
@@ -105,10 +109,10 @@ async def download_map(map_id: str, request: Request, team: TeamDep, session: Se
     if format == "json":
         data = await run_in_threadpool(request.app.state.blobs.path(row.sha256).read_bytes)
         return Response(data, media_type="application/json",
-                        headers={"Content-Disposition": f'attachment; filename="{stem}.json"'})
+                        headers={"Content-Disposition": content_disposition(f"{stem}.json")})
     grid = await run_in_threadpool(_load_grid, request, row)
     return Response(write_pcv_antex([grid]), media_type="text/plain",
-                    headers={"Content-Disposition": f'attachment; filename="{stem}.atx"'})
+                    headers={"Content-Disposition": content_disposition(f"{stem}.atx")})
 
 
 @router.delete("/{map_id}", status_code=204, responses=ERRORS, summary="Delete a PCV map version")

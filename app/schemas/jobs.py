@@ -1,9 +1,10 @@
 from __future__ import annotations
 
+import math
 from datetime import datetime
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 JobState = Literal["queued", "running", "succeeded", "failed", "cancelled"]
 
@@ -17,6 +18,21 @@ class JobCreate(BaseModel):
                                     "when the job ends (app/webhooks.py, worker/webhooks.py).")
     webhook_secret: str | None = Field(None, max_length=200, description="HMAC-SHA256 key of the webhook's "
                                        "X-Gnssatt-Signature (16-200 characters); made by the server when omitted.")
+
+    @field_validator("config")
+    @classmethod
+    def _finite(cls, value: dict[str, Any]) -> dict[str, Any]:
+        """NaN and Infinity (which Python's JSON reader accepts) are no JSON numbers: refused everywhere."""
+        stack = [value]
+        while stack:
+            item = stack.pop()
+            if isinstance(item, dict):
+                stack.extend(item.values())
+            elif isinstance(item, list):
+                stack.extend(item)
+            elif isinstance(item, float) and not math.isfinite(item):
+                raise ValueError(f"{item} is not a JSON number; give a finite value")
+        return value
 
 
 class JobPublic(BaseModel):

@@ -13,7 +13,9 @@ class PcvMapCreate(BaseModel):
     name: str = Field(min_length=1, max_length=200, pattern=r"^[A-Za-z0-9 _.:+-]+$",
                       description="Map name; uploading the same name again makes a new version.")
     map: dict[str, Any] | None = Field(None, description="One map as CONVENTIONS.md JSON.")
-    antex: str | None = Field(None, max_length=20_000_000, description="ANTEX-style text holding exactly one map.")
+    antex: str | None = Field(None, max_length=4_000_000,
+                              description="ANTEX-style text holding exactly one map (the whole JSON body is "
+                                          "limited to GNSSATT_MAX_JSON_BODY_BYTES).")
 
     @model_validator(mode="after")
     def _one_source(self) -> "PcvMapCreate":

@@ -6,9 +6,13 @@ from dataclasses import dataclass
 from sqlalchemy.orm import Session
 
 from app.problems import ProblemError
+from app.store.guard import ExpansionBudget, plain_file, scan_plain
+from app.store.plausible import check_plausible
+from app.store.summarizer import identify_elsewhere
 from app.store.uploads import StagedUpload
 from core.blobs import BlobStore
 from core.models import ObservationSet, SetFile
+from core.settings import Settings
 from gnssatt.gnss.io.errors import ParseError
 from gnssatt.gnss.io.observation_set import IdentifiedFile, SetProblem, set_summary
 from gnssatt.gnss.io.sniff import identify
@@ -29,17 +33,35 @@ def _parse_problem(exc: ParseError) -> ProblemError:
                         file=exc.path, line=exc.line_no, expected=exc.expected)
 
 
-def validate_staged(staged: StagedUpload) -> tuple[list[ValidatedFile], dict]:
-    """Identify and check every file, and the set as a whole; 422 naming file (and line) otherwise."""
+def validate_staged(staged: StagedUpload, settings: Settings,
+                    budget: ExpansionBudget | None = None) -> tuple[list[ValidatedFile], dict]:
+    """Identify and check every file, and the set as a whole; 422 naming file (and line) otherwise.
+
+    Each file is first peeled of its compression layers within the upload's budget and scanned for bounds
+    (app/store/guard.py); the sniffers then read only that bounded plain text."""
+    budget = budget or ExpansionBudget(settings)
     files: list[ValidatedFile] = []
+    scratch = staged.root / "plain"
+    scratch.mkdir(exist_ok=True)
     for f in staged.files:
+        plain, layers = plain_file(f.path, f.name, budget, scratch)
+        full_read = scan_plain(plain, f.name, settings)
         try:
-            kind, summary = identify(f.path, f.name)
+            if full_read and settings.summarizer_memory_mb:
+                kind, summary = identify_elsewhere(plain, f.name, settings.summarizer_memory_mb)
+            else:
+                kind, summary = identify(plain, f.name)
+            check_plausible(kind, summary, plain, f.name)
         except ParseError as exc:
             raise _parse_problem(exc) from exc
-        except (OSError, EOFError, ValueError) as exc:  # damaged compression, odd encodings
-            raise ProblemError(422, "unreadable-file", f"{f.name} could not be read", f"{f.name}: {exc}",
-                               file=f.name) from exc
+        except (OSError, EOFError, ValueError, OverflowError, TypeError, IndexError, RecursionError) as exc:
+            raise ProblemError(422, "unreadable-file", f"{f.name} could not be read",
+                               f"{f.name}: {type(exc).__name__}: {str(exc)[:300]}", file=f.name) from exc
+        finally:
+            if plain != f.path:
+                plain.unlink(missing_ok=True)
+        if "hatanaka" in layers and kind == "rinex_obs":
+            summary["compression"] = "hatanaka"
         files.append(ValidatedFile(f.name, kind, summary, f.sha256, f.size_bytes, f.path))
     try:
         summary = set_summary([IdentifiedFile(f.name, f.kind, f.summary, f.path) for f in files])
@@ -47,6 +69,9 @@ def validate_staged(staged: StagedUpload) -> tuple[list[ValidatedFile], dict]:
         raise ProblemError(422, exc.code, exc.title, exc.detail, file=exc.file, field=exc.field) from exc
     except ParseError as exc:
         raise _parse_problem(exc) from exc
+    except (OSError, EOFError, ValueError, OverflowError, TypeError, IndexError, RecursionError) as exc:
+        raise ProblemError(422, "invalid-set", "The files do not form an observation set",
+                           f"{type(exc).__name__}: {str(exc)[:300]}") from exc
     return files, summary
 
 

@@ -7,7 +7,6 @@ files into the blob store in one go, or deletes the staging directory: nothing o
 from __future__ import annotations
 
 import hashlib
-import os
 import re
 import shutil
 import stat
@@ -18,12 +17,14 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 
 from python_multipart.multipart import MultipartParser, parse_options_header
+from starlette.concurrency import run_in_threadpool
 from starlette.requests import Request
 
 from app.problems import ProblemError
 from core.settings import Settings
 
 COPY_CHUNK = 1024 * 1024
+MAX_NAME_CHARS = 500  # set_files.name
 
 
 @dataclass
@@ -55,6 +56,10 @@ def safe_member_name(raw: str, *, where: str) -> str:
     """A relative POSIX path with no '..', no absolute root, no drive letter; else a 422 problem."""
     name = raw.replace("\\", "/")
     parts = [p for p in name.split("/") if p not in ("", ".")]
+    if len(raw) > MAX_NAME_CHARS:
+        raise ProblemError(422, "name-too-long", "File name too long",
+                           f"{where}: a file name of {len(raw)} characters; at most {MAX_NAME_CHARS} are kept.",
+                           file=raw[:100])
     if name.startswith("/") or re.match(r"^[A-Za-z]:", name) or ".." in parts or not parts:
         raise ProblemError(422, "unsafe-path", "Unsafe file name",
                            f"{where}: the name {raw!r} is empty, absolute or climbs out of the set with '..'; "
@@ -63,7 +68,10 @@ def safe_member_name(raw: str, *, where: str) -> str:
 
 
 async def receive_multipart(request: Request, settings: Settings) -> StagedUpload:
-    """Stream a multipart/form-data body into staging; form field `files` (repeated) and optional `name`."""
+    """Stream a multipart/form-data body into staging; form field `files` (repeated) and optional `name`.
+
+    The parser runs on the event loop but only queues work: writing and hashing the bytes happen in the
+    threadpool, a megabyte at a time, so a huge or slow upload never delays other requests."""
     ctype = request.headers.get("content-type", "")
     mime, params = parse_options_header(ctype)
     if mime != b"multipart/form-data" or b"boundary" not in params:
@@ -78,70 +86,8 @@ async def receive_multipart(request: Request, settings: Settings) -> StagedUploa
     settings.staging_dir.mkdir(parents=True, exist_ok=True)
     staged = StagedUpload(root=settings.staging_dir / uuid.uuid4().hex)
     staged.root.mkdir()
-    state: dict = {"headers": {}, "hfield": b"", "hvalue": b"", "fh": None, "field": None, "buf": None,
-                   "digest": None, "size": 0, "name": None, "error": None}
-
-    def on_header_field(data: bytes, start: int, end: int) -> None:
-        state["hfield"] += data[start:end]
-
-    def on_header_value(data: bytes, start: int, end: int) -> None:
-        state["hvalue"] += data[start:end]
-
-    def on_header_end() -> None:
-        state["headers"][state["hfield"].decode("latin-1").lower()] = state["hvalue"]
-        state["hfield"], state["hvalue"] = b"", b""
-
-    def on_headers_finished() -> None:
-        disp, opts = parse_options_header(state["headers"].get("content-disposition", b""))
-        field_name = opts.get(b"name", b"").decode("utf-8", "replace")
-        filename = opts.get(b"filename")
-        state["field"] = field_name
-        if filename is not None and field_name == "files":
-            raw = filename.decode("utf-8", "replace")
-            # Browsers and curl send a base name; keep only that for direct uploads.
-            base = raw.replace("\\", "/").rsplit("/", 1)[-1]
-            name = safe_member_name(base, where="upload")
-            if any(f.name == name for f in staged.files):
-                raise ProblemError(422, "duplicate-file", "Duplicate file name",
-                                   f"Two uploaded files are both called {name!r}; rename one.", file=name)
-            path = staged.root / f"{len(staged.files):04d}.part"
-            state.update(fh=open(path, "wb"), name=name, path=path, digest=hashlib.sha256(), size=0)
-        elif filename is not None:
-            raise ProblemError(422, "unexpected-field", "Unexpected form field",
-                               f"File sent in form field {field_name!r}; use the field name `files`.",
-                               field=field_name)
-        else:
-            state["buf"] = bytearray()
-
-    def on_part_data(data: bytes, start: int, end: int) -> None:
-        chunk = data[start:end]
-        if state["fh"] is not None:
-            state["fh"].write(chunk)
-            state["digest"].update(chunk)
-            state["size"] += len(chunk)
-        elif state["buf"] is not None:
-            state["buf"] += chunk
-            if len(state["buf"]) > 64 * 1024:
-                raise ProblemError(422, "field-too-large", "Form field too large",
-                                   f"Form field {state['field']!r} is longer than 64 KiB.", field=state["field"])
-
-    def on_part_end() -> None:
-        if state["fh"] is not None:
-            fh = state["fh"]
-            fh.flush()
-            os.fsync(fh.fileno())
-            fh.close()
-            staged.files.append(StagedFile(state["name"], state["path"], state["size"], state["digest"].hexdigest()))
-            state["fh"] = None
-        elif state["buf"] is not None:
-            staged.fields[state["field"]] = state["buf"].decode("utf-8", "replace")
-            state["buf"] = None
-        state["headers"] = {}
-
-    parser = MultipartParser(params[b"boundary"], {
-        "on_header_field": on_header_field, "on_header_value": on_header_value, "on_header_end": on_header_end,
-        "on_headers_finished": on_headers_finished, "on_part_data": on_part_data, "on_part_end": on_part_end,
-    }, max_header_size=16 * 1024)
+    writer = _PartWriter(staged, settings)
+    parser = MultipartParser(params[b"boundary"], writer.callbacks(), max_header_size=16 * 1024)
     received = 0
     try:
         async for chunk in request.stream():
@@ -149,17 +95,17 @@ async def receive_multipart(request: Request, settings: Settings) -> StagedUploa
             if received > limit + 64 * 1024:
                 raise _too_large(limit)
             parser.write(chunk)
+            if writer.pending_bytes >= COPY_CHUNK or writer.must_flush:
+                await run_in_threadpool(writer.flush)
         parser.finalize()
+        await run_in_threadpool(writer.flush)
     except ProblemError:
-        _close(state)
-        staged.discard()
+        await run_in_threadpool(writer.abort)
         raise
     except Exception as exc:  # malformed multipart framing
-        _close(state)
-        staged.discard()
+        await run_in_threadpool(writer.abort)
         raise ProblemError(400, "bad-multipart", "Malformed multipart body",
                            f"The multipart/form-data body could not be parsed: {exc}") from exc
-    _close(state)
     staged.total_bytes = sum(f.size_bytes for f in staged.files)
     if staged.total_bytes > limit:
         staged.discard()
@@ -172,13 +118,126 @@ async def receive_multipart(request: Request, settings: Settings) -> StagedUploa
     return staged
 
 
-def _close(state: dict) -> None:
-    if state.get("fh") is not None:
-        try:
-            state["fh"].close()
-        except OSError:
-            pass
-        state["fh"] = None
+class _PartWriter:
+    """The multipart parser's callbacks: they decide (names, counts, field sizes) on the event loop and queue
+    the file operations, which `flush` performs in a worker thread (open, write + hash, close)."""
+
+    def __init__(self, staged: StagedUpload, settings: Settings):
+        self.staged, self.settings = staged, settings
+        self.headers: dict[str, bytes] = {}
+        self.hfield, self.hvalue = b"", b""
+        self.names: set[str] = set()
+        self.parts = 0
+        self.field: str | None = None
+        self.buf: bytearray | None = None
+        self.open_part: StagedFile | None = None
+        self.ops: list[tuple] = []
+        self.pending_bytes = 0
+        self.must_flush = False
+        self._fh = None
+        self._digest = None
+
+    def callbacks(self) -> dict:
+        return {"on_header_field": self.on_header_field, "on_header_value": self.on_header_value,
+                "on_header_end": self.on_header_end, "on_headers_finished": self.on_headers_finished,
+                "on_part_data": self.on_part_data, "on_part_end": self.on_part_end}
+
+    def on_header_field(self, data: bytes, start: int, end: int) -> None:
+        self.hfield += data[start:end]
+
+    def on_header_value(self, data: bytes, start: int, end: int) -> None:
+        self.hvalue += data[start:end]
+
+    def on_header_end(self) -> None:
+        if len(self.headers) >= 16:
+            raise ProblemError(400, "bad-multipart", "Malformed multipart body",
+                               "A multipart part has more than 16 headers.")
+        self.headers[self.hfield.decode("latin-1").lower()] = self.hvalue
+        self.hfield, self.hvalue = b"", b""
+
+    def on_headers_finished(self) -> None:
+        self.parts += 1
+        max_files = self.settings.max_upload_files
+        if self.parts > max_files + 16:
+            raise _too_many_files(max_files)
+        disp, opts = parse_options_header(self.headers.get("content-disposition", b""))
+        field_name = opts.get(b"name", b"").decode("utf-8", "replace")
+        filename = opts.get(b"filename")
+        self.field = field_name
+        if filename is not None and field_name == "files":
+            raw = filename.decode("utf-8", "replace")
+            # Browsers and curl send a base name; keep only that for direct uploads.
+            base = raw.replace("\\", "/").rsplit("/", 1)[-1]
+            name = safe_member_name(base, where="upload")
+            if name in self.names:
+                raise ProblemError(422, "duplicate-file", "Duplicate file name",
+                                   f"Two uploaded files are both called {name!r}; rename one.", file=name)
+            if len(self.names) >= max_files:
+                raise _too_many_files(max_files)
+            self.names.add(name)
+            part = StagedFile(name, self.staged.root / f"{len(self.names) - 1:04d}.part", 0, "")
+            self.open_part = part
+            self.ops.append(("open", part))
+        elif filename is not None:
+            raise ProblemError(422, "unexpected-field", "Unexpected form field",
+                               f"File sent in form field {field_name!r}; use the field name `files`.",
+                               field=field_name)
+        else:
+            self.buf = bytearray()
+
+    def on_part_data(self, data: bytes, start: int, end: int) -> None:
+        if self.open_part is not None:
+            self.ops.append(("data", bytes(data[start:end])))
+            self.pending_bytes += end - start
+        elif self.buf is not None:
+            self.buf += data[start:end]
+            if len(self.buf) > 64 * 1024:
+                raise ProblemError(422, "field-too-large", "Form field too large",
+                                   f"Form field {self.field!r} is longer than 64 KiB.", field=self.field)
+
+    def on_part_end(self) -> None:
+        if self.open_part is not None:
+            self.ops.append(("close", self.open_part))
+            self.staged.files.append(self.open_part)
+            self.open_part = None
+            self.must_flush = True
+        elif self.buf is not None:
+            self.staged.fields[self.field] = self.buf.decode("utf-8", "replace")
+            self.buf = None
+        self.headers = {}
+
+    def flush(self) -> None:
+        """Perform the queued file operations (in a worker thread). Files are fsynced when they are moved
+        into the blob store, not here."""
+        ops, self.ops = self.ops, []
+        self.pending_bytes, self.must_flush = 0, False
+        for op in ops:
+            if op[0] == "open":
+                self._fh, self._digest = open(op[1].path, "wb"), hashlib.sha256()
+            elif op[0] == "data":
+                self._fh.write(op[1])
+                self._digest.update(op[1])
+            else:
+                op[1].size_bytes = self._fh.tell()
+                op[1].sha256 = self._digest.hexdigest()
+                self._fh.close()
+                self._fh = None
+
+    def abort(self) -> None:
+        self.ops = []
+        if self._fh is not None:
+            try:
+                self._fh.close()
+            except OSError:
+                pass
+            self._fh = None
+        self.staged.discard()
+
+
+def _too_many_files(max_files: int) -> ProblemError:
+    return ProblemError(413, "too-many-files", "Too many files",
+                        f"An upload may hold at most {max_files} files (GNSSATT_MAX_UPLOAD_FILES); bundle them "
+                        "or split the set.", field="files")
 
 
 # --- bundles ---------------------------------------------------------------------------------------
@@ -212,11 +271,14 @@ def expand_bundles(staged: StagedUpload, settings: Settings) -> None:
         members = _extract(f, kind, staged, settings)
         f.path.unlink(missing_ok=True)
         out.extend(members)
-    names = [m.name for m in out]
-    dup = {n for n in names if names.count(n) > 1}
-    if dup:
-        raise ProblemError(422, "duplicate-file", "Duplicate file name",
-                           f"The set holds more than one file called {sorted(dup)[0]!r}.", file=sorted(dup)[0])
+    if len(out) > settings.max_upload_files:
+        raise _too_many_files(settings.max_upload_files)
+    seen: set[str] = set()
+    for m in out:
+        if m.name in seen:
+            raise ProblemError(422, "duplicate-file", "Duplicate file name",
+                               f"The set holds more than one file called {m.name!r}.", file=m.name)
+        seen.add(m.name)
     staged.files = out
     staged.total_bytes = sum(f.size_bytes for f in out)
 
@@ -226,7 +288,7 @@ def _bomb(bundle: str, detail: str) -> ProblemError:
 
 
 def _extract(bundle: StagedFile, kind: str, staged: StagedUpload, settings: Settings) -> list[StagedFile]:
-    limit = settings.max_upload_bytes
+    limit = min(settings.max_upload_bytes, settings.max_expanded_bytes)
     max_out = min(limit, int(max(bundle.size_bytes, 1) * settings.max_bundle_ratio))
     dest_root = staged.root / f"x{uuid.uuid4().hex[:8]}"
     dest_root.mkdir()
@@ -249,8 +311,6 @@ def _extract(bundle: StagedFile, kind: str, staged: StagedUpload, settings: Sett
                                 f"{settings.max_bundle_ratio:g}x, size limit {limit}); a zip bomb or too large")
                 digest.update(chunk)
                 out.write(chunk)
-            out.flush()
-            os.fsync(out.fileno())
         members.append(StagedFile(name, path, size, digest.hexdigest()))
 
     try:
@@ -275,7 +335,11 @@ def _extract(bundle: StagedFile, kind: str, staged: StagedUpload, settings: Sett
                         copy(src, name)
         else:
             with tarfile.open(bundle.path, "r:*") as tf:
+                entries = 0
                 for info in tf:
+                    entries += 1  # directories and skipped entries count too: a million of them is a bomb
+                    if entries > settings.max_bundle_members:
+                        raise _bomb(bundle.name, f"more than {settings.max_bundle_members} entries")
                     name = safe_member_name(info.name, where=bundle.name)
                     if info.isdir():
                         continue

@@ -9,7 +9,7 @@ import dataclasses
 import logging
 import time
 import typing
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, create_model, field_validator, model_validator
 
@@ -18,14 +18,21 @@ from gnssatt.attitude.settings import (FLAT_TO_NESTED, GROUPS, PLATFORM_DEFAULTS
 
 from worker.context import JobContext
 from worker.errors import JobInputError
+from worker.jobs.calibrated_baselines import CalibratedBaselines
 from worker.jobs.registry import JobType
 
 
 _BOUNDS = ("gt", "ge", "lt", "le", "min_length", "max_length")
 
 
+#: bounds of list/dict items, which the settings' metadata cannot express (every number of a job config is bounded)
+_ITEM_HINTS = {"initial_q_body_from_ecef": list[Annotated[float, Field(ge=-1.0, le=1.0)]] | None,
+               "cn0_mask_dbhz": dict[str, Annotated[float, Field(ge=0.0, le=70.0)]]}
+
+
 def _field_of(f: dataclasses.Field, hint):
     """(type, pydantic Field) of one settings field from its dataclass metadata (default, bounds, description)."""
+    hint = _ITEM_HINTS.get(f.name, hint)
     default = f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
     kw = {k: v for k, v in f.metadata.items() if k in _BOUNDS}
     return hint, Field(default, description=f.metadata.get("description"), **kw)
@@ -138,7 +145,7 @@ _JOB_EXTRA = {
                                                "override (gnssatt.attitude.settings.PRESETS): seed000 = Tables "
                                                "1-2; all-phases = no C/N0 or antenna-frame masks; "
                                                "all-phases-smoother; all-phases-adaptive-smoother.")),
-    "calibrated_baselines": (dict | None, Field(
+    "calibrated_baselines": (CalibratedBaselines | None, Field(
         None, description="A calibration job's baselines.json object (CONVENTIONS.md) replacing the a priori "
                           "antenna positions.")),
     "pcv_map_ids": (list[str], Field(

@@ -25,6 +25,10 @@ class SelftestConfig(BaseModel):
     task_seconds: float = Field(0.2, ge=0.0, le=600.0, description="How long each fanned-out task works.")
     publish_pcv_map: str | None = Field(None, max_length=200,
                                         description="Publish a small flat test PCV map under this name.")
+    allocate_mb: int = Field(0, ge=0, le=65536, description="Allocate (and touch) this much memory, 16 MB at a "
+                             "time, to check the worker's memory budget (GNSSATT_JOB_MEMORY_MB).")
+    spin_s: float = Field(0.0, ge=0.0, le=3600.0, description="Compute this long without reporting progress, to "
+                          "check that the time budget and cancel stop a job that never yields.")
 
 
 JOB_TYPE = JobType(
@@ -45,6 +49,13 @@ def run(ctx: JobContext, config) -> None:
             raise JobInputError("Selftest asked to fail", f"attempt {ctx.attempt} fails on purpose",
                                 field="config.fail_attempts")
         raise RuntimeError(f"selftest: attempt {ctx.attempt} fails on purpose (fail_attempts={config.fail_attempts})")
+    hog = []
+    for _ in range(config.allocate_mb // 16):
+        hog.append(bytearray(16 * 2**20))  # zero-filled: every page touched
+    spin_until = time.monotonic() + config.spin_s
+    while time.monotonic() < spin_until:
+        sum(range(10_000))
+    del hog
     start = time.monotonic()
     steps = max(int(config.duration_s / 0.1), 1)
     for k in range(steps):

@@ -3,13 +3,12 @@ the work dir and zips the result as one product."""
 from __future__ import annotations
 
 import zipfile
-from typing import Any
-
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from worker.context import JobContext
 from worker.errors import JobInputError
 from worker.jobs.registry import JobType
+from worker.jobs.sim_overrides import SimOverrides, check_job_size
 
 SCENARIOS = ("earth-pointing", "slew", "ttff", "calibration", "hard", "cubesat", "ground-static")
 
@@ -18,8 +17,9 @@ class SimulateConfig(BaseModel):
     model_config = ConfigDict(extra="forbid")
     scenario: str = Field("earth-pointing", description=f"One of {', '.join(SCENARIOS)} (see docs/simulator.md).")
     seed: int = Field(0, ge=0, le=2**31 - 1, description="Random seed; same seed and parameters, same files.")
-    overrides: dict[str, Any] = Field(default_factory=dict,
-                                      description="Any preset parameter, e.g. {\"duration_s\": 600, \"count\": 3}.")
+    overrides: SimOverrides = Field(default_factory=SimOverrides,
+                                    description="Any preset parameter, e.g. {\"duration_s\": 600, \"count\": 3}; "
+                                                "bounded (worker/jobs/sim_overrides.py).")
 
     @field_validator("scenario")
     @classmethod
@@ -44,9 +44,14 @@ JOB_TYPE = JobType(
 def run(ctx: JobContext, config) -> None:
     from gnssatt.sim import simulate_scenario
 
+    from gnssatt.sim.scenarios import make_params
+
     out = ctx.workdir / "sim"
+    overrides = config.overrides.as_dict()
     try:
-        result = simulate_scenario(config.scenario, out, seed=config.seed, overrides=config.overrides,
+        preset = make_params(config.scenario)
+        check_job_size(overrides, preset.duration_s, preset.interval_s, preset.count)
+        result = simulate_scenario(config.scenario, out, seed=config.seed, overrides=overrides,
                                    progress=lambda f, stage: ctx.progress(0.9 * f, stage))
     except ValueError as exc:  # an unknown or impossible override: the user's to fix
         raise JobInputError("Invalid simulation parameters", str(exc), field="config.overrides") from exc

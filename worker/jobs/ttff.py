@@ -12,13 +12,14 @@ import shutil
 import tempfile
 import time
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from worker.context import JobContext
 from worker.errors import JobInputError
 from worker.jobs.registry import JobType
+from worker.jobs.sim_overrides import SimOverrides
 
 
 class TtffSimulation(BaseModel):
@@ -30,16 +31,24 @@ class TtffSimulation(BaseModel):
     yaw_max_deg: float = Field(180.0, ge=0, le=180, description="Start yaw uniform in +-this (orbital frame).")
     pitch_max_deg: float = Field(70.0, ge=0, le=90, description="Start pitch uniform in +-this.")
     roll_max_deg: float = Field(40.0, ge=0, le=180, description="Start roll uniform in +-this.")
-    rate_deg_s: list[float] = Field([0.1, 0.5], min_length=2, max_length=2,
+    rate_deg_s: list[Annotated[float, Field(gt=0, le=10)]] = Field([0.1, 0.5], min_length=2, max_length=2,
                                     description="Peak slew-back rate uniform in [min, max] (deg/s).")
     hold_s: float = Field(0.0, ge=0, le=3600, description="Start orientation held this long before the slew back.")
     realistic: bool = Field(True, description="The `ttff` preset as it is (50 mm p-p differential PCV, ~1 m code "
                                               "multipath at the antenna horizon, C/N0-dependent noise, docs/ttff.md "
                                               "'Realism'); false: white noise only, no PCV or multipath "
                                               "(consistency checks).")
-    overrides: dict[str, Any] = Field(default_factory=dict,
+    overrides: SimOverrides = Field(default_factory=SimOverrides,
                                       description="Further simulator parameters of the `ttff` preset "
                                                   "(docs/simulator.md), applied last.")
+
+    @field_validator("overrides")
+    @classmethod
+    def _not_the_study_s_own(cls, v: SimOverrides) -> SimOverrides:
+        own = sorted({"count", "duration_s", "start_gps", "waypoints", "random_initial_attitude"} & set(v.as_dict()))
+        if own:
+            raise ValueError(f"{', '.join(own)}: set by the study itself (count, duration_s and the starts)")
+        return v
 
     @field_validator("rate_deg_s")
     @classmethod
@@ -189,7 +198,7 @@ def payloads(ctx: JobContext, config) -> list[dict]:
         base = {} if sim.realistic else dict(BENIGN_OVERRIDES)
         for st in starts:
             ov = start_overrides(st, config.duration_s + 1.0, sim.hold_s, base)
-            ov.update(sim.overrides)
+            ov.update(sim.overrides.as_dict())
             out.append({"source": "simulated", "seed": int(sim.seed) * 100_003 + st["index"],
                         "overrides": ov, "start": dict(st), "label": f"start {st['index']:03d}", "options": opts})
     return out
@@ -229,7 +238,7 @@ def run(ctx: JobContext, config) -> None:
     if not tasks:
         raise JobInputError("Nothing to study", "give at least one observation set or a `simulate` block",
                             field="config.simulate")
-    if config.simulate is not None and config.simulate.overrides:
+    if config.simulate is not None and config.simulate.overrides.as_dict():
         from gnssatt.sim.scenarios import make_params
         try:
             make_params("ttff", tasks[-1]["overrides"])

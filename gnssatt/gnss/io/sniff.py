@@ -215,7 +215,17 @@ def _epoch_v3(line: str, name: str, line_no: int):
     except ValueError as exc:
         raise ParseError(name, line_no, "an epoch line '> YYYY MM DD HH MM SS.SSSSSSS  F NNN' (RINEX 3 A13)",
                          line) from exc
+    _check_epoch_fields(name, line_no, line, (year, month, day, hour, minute, sec), count)
     return (year, month, day, hour, minute, sec), flag, count
+
+
+def _check_epoch_fields(name: str, line_no: int, line: str, fields: tuple, count: int) -> None:
+    """Calendar fields in range (seconds 0 <= s < 61, a leap second included), satellite count >= 0."""
+    year, month, day, hour, minute, sec = fields
+    if not (1900 <= year <= 2200 and 1 <= month <= 12 and 1 <= day <= 31 and 0 <= hour < 24 and 0 <= minute < 60
+            and 0.0 <= sec < 61.0 and count >= 0):
+        raise ParseError(name, line_no, "an epoch within its calendar ranges (month 1-12, day 1-31, hour 0-23, "
+                         "minute 0-59, seconds 0-60.9999999) and a satellite count >= 0", line)
 
 
 def _epoch_v2(line: str, name: str, line_no: int):
@@ -229,6 +239,7 @@ def _epoch_v2(line: str, name: str, line_no: int):
     except ValueError as exc:
         raise ParseError(name, line_no, "an epoch line ' YY MM DD HH MM SS.SSSSSSS  F NNN' + satellites (RINEX 2)",
                          line) from exc
+    _check_epoch_fields(name, line_no, line, (year, month, day, hour, minute, sec), count)
     return (year, month, day, hour, minute, sec), flag, count
 
 
@@ -508,7 +519,7 @@ class _BodyScan:
             return
         for rec in self.need(count, "satellite records", line_no):
             sid = rec[0:3].replace(" ", "0")
-            if not (sid[0].isalpha() and sid[1:].isdigit()):
+            if not (len(sid) == 3 and sid[0].isalpha() and sid[1:].isdigit()):
                 raise ParseError(name, self.line_no, "a satellite record starting with a satellite id like G01",
                                  rec)
             self.sats.add(sid)
@@ -533,7 +544,7 @@ class _BodyScan:
                 sat_ids += [cont[32 + 3 * i:35 + 3 * i] for i in range(12)]
             sat_ids = sat_ids[:count]
         for sid in sat_ids:
-            sid = (sid[0] if sid[0] != " " else "G") + sid[1:].replace(" ", "0")
+            sid = (sid[0] if sid[0] != " " else "G") + sid[1:].replace(" ", "0") if len(sid) == 3 else ""
             if not sid[1:].isdigit():
                 raise ParseError(name, epoch_line, "satellite ids like G01 in columns 33-68", line)
             self.sats.add(sid)

@@ -1,0 +1,107 @@
+"""The janitor (core/janitor.py) removes dead uploads' staging, dead attempts' work directories and blobs no row
+points to after their grace period, and never a blob a row points to, also while uploads re-use blobs
+concurrently (issue 22, defect 11). About 6 s."""
+from __future__ import annotations
+
+import os
+import threading
+import time
+
+from sqlalchemy import select
+
+from core import janitor
+from core.models import SetFile
+from tests.api.test_observation_sets import _files, sample_items
+
+HOUR = 3600.0
+
+
+def _age(path, seconds: float) -> None:
+    t = time.time() - seconds
+    os.utime(path, (t, t))
+
+
+def test_dead_staging_and_work_dirs_are_removed_live_ones_kept(api, settings):
+    rt = api.rt
+    dead = settings.staging_dir / "dead"
+    (dead / "0000.part").parent.mkdir(parents=True)
+    (dead / "0000.part").write_bytes(b"x" * 1000)
+    _age(dead / "0000.part", 2 * HOUR)
+    _age(dead, 2 * HOUR)
+    live = settings.staging_dir / "live"
+    live.mkdir()
+    (live / "0000.part").write_bytes(b"y")
+    _age(live, 2 * HOUR)  # an old directory with a fresh write: a slow upload still going
+    job_id = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]
+    work = settings.data_dir / "work"
+    gone, kept = work / f"{job_id}-1", work / "0123456789abcdef-1"
+    for d in (gone, kept):
+        d.mkdir(parents=True)
+        _age(d, 120)
+    counts = janitor.sweep(settings, rt.Session, rt.blobs)
+    assert counts["staging"] == 1 and not dead.exists() and live.exists()
+    assert not gone.exists()  # the job finished: its attempt 1 is over
+    assert not kept.exists()  # no such job at all
+    assert counts["workdirs"] == 2
+
+
+def test_unreferenced_blobs_go_after_the_grace_period_referenced_ones_never(api, settings):
+    rt = api.rt
+    set_id = api.post("/v1/observation-sets", files=_files(*sample_items(5))).json()["id"]
+    with rt.Session() as s:
+        shas = set(s.execute(select(SetFile.sha256).where(SetFile.set_id == set_id)).scalars())
+    orphan_old, _ = rt.blobs.put_bytes(b"orphan, old")
+    orphan_new, _ = rt.blobs.put_bytes(b"orphan, new")
+    old = time.time() + 10 * HOUR  # "now" far beyond the grace period: only references protect
+    for sha in shas | {orphan_old}:
+        _age(rt.blobs.path(sha), 0)
+    counts = janitor.sweep(settings, rt.Session, rt.blobs, now=old)
+    assert not rt.blobs.exists(orphan_old) and not rt.blobs.exists(orphan_new)
+    assert all(rt.blobs.exists(sha) for sha in shas) and counts["blobs"] == 2
+    assert api.delete(f"/v1/observation-sets/{set_id}").status_code == 204
+    janitor.sweep(settings, rt.Session, rt.blobs, now=old)
+    assert not any(rt.blobs.exists(sha) for sha in shas)  # deleted set: its files go too
+
+
+def test_concurrent_uploads_reusing_blobs_never_lose_one(api, settings):
+    """Upload, delete, age the blobs past the grace period and at once upload the same bytes again, while a
+    janitor with a 0.5 s grace sweeps in a loop: every stored set always has all its blobs (a re-used blob is
+    touched under the store's lock before its row commits, so the janitor either removed it first and the
+    upload wrote it anew, or leaves it)."""
+    rt = api.rt
+    settings.janitor_grace_s = 0.0
+    settings.job_time_s = 0.5
+    stop = threading.Event()
+    removed = [0, 0]  # sweeps, blobs removed
+    errors: list[BaseException] = []
+
+    def sweeper():
+        try:
+            while not stop.is_set():
+                removed[1] += janitor.sweep_blobs(settings, rt.Session, rt.blobs, time.time())
+                removed[0] += 1
+        except BaseException as exc:  # noqa: BLE001 - reported below
+            errors.append(exc)
+
+    thread = threading.Thread(target=sweeper, daemon=True)
+    thread.start()
+    items = sample_items(3)
+    try:
+        for _ in range(25):
+            resp = api.post("/v1/observation-sets", files=_files(*items))
+            assert resp.status_code == 201, resp.text
+            body = resp.json()
+            before = removed[0]
+            while removed[0] < before + 2 and thread.is_alive():
+                time.sleep(0.002)
+            lost = [f["name"] for f in body["files"] if not rt.blobs.exists(f["sha256"])]
+            assert not lost, f"blobs of a stored set were removed: {lost}"
+            assert api.delete(f"/v1/observation-sets/{body['id']}").status_code == 204
+            for f in body["files"]:  # unreferenced now, and long untouched: the janitor's to take
+                if rt.blobs.exists(f["sha256"]):
+                    _age(rt.blobs.path(f["sha256"]), 10.0)
+    finally:
+        stop.set()
+        thread.join(timeout=10)
+    assert not errors and removed[0] >= 50
+    assert removed[1] > 0  # the janitor did remove the deleted sets' blobs meanwhile
