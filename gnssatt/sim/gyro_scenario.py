@@ -48,6 +48,7 @@ class GyroScenario:
     wobble_period_s: tuple = (150.0, 110.0, 130.0)
     gps_fault_interval_s: float = 0.0          # 0: none; 60 for Table 1
     gps_fault_size_cyc: float = 0.35
+    fault_min_elevation_deg: float = 15.0      # faults only on satellites above this (the processing's mask)
     outages: tuple = ()                        # ((start_s, duration_s), ...)
     gyro: GyroErrorModel = field(default_factory=GyroErrorModel)
     start_gps: str = "2018-06-06T12:20:00"
@@ -89,15 +90,24 @@ def _true_attitude(ref_csv: Path) -> tuple[GpsTime, np.ndarray]:
     return ref.time, ref.q_body_from_frame
 
 
-def _visibility(sim: SimulatedSet) -> tuple[np.ndarray, dict]:
-    """(epoch GPS seconds, epoch -> satellites with L1 phase on every antenna)."""
-    from gnssatt.attitude.observations import build_platform_obs
-    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+def _visibility(sim: SimulatedSet, mask_deg: float) -> tuple[np.ndarray, dict]:
+    """(epoch GPS seconds, epoch -> satellites with L1 phase on every antenna and at least mask_deg above every
+    antenna's horizon at the true attitude): the satellites a receiver with that mask would use."""
+    from gnssatt.gnss import rotations as rot
+    from gnssatt.gnss.io.sniff import identify
+    from gnssatt.gyro.gps_data import load_gps
 
-    pobs = build_platform_obs({a: read_rinex_obs(p) for a, p in sim.obs.items()}, ["L1"])
-    t = pobs.time.s.astype(float) + pobs.time.frac
-    ok = np.isfinite(pobs.phase_m[..., 0]).all(axis=0)          # (n_ep, n_sat)
-    return t, {float(te): [pobs.sats[j] for j in np.flatnonzero(ok[i])] for i, te in enumerate(t)}
+    files = [(p.name, identify(p, p.name)[0], p) for p in sim.files]
+    gps = load_gps(files)
+    q_be = np.loadtxt(sim.truth_dir / "attitude.csv", delimiter=",", skiprows=1, usecols=range(3, 7), ndmin=2)
+    R_be = rot.quat_to_dcm(q_be)                                       # truth rows: every epoch, same order
+    t = gps.time.s.astype(float) + gps.time.frac
+    vis = {}
+    for k, te in enumerate(t):
+        ok = np.flatnonzero(gps.valid[k])
+        el = np.degrees(np.arcsin(np.clip((gps.los_ecef[k, ok] @ R_be[k].T) @ gps.boresight_body.T, -1, 1)))
+        vis[float(te)] = [gps.sats[j] for j in ok[el.min(axis=1) >= mask_deg]]
+    return t, vis
 
 
 def simulate_gyro_set(sc: GyroScenario, out_dir: str | Path, *, seed: int = 0) -> GyroSet:
@@ -122,7 +132,7 @@ def simulate_gyro_set(sc: GyroScenario, out_dir: str | Path, *, seed: int = 0) -
     outages = [(g0 + a, g0 + a + d) for a, d in sc.outages]
     faults: list[PhaseFault] = []
     if sc.gps_fault_interval_s > 0:
-        t_ep, vis = _visibility(sim)
+        t_ep, vis = _visibility(sim, sc.fault_min_elevation_deg)
         frng = np.random.default_rng(np.random.SeedSequence([seed, 2002, 2]))
         faults = fault_schedule(frng, t_ep, vis, list(sim.obs), sc.gps_fault_interval_s, sc.gps_fault_size_cyc,
                                 skip=outages)
