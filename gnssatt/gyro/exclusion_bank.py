@@ -50,7 +50,7 @@ def _processors(Z, ep, B, R0, ref, kappa, candidates):
         sub = [s for s in candidates if s != p]
         if len(sub) < 4 or (len(sub) - 1) * len(B) - 3 < 1:
             continue
-        f = fit_attitude(Z, ep, B, full.R_body_from_ecef, sub, ref)
+        f = fit_attitude(Z, ep, B, R0, sub, ref)        # from the prior: the full fit may hold the fault
         fits[p] = f
         costs.append((ref, p, f.J, f.dof, threshold(f.dof, kappa)))
     return full, fits, costs

@@ -34,7 +34,8 @@ from gnssatt.estimation.lambda_search import AmbiguitySearchError, mlambda
 
 __all__ = ["EpochPhases", "SnapshotFit", "integer_corrected", "fit_attitude", "dof", "skew"]
 
-GN_ITERATIONS = 4          # Gauss-Newton steps from a prior within a few degrees (converges to < 1e-9 rad)
+GN_ITERATIONS = 10         # at most this many Gauss-Newton steps ...
+GN_TOLERANCE_RAD = 1e-10   # ... stopping once a step is this small (2-3 steps from a prior within a few degrees)
 
 
 @dataclass
@@ -160,6 +161,8 @@ def fit_attitude(Z: np.ndarray, ep: EpochPhases, B: np.ndarray, R0: np.ndarray, 
         N = H.T @ W @ H
         dth = np.linalg.solve(N, H.T @ W @ r)
         R = _small_rotation(dth) @ R
+        if np.linalg.norm(dth) < GN_TOLERANCE_RAD:
+            break
     res = Y - _model(G, R, B, lam)
     r = res.T.ravel()
     J = float(r @ W @ r)
