@@ -45,6 +45,7 @@ class FusionRun:
     gyro_events: list = field(default_factory=list)
     gyro_tests: list = field(default_factory=list)
     integers: dict = field(default_factory=dict)      # epoch -> (reference sat, other sats, DD integers (m-1, n-1))
+    P_post: np.ndarray | None = None                  # (n_ep, 9, 9) covariance after each GPS epoch
     gyro_rates: np.ndarray | None = None
     gyro_dts: np.ndarray | None = None
     update_times_s: list = field(default_factory=list)   # seconds after the first GPS epoch of each GPS update
@@ -89,6 +90,7 @@ def run_fusion(gps: GpsData, gyro: GyroLog, s: FusionSettings, progress=None) ->
     run = FusionRun(gyro.time, out_q, out_P, np.zeros(n, bool), fused, np.full((n_ep, 4), np.nan),
                     np.full((n_ep, 3, 3), np.nan), np.zeros(n_ep, int), np.full(n_ep, np.nan),
                     np.full((n_ep, 3), np.nan), np.full((n_ep, 3, 3), np.nan), np.full((n_ep, 3), np.nan))
+    run.P_post = np.full((n_ep, 9, 9), np.nan)
     dt_gps = float(np.median(np.diff(t_e))) if n_ep > 1 else 5.0
     bank_g = PropagatorBank(s.gyro_fdi, dt_gps)
     arw2 = s.gyro.arw_rad_sqrt_s ** 2
@@ -118,6 +120,7 @@ def run_fusion(gps: GpsData, gyro: GyroLog, s: FusionSettings, progress=None) ->
         if bank is None or bank.fit is None:
             if state is not None:
                 bank_g.remember(k, state.q, state.bias, state.P, i_k)
+                run.P_post[k] = state.P
             i_prev = i_k
             continue
         fit = bank.fit
@@ -139,6 +142,7 @@ def run_fusion(gps: GpsData, gyro: GyroLog, s: FusionSettings, progress=None) ->
         run.innovation[k] = z / np.sqrt(np.diag(S))
         run.bias[k], run.bias_P[k] = state.bias, state.P[3:6, 3:6]
         bank_g.remember(k, state.q, state.bias, state.P, i_k)
+        run.P_post[k] = state.P
         if i_k > 0:
             out_q[i_k - 1], out_P[i_k - 1] = state.q, state.P[:3, :3]
         run.update_times_s.append(float(t_e[k]))
