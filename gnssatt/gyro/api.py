@@ -91,6 +91,25 @@ def _summary(res_run, gps, gyro, settings) -> dict:
             "frames": "GCRF from ECEF by IAU 2006/2000A, zero EOP", "warnings": gps.warnings}
 
 
+def _R_body_from_gyro(obs_files: list) -> np.ndarray:
+    """platform.json's sensors.gyro.R_body_from_sensor (CONVENTIONS.md "Inputs: sensor logs"), else identity."""
+    import json
+
+    for name, kind, path in obs_files:
+        if kind != "platform":
+            continue
+        doc = json.loads(Path(path).read_text())
+        R = (doc.get("sensors") or {}).get("gyro", {}).get("R_body_from_sensor")
+        if R is None:
+            return np.eye(3)
+        R = np.asarray(R, float)
+        if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
+            raise FusionInputError("Bad gyro alignment", f"{name}: sensors.gyro.R_body_from_sensor must be a 3x3 "
+                                   "rotation matrix (orthonormal, det +1)", file=name, field="sensors.gyro")
+        return R
+    return np.eye(3)
+
+
 def fuse(files: list, settings: FusionSettings | dict | None = None, progress=None) -> FusionResult:
     """FusionResult of an observation set plus a gyro log (paths or (name, kind, path) triples)."""
     from gnssatt.attitude.process import InputProblem
@@ -110,6 +129,7 @@ def fuse(files: list, settings: FusionSettings | dict | None = None, progress=No
         gps = load_gps(obs_files)
     except InputProblem as exc:
         raise FusionInputError(exc.title, exc.detail, exc.file, exc.field) from exc
+    gyro.rate_rad_s = gyro.rate_rad_s @ _R_body_from_gyro(obs_files).T
     run = run_fusion(gps, gyro, s, progress)
     if not run.has.any():
         raise FusionInputError("No attitude", "no GPS epoch gave a snapshot attitude to start the filter (too few "

@@ -103,3 +103,31 @@ def test_job_runs_locally(gyro_set, tmp_path):
         run_job_locally("gyro-fusion", [obs], {}, tmp_path / "none", progress=None)     # no gyro log
     with pytest.raises(JobInputError):
         run_job_locally("gyro-fusion", [with_gyro], {"kappa": -1}, tmp_path / "bad", progress=None)
+
+
+def test_gyro_axes_rotated_by_platform_alignment(gyro_set, fused, tmp_path):
+    """A log in sensor axes R_sensor_from_body with platform.json's R_body_from_sensor gives the same attitude."""
+    import json
+
+    from gnssatt.gnss import rotations as rot
+    from gnssatt.gyro.api import FusionInputError, fuse
+    from gnssatt.gyro.gyro_csv import gyro_csv_text, read_gyro_csv
+
+    R = rot.quat_to_dcm(rot.quat_from_rotvec([0.3, -1.2, 2.0]))            # body <- sensor
+    log = read_gyro_csv(gyro_set.gyro_csv.read_bytes())
+    gyro = tmp_path / "gyro.csv"
+    gyro.write_text(gyro_csv_text(log.time, log.rate_rad_s @ R))          # w_sensor = R' w_body
+    plat = json.loads(gyro_set.sim.platform.read_text())
+    plat["sensors"] = {"gyro": {"R_body_from_sensor": R.tolist()}}
+    pj = tmp_path / "platform.json"
+    pj.write_text(json.dumps(plat))
+    files = [p for p in gyro_set.sim.files if p.name not in ("platform.json",)] + [pj, gyro]
+    res = fuse(files)
+    ok = res.run.has & fused.run.has
+    d = rot.quat_to_rotvec(rot.quat_multiply(res.run.q_body_from_gcrf[ok], rot.quat_conjugate(
+        fused.run.q_body_from_gcrf[ok])))
+    assert np.degrees(np.abs(d)).max() < 1e-6          # 13 significant digits in the CSV: rounding only
+    plat["sensors"]["gyro"]["R_body_from_sensor"] = [[1, 0, 0], [0, 1, 0], [0, 0, -1]]
+    pj.write_text(json.dumps(plat))
+    with pytest.raises(FusionInputError, match="rotation matrix"):
+        fuse(files)
