@@ -79,7 +79,7 @@ def _parse_iso(text: str) -> tuple:
     return t
 
 
-def _float_cell(name, line_no, line, starts, cells, i, what, limit=None) -> float:
+def _float_cell(name, line_no, starts, cells, i, what, limit=None) -> float:
     try:
         v = float(cells[i])
     except ValueError:
@@ -136,15 +136,15 @@ def read_gyro_csv(text: str | bytes, name: str = "gyro.csv") -> GyroLog:
             except ValueError:
                 raise ParseError(name, line_no, "gps_week: a non-negative integer", cells[iw] or "(empty)",
                                  column=starts[iw]) from None
-            sow = _float_cell(name, line_no, line, starts, cells, isow, "gps_sow")
+            sow = _float_cell(name, line_no, starts, cells, isow, "gps_sow")
             if not 0.0 <= sow < 604800.0:
                 raise ParseError(name, line_no, "gps_sow in [0, 604800)", cells[isow], column=starts[isow])
             key = (week, sow)
-        w = [_float_cell(name, line_no, line, starts, cells, i, c, MAX_RATE_RAD_S)
+        w = [_float_cell(name, line_no, starts, cells, i, c, MAX_RATE_RAD_S)
              for i, c in zip(rate_idx, RATE_COLUMNS)]
         temp = float("nan")
         if has_temp and cells[index["temperature_c"]]:
-            temp = _float_cell(name, line_no, line, starts, cells, index["temperature_c"], "temperature_c", 500.0)
+            temp = _float_cell(name, line_no, starts, cells, index["temperature_c"], "temperature_c", 500.0)
         if prev is not None and key <= prev:
             i = index["time_gps"] if iso else index["gps_sow"]
             raise ParseError(name, line_no, "rows in strictly increasing time order", cells[i], column=starts[i])

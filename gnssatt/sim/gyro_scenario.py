@@ -20,7 +20,7 @@ import numpy as np
 from gnssatt.gnss.time import GpsTime
 from gnssatt.sim.api import SimulatedSet, simulate_set
 from gnssatt.sim.gps_faults import PhaseFault, fault_schedule, inject_outage, inject_phase_faults
-from gnssatt.sim.gyro import DriftFault, GyroErrorModel, simulate_gyro
+from gnssatt.sim.gyro import GyroErrorModel, simulate_gyro
 
 __all__ = ["GyroScenario", "GyroSet", "simulate_gyro_set", "SQUARE_0P6_ANTENNAS", "ORBIT_PERIOD_650KM_S"]
 
