@@ -111,7 +111,7 @@ def run_fusion(gps: GpsData, gyro: GyroLog, s: FusionSettings, progress=None) ->
             state = FilterState(q, state.bias * np.exp(-span / s.gyro.drift_tau_s),
                                 state.beta_theta * np.exp(-span / s.gps.multipath_tau_s), P)
             R_be_prior = rot.quat_to_dcm(state.q) @ R_ei[k].T
-            P_prior = P[:3, :3] + P[6:9, 6:9] + 2 * P[:3, 6:9]
+            P_prior = P[:3, :3]          # the predicted attitude's; multipath is in the DD noise already
         else:
             R_be_prior, P_prior = R_orb[k], prior_P
         bank, ep, idx, ratio = _snapshot(gps, k, R_be_prior, P_prior, s)
