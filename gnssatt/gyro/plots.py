@@ -89,9 +89,61 @@ def _bias_png(res) -> bytes:
     return _png(fig)
 
 
-def fusion_plots(res, tab: dict) -> dict[str, bytes]:
-    """{file name: PNG bytes}: attitude.png, faults.png, bias.png."""
+def _errors_png(res, tab, reference) -> bytes | None:
+    """Fused and GPS errors per body axis against a reference attitude (GCRF or ECEF quaternions at the same
+    time tags, within 10 ms), seed 002 Fig. 7; None when no row matches."""
+    import matplotlib.pyplot as plt
+
+    from gnssatt.gnss import rotations as rot
+    from gnssatt.gnss.frames import R_ecef_from_gcrf
+
+    t_ref = reference.time - res.gps.time[0]
+    q_ref = reference.q_body_from_frame.copy()
+    ecef = reference.frame == "ECEF"
+    if ecef.any():                                   # to GCRF -> body
+        R = rot.quat_to_dcm(q_ref[ecef]) @ R_ecef_from_gcrf(reference.time[ecef])
+        q_ref[ecef] = rot.dcm_to_quat(R)
+
+    def match(t_s):
+        j = np.clip(np.searchsorted(t_ref, t_s), 1, len(t_ref) - 1)
+        j = np.where(np.abs(t_ref[j - 1] - t_s) < np.abs(t_ref[j] - t_s), j - 1, j)
+        return j, np.abs(t_ref[j] - t_s) < 0.01
+
+    t_f = tab["time"] - res.gps.time[0]
+    j, ok = match(t_f)
+    if not ok.any():
+        return None
+    e_f = np.degrees(rot.quat_to_rotvec(rot.quat_multiply(tab["qi"][ok], rot.quat_conjugate(q_ref[j[ok]]))))
+    k = np.flatnonzero(np.isfinite(res.run.gps_q_body_from_ecef[:, 0]))
+    q_g = rot.dcm_to_quat(rot.quat_to_dcm(res.run.gps_q_body_from_ecef[k]) @ R_ecef_from_gcrf(res.gps.time[k]))
+    jg, okg = match(res.gps.time[k] - res.gps.time[0])
+    e_g = np.degrees(rot.quat_to_rotvec(rot.quat_multiply(q_g[okg], rot.quat_conjugate(q_ref[jg[okg]]))))
+    sig = tab["sigma"][ok][:, ::-1]                   # (roll, pitch, yaw) ~ body (x, y, z) near Earth pointing
+    fig, axes = plt.subplots(3, 1, figsize=(11, 7), sharex=True)
+    step = max(1, ok.sum() // 4000)
+    for i, name in enumerate(("x (roll)", "y (pitch)", "z (yaw)")):
+        ax = axes[i]
+        ax.plot((res.gps.time[k][okg] - res.gps.time[0]) / 60, e_g[:, i], ".", ms=2, color="0.6", label="GPS")
+        ax.plot(t_f[ok][::step] / 60, e_f[::step, i], lw=0.7, label="fused")
+        ax.plot(t_f[ok][::step] / 60, sig[::step, i], "k:", lw=0.6, label="1 sigma")
+        ax.plot(t_f[ok][::step] / 60, -sig[::step, i], "k:", lw=0.6)
+        ax.set_ylabel(f"{name} error (deg)")
+    axes[0].legend(fontsize=8, ncol=3)
+    axes[2].set_xlabel("minutes")
+    fig.suptitle("Errors against the reference attitude (body axes)")
+    fig.tight_layout()
+    return _png(fig)
+
+
+def fusion_plots(res, tab: dict, reference=None) -> dict[str, bytes]:
+    """{file name: PNG bytes}: attitude.png, faults.png, bias.png, and errors.png with a reference attitude
+    (gnssatt.gnss.io.reference_attitude.ReferenceAttitude)."""
     import matplotlib
 
     matplotlib.use("Agg")
-    return {"attitude.png": _attitude_png(res, tab), "faults.png": _faults_png(res), "bias.png": _bias_png(res)}
+    out = {"attitude.png": _attitude_png(res, tab), "faults.png": _faults_png(res), "bias.png": _bias_png(res)}
+    if reference is not None:
+        png = _errors_png(res, tab, reference)
+        if png is not None:
+            out["errors.png"] = png
+    return out

@@ -99,6 +99,11 @@ def test_job_runs_locally(gyro_set, tmp_path):
                           obs.summary)
     out = run_job_locally("gyro-fusion", [with_gyro], {"n_propagators": 2}, tmp_path, progress=None)
     assert {"attitude.csv", "faults.csv", "report.html", "faults.png", "attitude.png", "bias.png"} <= set(out)
+    assert "errors.png" not in out
+    truth = InputFile("reference.csv", "reference_attitude", gyro_set.sim.truth_dir / "attitude_gyro_rate.csv", {})
+    with_ref = type(obs)(obs.id, obs.name, with_gyro.files + [truth], obs.summary)
+    out = run_job_locally("gyro-fusion", [with_ref], {"n_propagators": 2}, tmp_path / "ref", progress=None)
+    assert out["errors.png"].read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     with pytest.raises(JobInputError):
         run_job_locally("gyro-fusion", [obs], {}, tmp_path / "none", progress=None)     # no gyro log
     with pytest.raises(JobInputError):

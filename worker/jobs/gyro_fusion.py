@@ -61,7 +61,7 @@ JOB_TYPE = JobType(
                 "rate, gyro bias, fault events, per-processor costs, plots, report and CCSDS AEM.",
     config_model=GyroFusionConfig, pipeline="worker.jobs.gyro_fusion:run",
     produces=("attitude.csv", "gps_attitude.csv", "bias.csv", "faults.csv", "costs.csv", "gyro_tests.csv",
-              "summary.json", "attitude.aem", "attitude.png", "faults.png", "bias.png", "report.html"))
+              "summary.json", "attitude.aem", "attitude.png", "faults.png", "bias.png", "errors.png", "report.html"))
 
 
 def run(ctx: JobContext, config: GyroFusionConfig) -> None:
@@ -82,7 +82,13 @@ def run(ctx: JobContext, config: GyroFusionConfig) -> None:
     for name, content in res.products().items():
         ctx.write_product(name, content)
     ctx.progress(0.93, "plotting")
-    pngs = fusion_plots(res, attitude_table(res))
+    refs = obs_set.of_kind("reference_attitude")
+    reference = None
+    if refs:                                  # a reference attitude in the set: errors.png (seed 002 Fig. 7)
+        from gnssatt.gnss.io.reference_attitude import read_reference_attitude
+
+        reference = read_reference_attitude(refs[0].path.read_bytes(), refs[0].name)
+    pngs = fusion_plots(res, attitude_table(res), reference)
     for name, png in pngs.items():
         ctx.write_product(name, png, media_type="image/png")
     faults = fault_rows(res)
