@@ -48,18 +48,18 @@ def test_set_deleted_while_a_job_is_submitted_is_409(api):
     engine = api.app.state.engine
     fired: list[bool] = []
 
-    def delete_set_meanwhile(session):
+    def delete_set_meanwhile(session, *_):   # at the flush that would write the new job and its set links
         if fired or not any(isinstance(o, Job) for o in session.new):
             return
         fired.append(True)
         with engine.begin() as conn:
             conn.execute(delete(ObservationSet).where(ObservationSet.id == set_id))
 
-    event.listen(OrmSession, "before_commit", delete_set_meanwhile)
+    event.listen(OrmSession, "before_flush", delete_set_meanwhile)
     try:
         resp = api.post("/v1/jobs", json={"type": "inspect", "observation_set_ids": [set_id]})
     finally:
-        event.remove(OrmSession, "before_commit", delete_set_meanwhile)
+        event.remove(OrmSession, "before_flush", delete_set_meanwhile)
     assert fired and resp.status_code == 409, resp.text
     assert resp.json()["type"].endswith("/set-deleted")
     assert api.get("/v1/jobs").json()["total"] == 0

@@ -7,7 +7,7 @@ Inputs of the set: one RINEX observation file with C/N0 (S1C/S1X/S1W) and a navi
 platform.json (the antenna's boresight in the body frame, kind); optional magnetometer.csv."""
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
@@ -16,9 +16,9 @@ from worker.errors import JobInputError
 
 class GainPatternModel(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    theta_deg: list[float] = Field(..., min_length=2, max_length=361, description="Off-boresight angles (deg), "
+    theta_deg: list[Annotated[float, Field(ge=0.0, le=180.0)]] = Field(..., min_length=2, max_length=361, description="Off-boresight angles (deg), "
                                    "increasing from 0 to at most 180.")
-    gain_db: list[float] = Field(..., min_length=2, max_length=361, description="Gain (dB) at theta_deg.")
+    gain_db: list[Annotated[float, Field(ge=-100.0, le=50.0)]] = Field(..., min_length=2, max_length=361, description="Gain (dB) at theta_deg.")
 
     @model_validator(mode="after")
     def _shape(self):

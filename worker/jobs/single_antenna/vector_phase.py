@@ -9,7 +9,7 @@ antenna_vector_length.md) or the antenna_model setting."""
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
@@ -28,10 +28,10 @@ class Settings(BaseModel):
         "reference", description="The attitude at the first epoch, which the phase changes of eq. 44 are counted "
                                  "from: the set's reference attitude file, q_body_from_ecef, or a coarse search "
                                  "(yaw grid, the EKF scoring each start; needs the platform to rotate).")
-    q_body_from_ecef: list[float] | None = Field(
+    q_body_from_ecef: list[Annotated[float, Field(ge=-1.0, le=1.0)]] | None = Field(
         None, min_length=4, max_length=4, description="ECEF->body quaternion (w, x, y, z) at the first epoch, for "
                                                       "initial_attitude 'given'.")
-    initial_position_ecef_m: list[float] | None = Field(
+    initial_position_ecef_m: list[Annotated[float, Field(ge=-1.0e8, le=1.0e8)]] | None = Field(
         None, min_length=3, max_length=3, description="Antenna position at the first epoch, ECEF m; default the "
                                                       "median code solution (metres off: better give it).")
     antenna_id: str | None = Field(None, max_length=100, description="The antenna of platform.json to use "
