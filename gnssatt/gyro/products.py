@@ -149,8 +149,11 @@ def _gyro_tests_csv(res) -> str:
 def fusion_products(res) -> dict:
     """Product name -> content (str or dict) of a FusionResult."""
     tab = attitude_table(res)
-    adapter = SimpleNamespace(att_epochs=np.arange(len(tab["time"])), pobs=SimpleNamespace(time=tab["time"]),
-                              inputs=SimpleNamespace(platform=res.gps.platform), q_body_from_gcrf=tab["qi"])
+    # every row of the table is a usable attitude (fused, or gyro-propagated from one): one useable AEM segment
+    n_rows = len(tab["time"])
+    adapter = SimpleNamespace(att_epochs=np.arange(n_rows), pobs=SimpleNamespace(time=tab["time"]),
+                              inputs=SimpleNamespace(platform=res.gps.platform), q_body_from_gcrf=tab["qi"],
+                              att_fixed=np.ones(n_rows, bool))
     out = {"attitude.csv": _attitude_csv(tab), "gps_attitude.csv": _gps_csv(res), "bias.csv": _bias_csv(res),
            "faults.csv": _faults_csv(fault_rows(res)), "costs.csv": _costs_csv(res),
            "gyro_tests.csv": _gyro_tests_csv(res), "summary.json": res.summary}

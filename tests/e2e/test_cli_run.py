@@ -29,6 +29,8 @@ def _normalised(name: str, data: bytes) -> bytes:
     if name.endswith(".html"):  # the report's generation time, and its embedded plots (which draw the ids)
         data = re.sub(rb"generated \d{4}-\d\d-\d\d \d\d:\d\d:\d\d UTC", b"generated *", data)
         return re.sub(rb"data:image/png;base64,[A-Za-z0-9+/=]+", b"data:image/png;base64,*", data)
+    if name.endswith(".aem"):  # CCSDS 504.0 CREATION_DATE: the time the product was written
+        return re.sub(rb"CREATION_DATE\s*=\s*\S+", b"CREATION_DATE = *", data)
     if not name.endswith(".json"):
         return data
     doc = json.loads(data)
