@@ -72,9 +72,10 @@ def _local_products(paths: list[Path], job_type: str, config: dict, tmp_path: Pa
 
 def _with_ids(products: dict[str, bytes], set_id: str, job_id: str) -> dict[str, bytes]:
     """Text products (HTML report, CSV, ...) with the run's set id and job id written as SET-ID / JOB-ID."""
-    return {name: data if name.endswith(".png") else
-            data.replace(set_id.encode(), b"SET-ID").replace(job_id.encode(), b"JOB-ID")
-            for name, data in products.items()}
+    def named(data: bytes) -> bytes:   # whole words only: the local job id "local" is also in config keys
+        data = re.sub(rb"\b" + re.escape(set_id.encode()) + rb"\b", b"SET-ID", data)
+        return re.sub(rb"\b" + re.escape(job_id.encode()) + rb"\b", b"JOB-ID", data)
+    return {name: data if name.endswith(".png") else named(data) for name, data in products.items()}
 
 
 def _assert_same(local: dict[str, bytes], remote: dict[str, bytes]) -> None:
