@@ -156,14 +156,15 @@ def _identify_json(data: bytes, name: str) -> tuple[str, dict]:
         return kind, {"format": "antenna_pattern.json", "model": doc.get("model"), "type": type(antenna).__name__}
     from gnssatt.satyaw.inputs import SatYawInputError, parse_stations, satellite_descriptions
 
+    check = parse_stations if kind == "stations" else satellite_descriptions
     try:
-        found = parse_stations(doc, name) if kind == "stations" else satellite_descriptions(doc, name)
+        check(doc, name)
     except SatYawInputError as exc:
         raise ParseError(name, None, f"a {kind}.json as docs/satellite_yaw.md describes", exc.detail) from exc
     except (TypeError, ValueError, KeyError) as exc:
         raise ParseError(name, None, f"a {kind}.json as docs/satellite_yaw.md describes", repr(exc)) from exc
-    listed = sorted(doc[kind]) if kind == "satellites" else sorted(k for k in doc[kind])
-    return kind, {"format": f"{kind}.json", kind: listed, "count": len(listed if kind == "satellites" else found)}
+    listed = sorted(doc[kind])
+    return kind, {"format": f"{kind}.json", kind: listed, "count": len(listed)}
 
 
 #: sensor log kinds by a column only their header has (gnssatt.gnss.io.sensor_csv.SPECS)
