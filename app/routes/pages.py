@@ -410,15 +410,25 @@ def _product(session, job: Job, name: str) -> Product | None:
     return session.execute(select(Product).where(Product.job_id == job.id, Product.name == name)).scalar_one_or_none()
 
 
+def _report_of(request: Request, session, job_id: str):
+    """(team, the report.html Product, None), or (team, None, the page to answer) when the job is not the
+    team's or has no report."""
+    team, job, early = _owned_job(request, session, job_id)
+    if early is not None:
+        return team, None, early
+    p = _product(session, job, "report.html")
+    if p is None:
+        return team, None, problem_page(request, team, ProblemError(404, "not-found", "No report",
+                                                                     "This job has no report.html."))
+    return team, p, None
+
+
 @router.get("/jobs/{job_id}/report", response_class=HTMLResponse)
 def report_inline(job_id: str, request: Request, session: SessionDep):
     """report.html shown in the browser (not downloaded), under a CSP that allows only its inline CSS and images."""
-    team, job, early = _owned_job(request, session, job_id)
+    _, p, early = _report_of(request, session, job_id)
     if early is not None:
         return early
-    p = _product(session, job, "report.html")
-    if p is None:
-        return problem_page(request, team, ProblemError(404, "not-found", "No report", "This job has no report.html."))
     resp = HTMLResponse(request.app.state.blobs.path(p.sha256).read_text())
     _finish(request, resp)
     resp.headers["Content-Security-Policy"] = REPORT_CSP
@@ -437,18 +447,15 @@ def report_pdf(job_id: str, request: Request, session: SessionDep):
     """report.html printed to PDF by the system Chromium (app.report_pdf), cached beside the blobs."""
     from app.report_pdf import PdfUnavailable, pdf_of
 
-    team, job, early = _owned_job(request, session, job_id)
+    team, p, early = _report_of(request, session, job_id)
     if early is not None:
         return early
-    p = _product(session, job, "report.html")
-    if p is None:
-        return problem_page(request, team, ProblemError(404, "not-found", "No report", "This job has no report.html."))
     try:
         data = pdf_of(request.app.state.blobs.path(p.sha256), p.sha256)
     except PdfUnavailable as exc:
         return problem_page(request, team, ProblemError(503, "pdf-unavailable", "PDF not available", str(exc)))
     return _finish(request, Response(data, media_type="application/pdf", headers={
-        "Content-Disposition": f'attachment; filename="report-{job.id[:8]}.pdf"'}))
+        "Content-Disposition": f'attachment; filename="report-{p.job_id[:8]}.pdf"'}))
 
 
 @router.get("/jobs/{job_id}/all.zip")

@@ -2,14 +2,11 @@
 from __future__ import annotations
 
 import pytest
-from fastapi.testclient import TestClient
 
 from app.keys import create_key
-from app.main import create_app
 from core.db import make_engine, make_sessionmaker
 from core.settings import Settings
-from worker import runner
-from worker.main import build_runtime
+from tests._service_client import service_client
 
 
 @pytest.fixture
@@ -21,17 +18,8 @@ def settings(tmp_path):
 @pytest.fixture
 def api(settings, monkeypatch):
     """(client, key) with the worker runtime in immediate mode, so a submitted job runs in the request."""
-    rt = build_runtime(settings, immediate=True, name="test-worker")
-    app = create_app(settings)
-    with TestClient(app, raise_server_exceptions=False) as client:
-        app.state.huey = rt.huey
-        with rt.Session.begin() as s:
-            key, _ = create_key(s, "team-a")
-        client.headers["Authorization"] = f"Bearer {key}"
-        client.rt = rt
+    with service_client(settings, immediate=True, team="team-a", name="test-worker") as client:
         yield client
-    runner.set_runtime(None)
-    rt.engine.dispose()
 
 
 @pytest.fixture

@@ -7,14 +7,10 @@ import json
 from pathlib import Path
 
 import pytest
-from fastapi.testclient import TestClient
 
-from app.keys import create_key
-from app.main import create_app
 from core.models import Job, SetFile
 from core.settings import Settings
-from worker import runner
-from worker.main import build_runtime
+from tests._service_client import service_client
 
 
 @pytest.fixture(scope="module")
@@ -29,17 +25,8 @@ def sim(tmp_path_factory) -> Path:
 @pytest.fixture
 def api(tmp_path):
     settings = Settings(data_dir=tmp_path / "var")
-    rt = build_runtime(settings, immediate=False, name="preflight-test")
-    app = create_app(settings)
-    with TestClient(app, raise_server_exceptions=False) as client:
-        app.state.huey = rt.huey
-        with rt.Session.begin() as s:
-            key, _ = create_key(s, "team-p")
-        client.headers["Authorization"] = f"Bearer {key}"
-        client.rt = rt
+    with service_client(settings, immediate=False, team="team-p", name="preflight-test") as client:
         yield client
-    runner.set_runtime(None)
-    rt.engine.dispose()
 
 
 def files_of(d: Path, drop=(), replace=None) -> list[tuple[str, bytes]]:

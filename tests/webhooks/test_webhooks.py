@@ -11,13 +11,9 @@ import time
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 
 import pytest
-from fastapi.testclient import TestClient
 
-from app.keys import create_key
-from app.main import create_app
 from core.settings import Settings
-from worker import runner
-from worker.main import build_runtime
+from tests._service_client import service_client
 
 SECRET = "s3cret-of-sixteen-chars"
 
@@ -52,17 +48,8 @@ class Receiver:
 def api(tmp_path, monkeypatch):
     monkeypatch.setenv("GNSSATT_WEBHOOK_BACKOFF_S", "0.2,0.4,0.8")
     settings = Settings(data_dir=tmp_path / "var")
-    rt = build_runtime(settings, immediate=True, name="webhook-test-worker")
-    app = create_app(settings)
-    with TestClient(app, raise_server_exceptions=False) as client:
-        app.state.huey = rt.huey
-        with rt.Session.begin() as s:
-            key, _ = create_key(s, "team-w")
-        client.headers["Authorization"] = f"Bearer {key}"
-        client.rt = rt
+    with service_client(settings, immediate=True, team="team-w", name="webhook-test-worker") as client:
         yield client
-    runner.set_runtime(None)
-    rt.engine.dispose()
 
 
 def wait_state(api, job_id, states, timeout_s=20.0) -> dict:
