@@ -291,6 +291,35 @@ def _check_nav(text: str, nav) -> int:
             _same(float(g.position_m[r, a]), pos[a] * 1000.0, f"{g.sat[r]} line {ln0} position")
             _same(float(g.velocity_m_s[r, a]), vel[a] * 1000.0, f"{g.sat[r]} line {ln0} velocity")
         n += 6
+    return n + _check_nav_sbas_and_messages(lines, nav)
+
+
+def _check_nav_sbas_and_messages(lines: list[str], nav) -> int:
+    """SBAS state vectors (15 words) and every RINEX 4 message's numbers (blanks are NaN in ours, absent in the
+    tokens), re-read as regex tokens of the record's lines."""
+    n = 0
+    s = getattr(nav, "sbas", None)
+    for r, ln0 in enumerate(getattr(s, "line_no", [])):
+        toks = _D19.findall(lines[ln0 - 1][23:]) + [t for k in range(1, 4) for t in _D19.findall(lines[ln0 - 1 + k][3:])]
+        vals = [float(t.replace("D", "E").replace("d", "e")) for t in toks[:15]]
+        for a in range(3):
+            _same(float(s.position_m[r, a]), vals[3 + 4 * a] * 1000.0, f"{s.sat[r]} line {ln0} position")
+            _same(float(s.velocity_m_s[r, a]), vals[4 + 4 * a] * 1000.0, f"{s.sat[r]} line {ln0} velocity")
+        _same(float(s.af0_s[r]), vals[0], f"{s.sat[r]} line {ln0} af0")
+        n += 7
+    for m in getattr(nav, "messages", []):
+        k = m.line_no   # the '>' line (1-based) = index of the record's first line
+        first = lines[k]
+        toks = _D19.findall(first[23:]) if m.kind != "STO" else []
+        j = k + 1
+        while j < len(lines) and not lines[j].startswith(">") and lines[j].strip():
+            toks += _D19.findall(lines[j][3:])
+            j += 1
+        ours = [float(v) for v in m.values if v == v]
+        assert len(ours) == len(toks), f"{m.kind} {m.sat} {m.msg_type} line {m.line_no}: {len(ours)} vs {len(toks)}"
+        for o, t in zip(ours, toks):
+            _same(o, float(t.replace("D", "E").replace("d", "e")), f"{m.kind} {m.sat} line {m.line_no}")
+        n += len(ours)
     return n
 
 

@@ -112,7 +112,7 @@ def test_quirk_same_toe_records_selection_is_deterministic():
     assert k2.iode[select_ephemeris(k2, "G05", t)] == 73
 
 
-def test_rinex4_dispatch_skips_unsupported_records_counted():
+def test_rinex4_dispatch_keeps_other_records_as_messages():
     eph = kepler_record_v3("G05", "2024 06 24 10 00 00")
     cnav_body = eph + "    " + d19(1.0) * 2 + "\n"  # a 9-line CNAV-like record: must not be read as LNAV
     text = (nav_header_v4() + "> EPH G05 LNAV\n" + eph + "> EPH G05 CNAV\n" + cnav_body +
@@ -124,9 +124,11 @@ def test_rinex4_dispatch_skips_unsupported_records_counted():
     nav = read_rinex_nav(_b(text), name="v4.rnx")
     assert nav.kepler["G"].sat.tolist() == ["G05"] and nav.kepler["G"].line_no.tolist() == [6]
     assert nav.kepler["E"].sat.tolist() == ["E11"] and len(nav.glonass) == 1
-    assert nav.skipped == {"EPH G CNAV": 1, "STO G LNAV": 1, "ION G LNAV": 1, "EOP G CNVX": 1}
-    codes = {w.code for w in nav.warnings}
-    assert {"UNSUPPORTED_RECORD:EPH G CNAV", "UNSUPPORTED_RECORD:STO G LNAV"} <= codes
+    # the CNAV record is kept as read, never taken for LNAV; STO/ION/EOP become NavMessages
+    assert nav.skipped == {} and [(m.kind, m.msg_type) for m in nav.messages] == [
+        ("EPH", "CNAV"), ("STO", "LNAV"), ("ION", "LNAV"), ("EOP", "CNVX")]
+    assert nav.messages[0].values.size == 3 + 4 * 8 and nav.messages[1].label == "GPUT"
+    assert nav.messages[2].named()["alpha0_s"] == 1e-8
     bad = text.replace("> EPH E11 INAV\nE11", "> EPH E11 INAV\nE12")
     with pytest.raises(ParseError, match="satellite E11"):
         read_rinex_nav(_b(bad), name="v4.rnx")

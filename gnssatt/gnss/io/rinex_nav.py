@@ -11,9 +11,12 @@ Implements:
   RINEX 3 record, in the PRN (I2, 3X orbit lines) or letter-id (A1,I2, 4X) layout (warning RINEX2_EXTENSION).
 - Quirks read with a warning and errors: docs/reader_policy.md.
 - RINEX 3.02-3.05 (IGS/RTCM-SC104), sec. 5.4 and Tables A6-A17 (GPS, Galileo, GLONASS, QZSS, BDS records).
-- RINEX 4.00-4.02, sec. 5 and Tables A31ff.: records dispatched on the `> EPH sss TYPE` line; the record types
-  read here are G/J LNAV, E INAV/FNAV, C D1/D2, R FDMA. Every other record type (CNAV, CNV1-3, L1NV, L1OC, SBAS,
-  STO, EOP, ION, ...) is skipped and counted in a `ParseWarning` (code ``UNSUPPORTED_RECORD``), never misread.
+- RINEX 3.03-3.05 NavIC (Table A18, the GPS layout with IRN week; `kepler['I']`, usable by the ephemeris layer
+  with the GPS/WGS-84 constants the IRNSS ICD uses) and SBAS (Table A16; `NavData.sbas`, a `SbasEphemeris`).
+- RINEX 4.00-4.02, sec. 5 and Tables A31ff.: records dispatched on the `> EPH sss TYPE` line; G/J LNAV,
+  E INAV/FNAV, C D1/D2, R FDMA and I LNAV become ephemerides, S SBAS state vectors; every other record (CNAV,
+  CNV1-3, L1NV, L1OC, STO, EOP, ION, ...) is kept as read in `NavData.messages` (gnssatt.gnss.io.nav_messages).
+  An unknown '>' record kind is an error.
 - Fixed columns (D19.12 fields at columns 4/5 + 19k), so fields that run into each other ("1.0D-05-2.0D-06")
   are read as the format defines them; `D` exponents accepted. Extra spare lines after the last defined line of
   a record (some converters write them) are checked to be numeric and ignored (counted warning).
@@ -29,7 +32,7 @@ Time scales (kept as the file gives them, see each dataclass):
   time with the leap seconds (the project's table gnssatt.gnss.leap_seconds, the header `LEAP SECONDS` after the
   table's expiry `LEAP_TABLE_EXPIRES`; a header that disagrees with the table is reported).
 
-Neglects: the RINEX 4 STO/EOP/ION messages, SBAS and NavIC records (skipped, counted).
+Neglects: RINEX 2 SBAS (type H) files (skipped with a warning); evaluating the CNAV-type RINEX 4 ephemerides.
 """
 from __future__ import annotations
 
@@ -42,6 +45,7 @@ import numpy as np
 from gnssatt.gnss.constants import BDT_MINUS_GPST_S, BDT_WEEK_OFFSET
 from gnssatt.gnss.io.compression import read_text_bytes
 from gnssatt.gnss.io.errors import ParseError, ParseWarning
+from gnssatt.gnss.io.nav_messages import NavMessage, SbasEphemeris, build_sbas
 from gnssatt.gnss.leap_seconds import EXPIRES as LEAP_TABLE_EXPIRES, gps_minus_utc_at_utc_s
 from gnssatt.gnss.time import SECONDS_PER_WEEK, GpsTime
 
@@ -60,7 +64,7 @@ BDT_WEEK0_GPS_WEEK = BDT_WEEK_OFFSET
 # Default half validity of a broadcast ephemeris around its toe, per system, in seconds. GPS/QZSS: half the
 # nominal 4 h curve-fit interval (IS-GPS-200 sec. 20.3.4.4; IS-QZSS-PNT sec. 4.1.2); Galileo 4 h and BeiDou
 # 6 h and GLONASS 30 min as RTKLIB's MAXDTOE_* (src/rtklib.h) - the upload rates of those systems.
-MAX_AGE_S = {"G": 7200.0, "J": 7200.0, "E": 14400.0, "C": 21600.0, "R": 1800.0}
+MAX_AGE_S = {"G": 7200.0, "J": 7200.0, "E": 14400.0, "C": 21600.0, "R": 1800.0, "I": 7200.0, "S": 600.0}
 
 # One D19.12 field as RINEX writes it: sign, mantissa, exponent with 2-3 digits (a field cut short by a column
 # shift ends in a one-digit exponent and is refused rather than misread).
@@ -233,7 +237,7 @@ class GlonassEphemeris:
 class NavData:
     """A navigation file: ephemerides per system plus what the header says.
 
-    - `kepler`: system letter ('G', 'J', 'E', 'C') -> `KeplerEphemeris` (only systems with records).
+    - `kepler`: system letter ('G', 'J', 'E', 'C', 'I') -> `KeplerEphemeris` (only systems with records).
     - `glonass`: GLONASS records (possibly empty).
     - `iono`: header ionosphere words by RINEX 3 label ('GPSA', 'GPSB', 'GAL', 'QZSA', 'BDSA', ...; RINEX 2
       ION ALPHA/BETA become 'GPSA'/'GPSB'), each an array of 4 (GAL: 3 used); `klobuchar_alpha`/`_beta` are
@@ -241,6 +245,9 @@ class NavData:
     - `time_corrections`: label ('GPUT', 'GAGP', ...) -> (a0_s, a1_s_s, t_ref_sow, week).
     - `leap_seconds`: header LEAP SECONDS (GPS-UTC now), or None.
     - `skipped`: record kind -> count of records not read (unsupported types), also in `warnings`.
+    - `sbas`: SBAS state vectors (`SbasEphemeris`, RINEX 3 and 4). NavIC records are `kepler['I']`.
+    - `messages`: the RINEX 4 records kept as read (`NavMessage`: CNAV/CNV1-3/L1NV/... ephemerides, STO, EOP,
+      ION), file order.
     """
 
     name: str
@@ -257,6 +264,8 @@ class NavData:
     program: str
     warnings: list[ParseWarning] = field(default_factory=list)
     skipped: dict[str, int] = field(default_factory=dict)
+    sbas: SbasEphemeris | None = None
+    messages: list[NavMessage] = field(default_factory=list)
 
 
 # --- low-level field reading ------------------------------------------------------------------------------
@@ -433,8 +442,8 @@ def _parse_header(ctx: _Ctx, lines: list[str]):
 
 # --- records ---------------------------------------------------------------------------------------------
 
-_KEPLER_SYSTEMS = "GJEC"
-_N_ORBIT_LINES = {"G": 7, "J": 7, "E": 7, "C": 7, "R": 3}
+_KEPLER_SYSTEMS = "GJECI"
+_N_ORBIT_LINES = {"G": 7, "J": 7, "E": 7, "C": 7, "I": 7, "R": 3, "S": 3}
 # Minimum number of BROADCAST ORBIT lines a record must have: GPS-like need line 7 (transmission time).
 _REQUIRED_KEPLER = list(range(0, 20)) + [21]
 
@@ -560,7 +569,33 @@ def _iter_records(ctx: _Ctx, lines: list[str], start: int, major: int):
 
 
 _V4_SUPPORTED = {("G", "LNAV"), ("J", "LNAV"), ("E", "INAV"), ("E", "FNAV"), ("C", "D1"), ("C", "D2"),
-                 ("R", "FDMA")}
+                 ("R", "FDMA"), ("I", "LNAV"), ("S", "SBAS")}
+
+
+def _v4_message(ctx: _Ctx, kind: str, sat: str, msg_type: str, i0: int, body) -> NavMessage:
+    """A RINEX 4 record kept as a NavMessage (RINEX 4.01 sec. 5.3-5.6): the epoch of its first line (EPH: 'sNN'
+    then the epoch; STO/EOP/ION: 4 blanks then the epoch), STO's labels, and every D19.12 number in file order."""
+    if not body:
+        raise ctx.error(i0 + 1, f"the first line of the '> {kind} {sat} {msg_type}' record", "")
+    fi, first = body[0]
+    # STO/EOP/ION lines carry no satellite (and '> STO E   IFNV' may name only the system): parse the epoch
+    # behind a placeholder id, keep the announced one
+    head = first[:4] if kind == "EPH" else "G01 "
+    if kind != "EPH" and first[:4].strip():
+        raise ctx.error(fi + 1, f"4 blanks before the epoch of a {kind} record", first, 1)
+    if kind == "STO":
+        _, parts, _ = _epoch_v3(ctx, head + first[4:23], fi + 1)
+        label, vals = " ".join(first[23:].split()), []
+    else:
+        _, parts, vals = _epoch_v3(ctx, head + first[4:], fi + 1)
+        label = ""
+    _check_epoch(ctx, parts, fi + 1, first)
+    for k, (oi, ol) in enumerate(body[1:]):
+        vals.extend(_orbit_line(ctx, ol, oi + 1, 4, f"line {k + 2} of the {kind} {sat} {msg_type} record"))
+    y, mo, d, h, mi, sec = parts
+    epoch = GpsTime.from_calendar(int(y), int(mo), int(d), int(h), int(mi), float(sec))
+    return NavMessage(kind=kind, sat=_sat_norm(sat), msg_type=msg_type, epoch=epoch,
+                      values=np.array(vals, dtype=np.float64), line_no=i0 + 1, label=label)
 
 
 def read_rinex_nav(source, *, name: str | None = None) -> NavData:
@@ -580,15 +615,15 @@ def read_rinex_nav(source, *, name: str | None = None) -> NavData:
     if major == 2 and system == "S":
         ctx.warnings.append(ParseWarning("UNSUPPORTED_SYSTEM", "RINEX 2 SBAS navigation (type H) is not read", 1))
 
-    rows: dict[str, list] = {s: [] for s in "GJECR"}
+    rows: dict[str, list] = {s: [] for s in "GJECIRS"}
     skipped: dict[str, int] = {}
+    messages: list[NavMessage] = []
     start_col = 3 if major == 2 else 4
     for kind, v4_sat, v4_type, i0, body in _iter_records(ctx, lines, end + 1, major):
         if major == 4:
             key = f"{kind} {v4_sat[:1]} {v4_type}".strip()
             if kind != "EPH" or (v4_sat[:1], v4_type) not in _V4_SUPPORTED:
-                skipped[key] = skipped.get(key, 0) + 1
-                ctx.warn_counted(f"UNSUPPORTED_RECORD:{key}", f"RINEX 4 '{key}' records were skipped", i0 + 1)
+                messages.append(_v4_message(ctx, kind, v4_sat, v4_type, i0, body))
                 continue
             if not body:
                 raise ctx.error(i0 + 1, "the SV / EPOCH / SV CLK line after '> EPH'", lines[i0])
@@ -637,12 +672,14 @@ def read_rinex_nav(source, *, name: str | None = None) -> NavData:
         if rows[sys]:
             kepler[sys] = _build_kepler(ctx, sys, rows[sys], lines)
     glonass = _build_glonass(ctx, rows["R"], leap)
+    sbas = build_sbas(rows["S"])
     ctx.flush()
     alpha = iono.get("GPSA")
     beta = iono.get("GPSB")
     return NavData(name=display, version=version, file_type=file_type, system=system, kepler=kepler,
                    glonass=glonass, iono=iono, klobuchar_alpha=alpha, klobuchar_beta=beta, time_corrections=corr,
-                   leap_seconds=leap, program=program, warnings=ctx.warnings, skipped=skipped)
+                   leap_seconds=leap, program=program, warnings=ctx.warnings, skipped=skipped, sbas=sbas,
+                   messages=messages)
 
 
 def _sat_norm(text: str) -> str:
@@ -720,7 +757,7 @@ def _build_kepler(ctx: _Ctx, sys: str, rows, lines) -> KeplerEphemeris:
         ds, bgd_a, bgd_b, tgd2 = neg, nan, nan, nan
         tgd, iodc = v[:, 25].copy(), ints(26)
         fit = np.array([_fit_hours(sys, x) for x in v[:, 28]])
-    time_system = {"G": "GPST", "J": "QZSST", "E": "GST", "C": "BDT"}[sys]
+    time_system = {"G": "GPST", "J": "QZSST", "E": "GST", "C": "BDT", "I": "IRNWT"}[sys]
     return KeplerEphemeris(
         sat=np.array(sats, dtype=np.str_), toc=toc, af0_s=v[:, 0].copy(), af1_s_s=v[:, 1].copy(),
         af2_s_s2=v[:, 2].copy(), iode=ints(3), crs_m=v[:, 4].copy(), delta_n_rad_s=v[:, 5].copy(),
