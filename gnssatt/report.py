@@ -123,7 +123,8 @@ def html_report(title: str, summary: Mapping[str, Any] | None, plots: Mapping[st
         generated_at: time stamp printed under the title (default: now, UTC).
         config: the job's configuration, shown once (the plots' titles need not repeat it).
 
-    A `quality` block in the summary (attitude jobs) comes first as a verdict table; the raw summary keys follow
+    A `quality` block in the summary (attitude jobs) comes first as a verdict table, then `reader_warnings`
+    (gnssatt.gnss.io.reader_warnings: the input files' quirk warnings) as a table; the raw summary keys follow
     in a collapsed section, with sensible digits (format_value).
     """
     when = (generated_at or _dt.datetime.now(_dt.timezone.utc)).strftime("%Y-%m-%d %H:%M:%S UTC")
@@ -134,9 +135,13 @@ def html_report(title: str, summary: Mapping[str, Any] | None, plots: Mapping[st
     quality = summary.get("quality") if isinstance(summary, Mapping) else None
     if isinstance(quality, Mapping):
         parts.append(quality_html(quality))
+    quirks = summary.get("reader_warnings") if isinstance(summary, Mapping) else None
+    if quirks:   # docs/reader_policy.md: files read with a quirk, shown as code + text
+        parts.append(_table_html("Input files read with warnings (docs/reader_policy.md)", quirks))
     if summary:
         rows = "".join(f"<tr><td class=\"k\">{_esc(k)}</td><td>{_esc(format_value(v))}</td></tr>"
-                       for k, v in flatten_summary({k: v for k, v in summary.items() if k != "quality"}))
+                       for k, v in flatten_summary({k: v for k, v in summary.items()
+                                                    if k not in ("quality", "reader_warnings")}))
         table = f"<table class=\"summary\"><tbody>{rows}</tbody></table>"
         parts.append(f"<details><summary>All summary keys (raw summary.json)</summary>{table}</details>"
                      if isinstance(quality, Mapping) else f"<h2>Summary</h2>{table}")

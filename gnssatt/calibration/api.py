@@ -14,7 +14,7 @@ the map function. See docs/library.md for a runnable example.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable, Iterable
 
@@ -23,6 +23,7 @@ import numpy as np
 from gnssatt.calibration.campaign import (CampaignOptions, MapResult, SetFinal, SetStats, combine_residual_stats,
                                           finish_maps, reduce_baselines, reduce_maps, split_baselines)
 from gnssatt.calibration.checks import CampaignError, check_campaign
+from gnssatt.gnss.io.reader_warnings import reader_warnings
 from gnssatt.calibration.held_out import HeldOutAttitude
 from gnssatt.calibration.tasks import (HELD_OUT_COST, STAGE_PASS1, STAGE_PASS2, FanOut, SetTask,
                                        calibration_of_shared, run_task, set_infos, set_label, shared_of, task_cost)
@@ -47,6 +48,7 @@ class CampaignResult:
     (n_el, n_az); pcv_maps: (first, second, signal) -> the map's CONVENTIONS JSON (pcv_<first>_<second>_<f>.json);
     residual_statistics: residual_statistics.json (before/after per baseline and signal, and "held_out");
     held_out_attitude: held_out_attitude.json, or None without a held-out set;
+    reader_warnings: the input files' quirk warnings (gnssatt.gnss.io.reader_warnings), in set order;
     stats / finals: the per-set results of passes 1 and 2 (set order, the held-out set last in finals);
     pass1_runs / pass2_runs: per task {"seconds", "cpu_s"}; timing_s: wall seconds per stage.
     """
@@ -68,6 +70,7 @@ class CampaignResult:
     pass2_runs: list[dict]
     timing_s: dict
     started_perf_s: float
+    reader_warnings: list = field(default_factory=list)   # the input files' quirk warnings (reader_warnings)
 
     @property
     def held_out_table(self) -> list[dict]:
@@ -245,4 +248,5 @@ def _finish(plat, options: CampaignOptions, sets: list, rows: list, calibrated: 
     runs = [[{k: r[k] for k in ("seconds", "cpu_s") if k in r} for r in rs] for rs in (r1, r2)]
     return CampaignResult(plat, options, [set_label(s) for s in cal_sets], [set_label(s) for s in held], rows,
                           calibrated, map_results, final_maps, pcv_maps, resid, held_att[0] if held_att else None,
-                          [r["stats"] for r in r1], finals, runs[0], runs[1], timing, t_start)
+                          [r["stats"] for r in r1], finals, runs[0], runs[1], timing, t_start,
+                          reader_warnings(cal_sets + held))

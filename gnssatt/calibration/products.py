@@ -107,7 +107,8 @@ def campaign_summary(result, products_s: float = 0.0, workers: dict | None = Non
         "platform": result.platform.name, "sets": len(result.sets), "held_out_set": list(result.held_out_set),
         "extractor": EXTRACTOR, "grid": grid_summary(result.options),
         "baselines": baselines_document(result.platform.name, result.baselines)["baselines"],
-        "maps": maps_summary(result), "timing_s": _timing(result, products_s), "per_set": per_set_rows(result)}
+        "maps": maps_summary(result), "timing_s": _timing(result, products_s), "per_set": per_set_rows(result),
+        "reader_warnings": list(getattr(result, "reader_warnings", []))}
     if workers is not None:
         summary["workers"] = workers
     return summary

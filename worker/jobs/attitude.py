@@ -228,6 +228,7 @@ class StageClock:
 
 def run(ctx: JobContext, config) -> None:
     from gnssatt.attitude.process import InputProblem, load_inputs, process
+    from gnssatt.gnss.io.reader_warnings import reader_warnings
     from gnssatt.attitude.products import all_products, product_tables
 
     obs_set = ctx.require_one()
@@ -264,6 +265,7 @@ def run(ctx: JobContext, config) -> None:
     ctx.progress(0.92, "writing products")
     sol.summary["observation_set_id"] = obs_set.id
     sol.summary["pcv_map_ids"] = list(config.pcv_map_ids)
+    sol.summary["reader_warnings"] = reader_warnings([obs_set])
     products = all_products(sol)
     clock.mark("storing products")
     for name, content in products.items():

@@ -901,6 +901,14 @@ def summarize_rinex_nav(source, *, name: str | None = None) -> dict:
         n_records["R"] = len(nav.glonass)
         sats["R"] = sorted(set(nav.glonass.sat.tolist()))
         times.append(nav.glonass.toc)
+    if nav.sbas is not None and len(nav.sbas):
+        n_records["S"] = len(nav.sbas)
+        sats["S"] = sorted(set(nav.sbas.sat.tolist()))
+        times.append(nav.sbas.toc)
+    messages: dict[str, int] = {}
+    for m in nav.messages:
+        key = f"{m.kind} {m.sat[:1]} {m.msg_type}"
+        messages[key] = messages.get(key, 0) + 1
     span = None
     if times:
         allt = GpsTime.concatenate(times)
@@ -918,6 +926,7 @@ def summarize_rinex_nav(source, *, name: str | None = None) -> dict:
         "time_span_gps": span,
         "leap_seconds": nav.leap_seconds,
         "has_klobuchar": nav.klobuchar_alpha is not None and nav.klobuchar_beta is not None,
+        "messages": messages,
         "skipped": dict(nav.skipped),
         "warnings": [w.to_dict() for w in nav.warnings],
     }
