@@ -170,5 +170,5 @@ def test_frequency_count_disagreeing_with_blocks_is_a_quirk():
     warns: list = []
     pats = read_antex(text.replace(old, old.replace("2", "3", 1), 1).encode(), name="q.atx", warnings=warns)
     assert pats == read_antex(text.encode(), name="s.atx")
-    assert [w.code for w in warns] == ["FREQUENCY_COUNT_MISMATCH"] and warns[0].line_no == 38
+    assert [w.code for w in warns] == ["frequency-count-mismatch"] and warns[0].line_no == 38
     assert "says 3" in warns[0].message and "2 frequency blocks" in warns[0].message

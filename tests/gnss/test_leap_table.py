@@ -95,11 +95,11 @@ def test_expired_table_warns_in_rinex_nav_and_products():
     year = L.TABLE.expires.year + 1  # 10 January of the year after the expiry: past it
     nav = rinex_nav.read_rinex_nav(_glonass_nav_v2(year, None), name="late.g")
     codes = [w.code for w in nav.warnings]
-    assert "LEAP_TABLE_EXPIRED" in codes and nav.glonass.leap_s.tolist() == [18]
+    assert "leap-table-expired" in codes and nav.glonass.leap_s.tolist() == [18]
     nav_h = rinex_nav.read_rinex_nav(_glonass_nav_v2(year, "    19"), name="late.g")  # a new leap second
-    assert nav_h.glonass.leap_s.tolist() == [19] and "LEAP_TABLE_EXPIRED" in [w.code for w in nav_h.warnings]
+    assert nav_h.glonass.leap_s.tolist() == [19] and "leap-table-expired" in [w.code for w in nav_h.warnings]
     before = rinex_nav.read_rinex_nav(_glonass_nav_v2(L.TABLE.expires.year - 1, None), name="ok.g")
-    assert "LEAP_TABLE_EXPIRED" not in [w.code for w in before.warnings]
+    assert "leap-table-expired" not in [w.code for w in before.warnings]
     # the sentence a product carries (attitude summary warnings, simulator truth file)
     late = L.utc_to_gps(year, 1, 10)
     assert sim_constants.leap_expiry_warning(float(late.s)) == L.expiry_warning(late)

@@ -18,7 +18,7 @@ KMS_V4 = "georust+rinex/test_resources/NAV/V4/KMS300DNK_R_20221591000_01H_MN.rnx
 
 
 def test_rinex3_navic_and_sbas_records_read():
-    """RINEX 3.04 mixed file (DLR): I02/I03 and S records are read (no UNSUPPORTED_RECORD), values of the raw
+    """RINEX 3.04 mixed file (DLR): I02/I03 and S records are read (no unsupported-record), values of the raw
     lines; the NavIC orbit radius is the GEO/IGSO one (42,164 km +- 200 km, IRNSS ICD sec. 6.2)."""
     path = third_party_file(BRDM_V3)
     nav = read_rinex_nav(path)

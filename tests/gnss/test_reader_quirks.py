@@ -29,7 +29,7 @@ def test_antex_frequency_count_disagreeing_with_blocks(rel, n_declared, n_blocks
     (ant,) = read_antex(third_party_file(rel), warnings=warns)
     assert len(ant.frequencies) == n_blocks
     (w,) = warns
-    assert w.code == "FREQUENCY_COUNT_MISMATCH" and f"says {n_declared}" in w.message
+    assert w.code == "frequency-count-mismatch" and f"says {n_declared}" in w.message
 
 
 def test_antex_dazi_without_azimuth_rows_uses_noazi():
@@ -37,7 +37,7 @@ def test_antex_dazi_without_azimuth_rows_uses_noazi():
     path = third_party_file("rtklibexplorer+RTKLIB/data/ant/gnssant_ext.atx")
     warns: list = []
     pats = read_antex(path, warnings=warns)
-    assert "AZIMUTH_ROWS_MISSING" in _codes(warns)
+    assert "azimuth-rows-missing" in _codes(warns)
     no_rows = [f for p in pats if p.dazi_deg > 0 for f in p.frequencies if f.pcv_mm is None]
     assert no_rows and all(len(f.noazi_mm) == 19 for f in no_rows)   # ZEN1/ZEN2/DZEN 0/90/5
     # the NOAZI row is the raw line's numbers (line 337 of the file: ANN_MB_00_C G01)
@@ -60,7 +60,7 @@ def test_antex_partial_azimuth_rows_still_refused():
 def test_antex_missing_end_of_antenna_closed_at_next_start():
     warns: list = []
     pats = read_antex(third_party_file(GEORUST + "ATX/V1/igs14_small.atx.gz"), warnings=warns)
-    assert "MISSING_END_OF_ANTENNA" in _codes(warns)
+    assert "missing-end-of-antenna" in _codes(warns)
     assert len(pats) == 6 and {p.antenna_type.split()[0] for p in pats} >= {"BLOCK", "EML_REACH_RS2", "GALILEO-2"}
 
 
@@ -77,7 +77,7 @@ def test_rinex_clock_304_wide_first_line():
     assert cod.clock_s[0, e01] == -0.109666757011e-02 and cod.sigma_s[0, e01] == 0.188030325505e-10
     path = third_party_file(GEORUST + "CLK/V3/example1.txt")
     clk = read_rinex_clock(path)
-    assert clk.version == 3.04 and _codes(clk.warnings) == {"MISPLACED_VALUES"}
+    assert clk.version == 3.04 and _codes(clk.warnings) == {"misplaced-values"}
     assert "AREQ00USA" in [r.decode().strip() if isinstance(r, bytes) else str(r).strip()
                            for r in clk.receivers]
     g16 = clk.sats.index("G16")
@@ -117,7 +117,7 @@ def test_sp3c_satellite_missing_from_plus_lines():
 
     path = third_party_file("SGL-UT+gnsstk-data/test_input_SP3c_mgex3.sp3")
     sp3 = read_sp3(path)
-    assert {"UNLISTED_SATELLITE", "LISTED_WITHOUT_RECORDS"} <= _codes(sp3.warnings)
+    assert {"unlisted-satellite", "listed-without-records"} <= _codes(sp3.warnings)
     assert "C07" in sp3.sats and "C02" not in sp3.sats   # C02 listed, C07 in the body: never swapped
     x, y, z, c = _raw_p(path, "C07")
     j = sp3.sats.index("C07")
@@ -130,7 +130,7 @@ def test_sp3d_listed_satellites_without_records_dropped():
 
     path = third_party_file(GEORUST + "SP3/sp3d.txt")
     sp3 = read_sp3(path)
-    (w,) = [w for w in sp3.warnings if w.code == "LISTED_WITHOUT_RECORDS"]
+    (w,) = [w for w in sp3.warnings if w.code == "listed-without-records"]
     assert w.line_no == 3 and "C02" in w.message
     body_sats = {ln[1:4] for ln in path.read_text().splitlines() if ln.startswith("P")}
     assert set(sp3.sats) == body_sats and np.isfinite(sp3.position_ecef_m).all(axis=2).any(axis=0).all()
@@ -142,7 +142,7 @@ def test_sp3a_elision_lines_skipped(rel):
 
     path = third_party_file("geospace-code+georinex/src/georinex/tests/data/" + rel)
     sp3 = read_sp3(path)
-    assert "ELISION_LINE" in _codes(sp3.warnings) and sp3.version == "a" and len(sp3.time) == 3
+    assert "elision-line" in _codes(sp3.warnings) and sp3.version == "a" and len(sp3.time) == 3
     x, y, z, c = _raw_p(path, "G31", 2)
     np.testing.assert_array_equal(sp3.position_ecef_m[2, sp3.sats.index("G31")], np.array([x, y, z]) * 1000.0)
 
@@ -152,7 +152,7 @@ def test_oldest_sp3_without_version_letter():
 
     path = third_party_file(GEORUST + "SP3/sio06492.sp3")
     sp3 = read_sp3(path)
-    assert "NO_VERSION_LETTER" in _codes(sp3.warnings) and sp3.version == "a" and len(sp3.sats) == 17
+    assert "no-version-letter" in _codes(sp3.warnings) and sp3.version == "a" and len(sp3.sats) == 17
     assert sp3.time[0].iso(0).startswith("1992-06-15T08:37:29")
     x, y, z, c = _raw_p(path, "G02")
     np.testing.assert_array_equal(sp3.position_ecef_m[0, 0], np.array([x, y, z]) * 1000.0)
@@ -164,7 +164,7 @@ def test_sp3_leading_blank_line_keeps_line_numbers():
 
     path = third_party_file("geospace-code+georinex/src/georinex/tests/data/igs19362.sp3c")
     sp3 = read_sp3(path)
-    assert {"LEADING_BLANK_LINES", "BLANK_LINE"} <= _codes(sp3.warnings) and len(sp3.sats) == 32
+    assert {"leading-blank-lines", "blank-line"} <= _codes(sp3.warnings) and len(sp3.sats) == 32
     raw = path.read_bytes()
     k = raw.index(b"\nPG01") + 1
     with pytest.raises(ParseError) as info:   # an error still names the line of the file, blank line counted
@@ -176,7 +176,7 @@ def test_oldest_sp3_identified_by_the_upload_sniffer():
     from gnssatt.gnss.io.sniff import identify
 
     kind, summary = identify(third_party_file(GEORUST + "SP3/sio06492.sp3"), "sio06492.sp3")
-    assert kind == "sp3" and "NO_VERSION_LETTER" in {w["code"] for w in summary["warnings"]}
+    assert kind == "sp3" and "no-version-letter" in {w["code"] for w in summary["warnings"]}
 
 
 # --- RINEX navigation ------------------------------------------------------------------------------------
@@ -198,7 +198,7 @@ def test_rinex2_galileo_and_qzss_navigation(rel, system, sat, n_records, sqrt_a_
 
     path = third_party_file(rel)
     nav = read_rinex_nav(path)
-    assert "RINEX2_EXTENSION" in _codes(nav.warnings) and list(nav.kepler) == [system]
+    assert "rinex2-extension" in _codes(nav.warnings) and list(nav.kepler) == [system]
     eph = nav.kepler[system]
     # as many records as record-start lines (non-blank columns 1-2 after the header)
     lines = path.read_text().splitlines()
@@ -213,13 +213,13 @@ def test_beidou_week_not_matching_the_epoch_taken_from_epoch():
     from gnssatt.gnss.io.rinex_nav import read_rinex_nav
 
     nav = read_rinex_nav(third_party_file("SGL-UT+gnsstk-data/rinnav_BDS_D1_test.14n"))
-    (w,) = [w for w in nav.warnings if w.code == "WEEK_FROM_EPOCH"]
+    (w,) = [w for w in nav.warnings if w.code == "week-from-epoch"]
     assert "e.g. 1)" in w.message and "BDT" in w.message and w.line_no == 11
     eph = nav.kepler["C"]
     # toc 2014-05-10 00:00 BDT = BDT week 435, 518400 s; toe 1245 s of week is nearest in week 436
     assert eph.week[0] == 436 and eph.toe_sow[0] == 1245.0
     gps = read_rinex_nav(third_party_file("tomojitakasu+RTKLIB/test/data/rinex/brdc1820.10n"))
-    assert "WEEK_FROM_EPOCH" not in _codes(gps.warnings) and set(gps.kepler["G"].week) <= {1590, 1591}
+    assert "week-from-epoch" not in _codes(gps.warnings) and set(gps.kepler["G"].week) <= {1590, 1591}
 
 
 @pytest.mark.parametrize("rel", ["blank1st.10n", "blank3_1st.10n"])
@@ -228,7 +228,7 @@ def test_navigation_leading_blank_lines(rel):
 
     nav = read_rinex_nav(third_party_file("geospace-code+georinex/src/georinex/tests/data/" + rel))
     (w,) = nav.warnings
-    assert w.code == "LEADING_BLANK_LINES" and w.line_no == 2 and not nav.kepler
+    assert w.code == "leading-blank-lines" and w.line_no == 2 and not nav.kepler
 
 
 def test_navigation_blank_inside_a_number_still_refused():
@@ -316,9 +316,9 @@ def test_observation_leading_blank_lines(rel):
     (GEORUST + "OBS/V2/rovn0010.21o", "truncated-last-epoch"),
     (GEORINEX + "demo.10o", "approx-position-misplaced"),
     (GEORINEX + "wrong_obs2_count.10o", "obs-type-count-mismatch"),
-    (GEORINEX + "blank1st.10n", "LEADING_BLANK_LINES"),
-    (GEORINEX + "igs19362.sp3c", "LEADING_BLANK_LINES"),
-    (GEORINEX + "ceda2100.18e", "RINEX2_EXTENSION"),
+    (GEORINEX + "blank1st.10n", "leading-blank-lines"),
+    (GEORINEX + "igs19362.sp3c", "leading-blank-lines"),
+    (GEORINEX + "ceda2100.18e", "rinex2-extension"),
 ])
 def test_quirks_reach_the_upload_summary(rel, code):
     """The upload sniffer (the set's summary) reports the same quirk codes as the full readers."""

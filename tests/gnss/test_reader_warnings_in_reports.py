@@ -2,7 +2,11 @@
 (docs/reader_policy.md: a quirk is read with a structured warning in the set's summary and the job's report)."""
 from __future__ import annotations
 
+import re
 from types import SimpleNamespace
+
+from bench.corpus_check import load_manifest
+from gnssatt.gnss.io.errors import ParseWarning
 
 from gnssatt.gnss.io.reader_warnings import reader_warnings
 from gnssatt.gnss.io.sniff import identify
@@ -58,3 +62,20 @@ def test_calibration_summary_carries_the_reader_warnings():
     assert '"reader_warnings"' in inspect.getsource(products)
     assert api.CampaignResult.__dataclass_fields__["reader_warnings"].default_factory() == []
 
+
+
+CODE_STYLE = re.compile(r"[a-z0-9]+(-[a-z0-9]+)*(:.+)?")
+
+
+def test_one_warning_code_style_for_every_reader():
+    """docs/reader_policy.md: lower-case words joined by '-', optional ':detail'. ParseWarning enforces it, and
+    every code the corpus manifest expects (observation, navigation, SP3, clock and ANTEX readers; the corpus
+    test asserts the readers give exactly these) has that form."""
+    assert ParseWarning("LEAP_TABLE_EXPIRED", "m").code == "leap-table-expired"
+    assert ParseWarning("UNSUPPORTED_RECORD:EPH X", "m", 3).to_dict() == {
+        "code": "unsupported-record:EPH X", "message": "m", "line_no": 3}
+    assert ParseWarning("truncated-last-epoch", "m").code == "truncated-last-epoch"
+    codes = {c for r in load_manifest() if r.label == "quirk" for c in r.expect.split(";")}
+    kinds = {r.kind for r in load_manifest() if r.label == "quirk"}
+    assert len(codes) > 30 and kinds == {"obs", "nav", "sp3", "clk", "atx"}
+    assert [c for c in codes if not CODE_STYLE.fullmatch(c)] == []

@@ -64,7 +64,7 @@ def test_quirk_extra_spare_words_are_ignored_and_counted():
     k = nav.kepler["G"]
     assert k.sat.tolist() == ["G05", "G07"] and k.line_no.tolist() == [7, 16]
     assert k.m0_rad[0] == plain.kepler["G"].m0_rad[0]
-    w = [w for w in nav.warnings if w.code == "EXTRA_SPARE_LINES"]
+    w = [w for w in nav.warnings if w.code == "extra-spare-lines"]
     assert len(w) == 1 and "2 times" in w[0].message
 
 
@@ -155,7 +155,7 @@ def test_week_written_modulo_1024_is_fixed_and_reported():
     v[21] = 2320 - 2048
     nav = read_rinex_nav(_b(nav_header_v3() + kepler_record_v3("G05", "2024 06 24 10 00 00", v)), name="w")
     assert nav.kepler["G"].week[0] == 2320
-    assert any(w.code == "WEEK_ROLLOVER_FIXED" for w in nav.warnings)
+    assert any(w.code == "week-rollover-fixed" for w in nav.warnings)
 
 
 @pytest.mark.parametrize("mutate, line, what", [
@@ -180,7 +180,7 @@ def test_column_shifted_continuation_lines_are_read_and_reported():
     shifted = "\n".join((" " + ln) if ln.startswith("   ") else ln for ln in body.split("\n"))
     nav = read_rinex_nav(_b(nav_header_v2() + shifted), name="s.24n")
     assert nav.kepler["G"].crs_m[0] == -98.21875
-    assert any(w.code == "COLUMN_SHIFT" for w in nav.warnings)
+    assert any(w.code == "column-shift" for w in nav.warnings)
 
 
 # --- real files ------------------------------------------------------------------------------------------
@@ -295,4 +295,4 @@ def test_rinex2_glonass_file_utc_epochs():
     wrong = hdr.replace("    14", "    13")
     nav2 = read_rinex_nav(_b(wrong + rec), name="g.07g")
     assert nav2.glonass.toc.iso(0) == ["2007-03-21T00:15:14"]
-    assert any(w.code == "LEAP_SECONDS_MISMATCH" for w in nav2.warnings)
+    assert any(w.code == "leap-seconds-mismatch" for w in nav2.warnings)

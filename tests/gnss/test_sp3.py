@@ -81,7 +81,7 @@ def test_quirk_epoch_seconds_60_rolls_over():
     text = sp3_text(SATS, 3, seconds={1: 60.0}).decode()
     assert "*  2024  6 24  0 14 60.00000000" in text
     assert sp3.time.iso(0)[1] == "2024-06-24T00:15:00"
-    assert any(w.code == "EPOCH_SECONDS_60" for w in sp3.warnings)
+    assert any(w.code == "epoch-seconds-60" for w in sp3.warnings)
 
 
 def test_quirk_sp3d_more_than_85_satellites():
@@ -101,7 +101,7 @@ def test_quirk_body_satellite_not_in_header_is_read_under_its_own_id():
     base = read_sp3(sp3_text(SATS, 3), name="t.sp3")
     sp3 = read_sp3(sp3_text(SATS, 3, extra_body_sat="G09"), name="t.sp3")
     assert sp3.sats == base.sats + ["G09"]
-    (w,) = [w for w in sp3.warnings if w.code == "UNLISTED_SATELLITE"]
+    (w,) = [w for w in sp3.warnings if w.code == "unlisted-satellite"]
     assert "G09" in w.message and w.line_no is not None
     np.testing.assert_array_equal(sp3.position_ecef_m[:, :len(SATS)], base.position_ecef_m)
     assert np.isfinite(sp3.position_ecef_m[:, -1]).any()
@@ -113,14 +113,14 @@ def test_quirk_header_satellite_absent_from_body_is_dropped():
     base = read_sp3(sp3_text(SATS, 3), name="t.sp3")
     sp3 = read_sp3(sp3_text(SATS, 3, drop=drop), name="t.sp3")
     assert sp3.sats == [s for s in base.sats if s != "E11"]
-    (w,) = [w for w in sp3.warnings if w.code == "LISTED_WITHOUT_RECORDS"]
+    (w,) = [w for w in sp3.warnings if w.code == "listed-without-records"]
     assert "E11" in w.message and w.line_no == 3
     keep = [base.sats.index(s) for s in sp3.sats]
     np.testing.assert_array_equal(sp3.position_ecef_m, base.position_ecef_m[:, keep])
     # Absent at one epoch only: tolerated as NaN, counted.
     sp3 = read_sp3(sp3_text(SATS, 3, drop={(1, "E11")}), name="t.sp3")
     assert np.isnan(sp3.position_ecef_m[1, 2]).all() and np.isfinite(sp3.position_ecef_m[0, 2]).all()
-    assert any(w.code == "MISSING_RECORDS" for w in sp3.warnings)
+    assert any(w.code == "missing-records" for w in sp3.warnings)
 
 
 def test_header_count_disagreeing_with_listed_ids_is_refused():
@@ -135,16 +135,16 @@ def test_quirk_missing_velocity_records_and_bad_values():
     sp3 = read_sp3(raw, name="t.sp3")
     assert np.isnan(sp3.velocity_ecef_m_s[2, 1]).all() and np.isfinite(sp3.velocity_ecef_m_s[1, 1]).all()
     assert np.isfinite(sp3.position_ecef_m[2, 1]).all()
-    assert any(w.code == "MISSING_VELOCITY" for w in sp3.warnings)
+    assert any(w.code == "missing-velocity" for w in sp3.warnings)
     assert np.isnan(sp3.clock_s[1, 0]) and np.isfinite(sp3.position_ecef_m[1, 0]).all()
     assert np.isnan(sp3.position_ecef_m[0, 3]).all() and np.isfinite(sp3.clock_s[0, 3])
 
 
 def test_eof_line_and_missing_eof():
     sp3 = read_sp3(sp3_text(SATS, 2, eof=True) + b"\n", name="t.sp3")
-    assert not any(w.code == "MISSING_EOF" for w in sp3.warnings)
+    assert not any(w.code == "missing-eof" for w in sp3.warnings)
     sp3 = read_sp3(sp3_text(SATS, 2, eof=False), name="t.sp3")
-    assert any(w.code == "MISSING_EOF" for w in sp3.warnings)
+    assert any(w.code == "missing-eof" for w in sp3.warnings)
     with pytest.raises(ParseError, match="after the 'EOF'"):
         read_sp3(sp3_text(SATS, 2) + b"PG01  1.0  2.0\n", name="t.sp3")
 
@@ -196,4 +196,4 @@ def test_real_grace_sp3b_leo():
     assert np.isnan(sp3.clock_s).all()  # 999999.999999 throughout
     s = summarize_sp3(real_set("leo_grace_a_2007080") / "GRAA_07_080.sp3.gz")
     assert s["format"] == "SP3-b" and s["valid_positions"] == 1443 and s["valid_clocks"] == 0
-    assert [w["code"] for w in s["warnings"]] == ["MISSING_EOF"]
+    assert [w["code"] for w in s["warnings"]] == ["missing-eof"]

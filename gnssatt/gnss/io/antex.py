@@ -205,7 +205,7 @@ def _read_frequency(r: _Reader, i: int, ant: AntennaPattern, end_label: str):
                 raise r.err(i, "NORTH / EAST / UP and a NOAZI row before the end of the frequency block")
             if ant.dazi_deg > 0 and not rows:
                 # quirk (gnssant_ext.atx): DAZI > 0 but only the NOAZI row; it is the whole pattern then
-                r.warn("AZIMUTH_ROWS_MISSING", f"frequency {code} of {ant.antenna_type!r} has no azimuth rows "
+                r.warn("azimuth-rows-missing", f"frequency {code} of {ant.antenna_type!r} has no azimuth rows "
                        f"although DAZI is {ant.dazi_deg:g}: its NOAZI row is used for every azimuth", i + 1)
             elif ant.dazi_deg > 0 and len(rows) != len(azi):
                 raise r.err(i, f"{len(azi)} azimuth rows (0 to 360 by DAZI {ant.dazi_deg})")
@@ -339,7 +339,7 @@ def _read_antenna(r: _Reader, i: int):
             if ant is None or not freqs or n_freq_declared is None:
                 raise r.err(i, "'END OF ANTENNA' before the next 'START OF ANTENNA'", 61)
             # quirk (igs14_small.atx): a complete block whose END OF ANTENNA line is missing
-            r.warn("MISSING_END_OF_ANTENNA", f"antenna {ant.antenna_type!r} ends without 'END OF ANTENNA'; it was "
+            r.warn("missing-end-of-antenna", f"antenna {ant.antenna_type!r} ends without 'END OF ANTENNA'; it was "
                    f"closed at the next 'START OF ANTENNA'", i + 1)
             _check_frequency_count(r, i, ant, n_freq_declared, freqs)
             ant.frequencies, ant.rms = freqs, rms
@@ -353,7 +353,7 @@ def _read_antenna(r: _Reader, i: int):
 def _check_frequency_count(r: _Reader, i: int, ant: AntennaPattern, n_declared: int, freqs: list) -> None:
     """'# OF FREQUENCIES' against the blocks present: a disagreement is a quirk (the blocks are what is read)."""
     if n_declared != len(freqs):
-        r.warn("FREQUENCY_COUNT_MISMATCH", f"antenna {ant.antenna_type!r}: '# OF FREQUENCIES' says {n_declared}, "
+        r.warn("frequency-count-mismatch", f"antenna {ant.antenna_type!r}: '# OF FREQUENCIES' says {n_declared}, "
                f"the block holds {len(freqs)} frequency blocks (those are read)", i + 1)
 
 

@@ -45,13 +45,24 @@ class ParseError(ValueError):
                 "expected": self.expected, "found": self.found, "detail": str(self)}
 
 
+def warning_code(code: str) -> str:
+    """The one warning-code style of every reader (docs/reader_policy.md): lower-case words joined by '-'
+    ('truncated-last-epoch'), then optionally ':' and a detail kept as written ('unsupported-record:EPH S')."""
+    head, sep, detail = code.partition(":")
+    return head.strip().lower().replace("_", "-").replace(" ", "-") + sep + detail
+
+
 @dataclass(frozen=True)
 class ParseWarning:
-    """A tolerated quirk (missing MARKER NAME, wrong TIME OF LAST OBS, ...) reported to the user."""
+    """A tolerated quirk (missing MARKER NAME, wrong TIME OF LAST OBS, ...) reported to the user; `code` is put
+    in the one style of `warning_code` whatever the reader wrote."""
 
     code: str
     message: str
     line_no: int | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "code", warning_code(self.code))
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -90,14 +90,14 @@ def _header(name: str, lines: list[bytes]):
         ln = lines[i].decode("latin-1")
         label = ln[label_col:].strip()
         if len(ln) > label_col + 20 and ln[label_col + 20:].strip():
-            odd.append(("HEADER_TEXT_BEYOND_LABEL", f"text after column {label_col + 20} of a header line "
+            odd.append(("header-text-beyond-label", f"text after column {label_col + 20} of a header line "
                         "(ignored)", i + 1))
             label = ln[label_col:label_col + 20].strip()
         if "\t" in ln or not label:
-            odd.append(("HEADER_LINE_WITHOUT_LABEL", "a header line without a label (ignored)", i + 1))
+            odd.append(("header-line-without-label", "a header line without a label (ignored)", i + 1))
         if label == "END OF HEADER" or ln[65:].strip() == "END OF HEADER":
             if not types:
-                odd.append(("MISSING_HEADER_RECORD", "no '# / TYPES OF DATA' header record", i + 1))
+                odd.append(("missing-header-record", "no '# / TYPES OF DATA' header record", i + 1))
             return version, time_system, ac, leap, types, i, odd
         if label == "TIME SYSTEM ID":
             time_system = ln[0:6].strip() or "GPS"
@@ -276,7 +276,7 @@ def read_rinex_clock(source, *, name: str | None = None) -> ClockData:
     warnings = [ParseWarning(code, f"{msg} ({n} time{'s' if n != 1 else ''})", ln)
                 for code, (n, msg, ln) in counted.items()]
     if not as_idx and not ar_idx:
-        warnings.append(ParseWarning("NO_RECORDS", "the file holds no AS or AR clock record", end + 1))
+        warnings.append(ParseWarning("no-records", "the file holds no AS or AR clock record", end + 1))
     base = end + 2  # 1-based line number of body[0]
     as_lines = np.array(as_idx, dtype=np.int64) + base
     ar_lines = np.array(ar_idx, dtype=np.int64) + base
@@ -288,12 +288,12 @@ def read_rinex_clock(source, *, name: str | None = None) -> ClockData:
     t_as, n_as, v1_as, v2_as, mis_as = _parse_records(display, [body[i] for i in as_idx], as_lines, shift, lines)
     t_ar, n_ar, v1_ar, v2_ar, mis_ar = _parse_records(display, [body[i] for i in ar_idx], ar_lines, shift, lines)
     if mis_as + mis_ar:
-        warnings.append(ParseWarning("MISPLACED_VALUES", f"{mis_as + mis_ar} clock records have values off their "
+        warnings.append(ParseWarning("misplaced-values", f"{mis_as + mis_ar} clock records have values off their "
                                      "E19.12 columns; read as whitespace-separated numbers",
                                      int((as_lines if mis_as else ar_lines)[0])))
     ts = time_system.strip().upper()
     if ts in ("UTC", "GLO", "TAI", "BDT"):
-        warnings.append(ParseWarning("TIME_SYSTEM_CONVERTED", f"{ts} epochs converted to GPS time"))
+        warnings.append(ParseWarning("time-system-converted", f"{ts} epochs converted to GPS time"))
         conv = {"TAI": lambda t: t - 19.0, "BDT": lambda t: t + 14.0}
         f = conv.get(ts, lambda t: GpsTime(t.s + gps_minus_utc_s(t.s), t.frac))
         t_as, t_ar = f(t_as), f(t_ar)
@@ -308,7 +308,7 @@ def read_rinex_clock(source, *, name: str | None = None) -> ClockData:
     sats = [sats[i] for i in order]
     clk, sig = clk[:, order], sig[:, order]
     for k, v in skipped.items():
-        warnings.append(ParseWarning("SKIPPED_RECORDS", f"{v} {k} records not read"))
+        warnings.append(ParseWarning("skipped-records", f"{v} {k} records not read"))
     return ClockData(name=display, version=version, time_system=time_system, analysis_center=ac, leap_seconds=leap,
                      data_types=types, time=time, sats=sats, clock_s=clk, sigma_s=sig, receiver_time=rtime,
                      receivers=recv, receiver_clock_s=rclk, receiver_sigma_s=rsig, skipped=skipped,

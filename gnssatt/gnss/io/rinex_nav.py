@@ -8,7 +8,7 @@ use for a satellite at a time.
 Implements:
 - RINEX 2.10/2.11 (Gurtner & Estey, IGS/RTCM), sec. 5 and Tables A3/A4 (GPS nav), A10/A11 (GLONASS nav); the
   2.12 drafts' Galileo ('E', 'L') and QZSS ('J', 'Q', or 'N' with 'J' in column 41) files with the system's
-  RINEX 3 record, in the PRN (I2, 3X orbit lines) or letter-id (A1,I2, 4X) layout (warning RINEX2_EXTENSION).
+  RINEX 3 record, in the PRN (I2, 3X orbit lines) or letter-id (A1,I2, 4X) layout (warning rinex2-extension).
 - Quirks read with a warning and errors: docs/reader_policy.md.
 - RINEX 3.02-3.05 (IGS/RTCM-SC104), sec. 5.4 and Tables A6-A17 (GPS, Galileo, GLONASS, QZSS, BDS records).
 - RINEX 3.03-3.05 NavIC (Table A18, the GPS layout with IRN week; `kepler['I']`, usable by the ephemeris layer
@@ -24,7 +24,7 @@ Implements:
 Time scales (kept as the file gives them, see each dataclass):
 - GPS, QZSS, Galileo: `toc` is a `GpsTime` (QZSST and GST are steered to GPS time; the GGTO offset is ns-level).
   The week of GPS/QZSS/Galileo records is the continuous GPS-aligned week (RINEX 3 sec. 8.1.3); a week written
-  modulo 1024 (or as GST week) is corrected from the epoch and reported (``WEEK_ROLLOVER_FIXED``).
+  modulo 1024 (or as GST week) is corrected from the epoch and reported (``week-rollover-fixed``).
 - BeiDou: `toc` holds the BDT calendar epoch *as written* (BDT = GPST - 14 s), `week` is the BDT week and
   `toe_sow` seconds of the BDT week (BDT week 0 starts at GPS week 1356). Use `KeplerEphemeris.toe_gpst()` /
   `toc_gpst()` for GPS-time values.
@@ -323,7 +323,7 @@ def _orbit_line(ctx: _Ctx, line: str, line_no: int, start: int, what: str) -> li
     if not _fields_ok(line[:start + 4 * _FIELD_W], start):
         for alt in (start + 1, start - 1):
             if 0 < alt and not line[:alt].strip() and _fields_ok(line, alt):
-                ctx.warn_counted("COLUMN_SHIFT", f"BROADCAST ORBIT lines start in column {alt + 1}, "
+                ctx.warn_counted("column-shift", f"BROADCAST ORBIT lines start in column {alt + 1}, "
                                  f"not {start + 1}; read one column shifted", line_no)
                 start = alt
                 break
@@ -354,7 +354,7 @@ def _v2_system(ctx: _Ctx, first: str, file_type: str, sys_char: str) -> str:
     if file_type == "N" and sys_char in ("J", "E", "C"):
         system = sys_char
     if file_type not in ("N", "G", "H") or system != "G" and file_type == "N":
-        ctx.warnings.append(ParseWarning("RINEX2_EXTENSION", f"RINEX {first[0:9].strip()} navigation of system "
+        ctx.warnings.append(ParseWarning("rinex2-extension", f"RINEX {first[0:9].strip()} navigation of system "
                                          f"{system} (file type {file_type!r}, column 41 {sys_char!r}): not in RINEX "
                                          "2.11, read with the RINEX 2 layout and the system's RINEX 3 record", 1))
     return system
@@ -373,7 +373,7 @@ def _parse_header(ctx: _Ctx, lines: list[str]):
     if first[60:80].strip() != "RINEX VERSION / TYPE":
         raise ctx.error(h0 + 1, "'RINEX VERSION / TYPE' in columns 61-80 of the first line", first, 61)
     if h0:
-        ctx.warnings.append(ParseWarning("LEADING_BLANK_LINES", f"{h0} blank line(s) before the first header line "
+        ctx.warnings.append(ParseWarning("leading-blank-lines", f"{h0} blank line(s) before the first header line "
                                          "were skipped", h0 + 1))
     try:
         version = float(first[0:9])
@@ -405,7 +405,7 @@ def _parse_header(ctx: _Ctx, lines: list[str]):
         ln = lines[i]
         label = ln[60:80].strip()
         if ln[80:].strip():
-            ctx.warn_counted("HEADER_TEXT_BEYOND_80", "header lines with text after column 80 (ignored)", i + 1)
+            ctx.warn_counted("header-text-beyond-80", "header lines with text after column 80 (ignored)", i + 1)
         if i == h0:
             continue
         if label == "END OF HEADER":
@@ -433,7 +433,7 @@ def _parse_header(ctx: _Ctx, lines: list[str]):
             elif label == "LEAP SECONDS":
                 leap = int(ln[0:6])
         except ValueError:
-            ctx.warnings.append(ParseWarning("HEADER_LINE_UNREADABLE", f"header line '{label}' could not be read "
+            ctx.warnings.append(ParseWarning("header-line-unreadable", f"header line '{label}' could not be read "
                                              "and is ignored", i + 1))
     if end is None:
         raise ctx.error(len(lines), "an 'END OF HEADER' line (columns 61-80)", lines[-1] if lines else "")
@@ -538,7 +538,7 @@ def _iter_records(ctx: _Ctx, lines: list[str], start: int, major: int):
                     raise ctx.error(i + 1, "a RINEX 4 record line '> EPH|STO|EOP|ION sNN TYPE'", ln, 1)
                 cur = (toks[0], toks[1], toks[2] if len(toks) > 2 else "", i, [])
             elif not ln.strip():
-                ctx.warn_counted("BLANK_LINE", "blank lines in the data section were ignored", i + 1)
+                ctx.warn_counted("blank-line", "blank lines in the data section were ignored", i + 1)
             else:
                 if cur is None:
                     raise ctx.error(i + 1, "a RINEX 4 record line starting with '>'", ln, 1)
@@ -551,7 +551,7 @@ def _iter_records(ctx: _Ctx, lines: list[str], start: int, major: int):
     while i < n:
         ln = lines[i]
         if not ln.strip():
-            ctx.warn_counted("BLANK_LINE", "blank lines in the data section were ignored", i + 1)
+            ctx.warn_counted("blank-line", "blank lines in the data section were ignored", i + 1)
             i += 1
             continue
         is_start = bool(ln[0:2].strip()) if major == 2 else ln[0] != " "
@@ -613,7 +613,7 @@ def read_rinex_nav(source, *, name: str | None = None) -> NavData:
     version, file_type, system, iono, corr, leap, program, end = _parse_header(ctx, lines)
     major = int(version)
     if major == 2 and system == "S":
-        ctx.warnings.append(ParseWarning("UNSUPPORTED_SYSTEM", "RINEX 2 SBAS navigation (type H) is not read", 1))
+        ctx.warnings.append(ParseWarning("unsupported-system", "RINEX 2 SBAS navigation (type H) is not read", 1))
 
     rows: dict[str, list] = {s: [] for s in "GJECIRS"}
     skipped: dict[str, int] = {}
@@ -639,13 +639,13 @@ def read_rinex_nav(source, *, name: str | None = None) -> NavData:
             if major == 4 and sat != _sat_norm(v4_sat):
                 raise ctx.error(ln1, f"satellite {v4_sat} as announced on line {i0 + 1}", first, 1)
             if system != "M" and sat[0] != system and not (system == "G" and sat[0] == "G"):
-                ctx.warn_counted("SYSTEM_MISMATCH", f"records of system {sat[0]} in a file declared {system}", ln1)
+                ctx.warn_counted("system-mismatch", f"records of system {sat[0]} in a file declared {system}", ln1)
         _check_epoch(ctx, parts, ln1, first)
         sys = sat[0]
         if sys not in _N_ORBIT_LINES:
             key = f"EPH {sys}"
             skipped[key] = skipped.get(key, 0) + 1
-            ctx.warn_counted(f"UNSUPPORTED_RECORD:{key}", f"navigation records of system {sys} were skipped", ln1)
+            ctx.warn_counted(f"unsupported-record:{key}", f"navigation records of system {sys} were skipped", ln1)
             continue
         need = _N_ORBIT_LINES[sys]
         orbit_lines = body[1:]
@@ -664,7 +664,7 @@ def read_rinex_nav(source, *, name: str | None = None) -> NavData:
         else:
             extra = len(orbit_lines) - need
         if extra > 0:
-            ctx.warn_counted("EXTRA_SPARE_LINES", "records with extra spare lines (ignored)", ln1)
+            ctx.warn_counted("extra-spare-lines", "records with extra spare lines (ignored)", ln1)
         rows[sys].append((sat, parts, vals, ln1))
 
     kepler = {}
@@ -697,7 +697,7 @@ def _week_from_epoch(ctx: _Ctx, sys: str, toc: GpsTime, toe_sow: np.ndarray, wee
     toc_sow = toc.week_sow()[1]
     derived = toc_week + np.round((toc_sow - toe_sow) / SECONDS_PER_WEEK).astype(np.int64)
     r = int(np.argmax(bad))
-    ctx.warn_counted("WEEK_FROM_EPOCH", f"{sys} records whose week (BROADCAST ORBIT - 5, word 3; e.g. "
+    ctx.warn_counted("week-from-epoch", f"{sys} records whose week (BROADCAST ORBIT - 5, word 3; e.g. "
                      f"{int(week[r])}) is not the {'BDT' if sys == 'C' else 'GPS'} week of their epoch "
                      f"({int(toc_week[r])}): the week was taken from the epoch and toe", int(line_no[r]) + 5)
     return np.where(bad & np.isfinite(toe_sow), derived, week)
@@ -738,7 +738,7 @@ def _build_kepler(ctx: _Ctx, sys: str, rows, lines) -> KeplerEphemeris:
     fix = (k1024 != 0) & (np.abs(off - 1024 * k1024) <= 1)
     if fix.any():
         week = week + 1024 * np.where(fix, k1024, 0)
-        ctx.warn_counted("WEEK_ROLLOVER_FIXED", f"{sys} week numbers written modulo 1024 (or as GST week) were "
+        ctx.warn_counted("week-rollover-fixed", f"{sys} week numbers written modulo 1024 (or as GST week) were "
                          "made continuous from the record epochs", int(line_no[np.argmax(fix)]))
     bad_week = np.abs(toc_week - week) > 1
     if bad_week.any():
@@ -793,16 +793,16 @@ def _build_glonass(ctx: _Ctx, rows, header_leap: int | None) -> GlonassEphemeris
     after = toc_utc.s >= expires
     if n and after.any():
         if header_leap is None:
-            ctx.warnings.append(ParseWarning("LEAP_TABLE_EXPIRED", "GLONASS epochs after the leap-second table "
+            ctx.warnings.append(ParseWarning("leap-table-expired", "GLONASS epochs after the leap-second table "
                                              f"expiry {LEAP_TABLE_EXPIRES.isoformat()} and no LEAP SECONDS in the "
                                              f"header: GPS-UTC = {int(leap[-1])} s assumed", int(line_no[0])))
         else:
-            ctx.warnings.append(ParseWarning("LEAP_TABLE_EXPIRED", "GLONASS epochs after the leap-second table "
+            ctx.warnings.append(ParseWarning("leap-table-expired", "GLONASS epochs after the leap-second table "
                                              f"expiry {LEAP_TABLE_EXPIRES.isoformat()}: header LEAP SECONDS "
                                              f"{header_leap} used", int(line_no[0])))
             leap = np.where(after, header_leap, leap)
     if n and header_leap is not None and not after.all() and header_leap != int(leap[~after][-1]):
-        ctx.warnings.append(ParseWarning("LEAP_SECONDS_MISMATCH", f"header LEAP SECONDS {header_leap} differs from "
+        ctx.warnings.append(ParseWarning("leap-seconds-mismatch", f"header LEAP SECONDS {header_leap} differs from "
                                          f"GPS-UTC {int(leap[~after][-1])} s at the GLONASS epochs; the table "
                                          "value was used", None))
     toc = GpsTime(toc_utc.s + leap, toc_utc.frac)

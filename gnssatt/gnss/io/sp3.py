@@ -149,13 +149,13 @@ def _convert_time(ctx: _Ctx, t: GpsTime, time_system: str) -> GpsTime:
     if ts in ("GPS", "GAL", "QZS", "IRN", "", "CCC"):
         return t
     if ts == "TAI":
-        ctx.warn("TIME_SYSTEM_CONVERTED", "TAI epochs converted to GPS time (-19 s)", None)
+        ctx.warn("time-system-converted", "TAI epochs converted to GPS time (-19 s)", None)
         return t - 19.0
     if ts == "BDT":
-        ctx.warn("TIME_SYSTEM_CONVERTED", "BDT epochs converted to GPS time (+14 s)", None)
+        ctx.warn("time-system-converted", "BDT epochs converted to GPS time (+14 s)", None)
         return t + 14.0
     if ts in ("UTC", "GLO"):
-        ctx.warn("TIME_SYSTEM_CONVERTED", f"{ts} epochs converted to GPS time with the "
+        ctx.warn("time-system-converted", f"{ts} epochs converted to GPS time with the "
                  "leap-second table (GLO taken as UTC)", None)
         return GpsTime(t.s + gps_minus_utc_s(t.s), t.frac)
     raise ctx.error(13, "a time system GPS/GLO/GAL/QZS/BDT/IRN/UTC/TAI in columns 10-12 of the first %c line",
@@ -204,7 +204,7 @@ def _sp3_lines_1_2(ctx: _Ctx, lines: list[str]) -> _Sp3Header:
     l1 = lines[0]
     if l1.startswith("#  ") and len(l1) > 3 and l1[3] in "12":
         # the SP3 of Remondi (1989) before letters: '#' then the start epoch; SP3-a's layout, positions only
-        ctx.warn("NO_VERSION_LETTER", "line 1 has no version letter (column 2) nor P/V flag (column 3): the "
+        ctx.warn("no-version-letter", "line 1 has no version letter (column 2) nor P/V flag (column 3): the "
                  "original SP3 layout, read as SP3-a with positions", 1)
         l1 = "#aP" + l1[3:]
     if len(l1) < 3 or l1[0] != "#" or l1[1] not in "abcd" or l1[2] not in "PV":
@@ -262,7 +262,7 @@ def _sp3_descriptors(ctx: _Ctx, lines: list[str], i: int, hdr: _Sp3Header) -> in
     while i < len(lines) and (lines[i][:2] in ("%c", "%f", "%i", "/*", "%/") or not lines[i].strip()):
         ln = lines[i]
         if not ln.strip():
-            ctx.count("BLANK_LINE", "blank lines were ignored", i + 1)
+            ctx.count("blank-line", "blank lines were ignored", i + 1)
         elif ln.startswith("%c"):
             if n_pc == 0 and hdr.version in "cd":
                 hdr.file_type = ln[3:5].strip() or "G"
@@ -324,7 +324,7 @@ def _sp3_body(ctx: _Ctx, lines: list[str], body_start: int, hdr: _Sp3Header) -> 
     epoch_lines = [k for k in range(body_start, len(lines)) if lines[k].startswith("*")]
     n_ep = len(epoch_lines)
     if n_ep != hdr.n_epochs_header:
-        ctx.warn("EPOCH_COUNT_MISMATCH", f"line 1 announces {hdr.n_epochs_header} epochs, "
+        ctx.warn("epoch-count-mismatch", f"line 1 announces {hdr.n_epochs_header} epochs, "
                  f"the body has {n_ep}", 1)
     index = {s: j for j, s in enumerate(hdr.sats)}
     ns = len(hdr.sats)
@@ -344,7 +344,7 @@ def _sp3_body(ctx: _Ctx, lines: list[str], body_start: int, hdr: _Sp3Header) -> 
             e += 1
             body.cal[e] = _epoch(ctx, ln, lno)
             if body.cal[e, 5] >= 60.0:
-                ctx.count("EPOCH_SECONDS_60", "epoch lines with seconds >= 60 were rolled over", lno)
+                ctx.count("epoch-seconds-60", "epoch lines with seconds >= 60 were rolled over", lno)
         elif c0 == "P" or c0 == "V":
             _sp3_pv_record(ctx, body, e, index, ln, lno)
         elif ln.startswith("EOF"):
@@ -352,9 +352,9 @@ def _sp3_body(ctx: _Ctx, lines: list[str], body_start: int, hdr: _Sp3Header) -> 
         elif c0 == "E" and ln[1:2] in ("P", "V"):
             continue
         elif not ln.strip():
-            ctx.count("BLANK_LINE", "blank lines were ignored", lno)
+            ctx.count("blank-line", "blank lines were ignored", lno)
         elif ln.strip() == "*":
-            ctx.count("ELISION_LINE", "lines holding only '*' (an elision mark, no epoch) were skipped", lno)
+            ctx.count("elision-line", "lines holding only '*' (an elision mark, no epoch) were skipped", lno)
         else:
             raise ctx.error(lno, "an epoch ('*'), 'P', 'V', 'EP', 'EV' record or 'EOF'", ln, 1)
         if e < 0 and c0 != "*":
@@ -365,14 +365,14 @@ def _sp3_body(ctx: _Ctx, lines: list[str], body_start: int, hdr: _Sp3Header) -> 
 def _sp3_completeness(ctx: _Ctx, body: _Sp3Body, hdr: _Sp3Header, n_lines: int) -> bool:
     """Whether velocities are present; refuses listed satellites without records, warns of missing ones."""
     if not body.eof:
-        ctx.warn("MISSING_EOF", "the file ends without an 'EOF' line (truncated?)", n_lines)
+        ctx.warn("missing-eof", "the file ends without an 'EOF' line (truncated?)", n_lines)
     if body.unlisted:
-        ctx.warn("UNLISTED_SATELLITE", f"satellites with records but not in the '+' lines, read under their own "
+        ctx.warn("unlisted-satellite", f"satellites with records but not in the '+' lines, read under their own "
                  f"ids: {', '.join(s for s, _ in body.unlisted)}", body.unlisted[0][1])
         hdr.sats = hdr.sats + [s for s, _ in body.unlisted]
     absent = ~body.seen_p.any(axis=0)
     if absent.any():
-        ctx.warn("LISTED_WITHOUT_RECORDS", f"satellites listed in the '+' lines without any P record, dropped: "
+        ctx.warn("listed-without-records", f"satellites listed in the '+' lines without any P record, dropped: "
                  f"{', '.join(s for s, a in zip(hdr.sats, absent) if a)}", hdr.sat_line_no)
         keep = ~absent
         hdr.sats = [s for s, k in zip(hdr.sats, keep) if k]
@@ -381,13 +381,13 @@ def _sp3_completeness(ctx: _Ctx, body: _Sp3Body, hdr: _Sp3Header, n_lines: int) 
     seen_p, seen_v = body.seen_p, body.seen_v
     missing_p = int((~seen_p).sum())
     if missing_p:
-        ctx.warn("MISSING_RECORDS", f"{missing_p} satellite-epochs without a P record "
+        ctx.warn("missing-records", f"{missing_p} satellite-epochs without a P record "
                  "(NaN)", None)
     has_vel = hdr.pos_vel_flag == "V" or seen_v.any()
     if has_vel:
         miss_v = int((seen_p & ~seen_v).sum())
         if miss_v:
-            ctx.warn("MISSING_VELOCITY", f"{miss_v} P records without a V record "
+            ctx.warn("missing-velocity", f"{miss_v} P records without a V record "
                      "(velocity NaN)", None)
     return bool(has_vel)
 
@@ -419,7 +419,7 @@ def read_sp3(source, *, name: str | None = None) -> Sp3Data:
     lead = next((k for k, ln in enumerate(lines) if ln.strip()), 0)
     ctx = _Ctx(display, lead)
     if lead:
-        ctx.warn("LEADING_BLANK_LINES", f"{lead} blank line(s) before line 1 were skipped", 1 - lead)
+        ctx.warn("leading-blank-lines", f"{lead} blank line(s) before line 1 were skipped", 1 - lead)
         lines = lines[lead:]
     hdr = _sp3_lines_1_2(ctx, lines)
     i = _sp3_satellites(ctx, lines, 2, hdr)
