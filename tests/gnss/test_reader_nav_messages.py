@@ -15,6 +15,7 @@ from tests.corpus.third_party import third_party_file
 
 BRDM_V3 = "Stanford-NavLab+gnss_lib_py/data/unit_test/rinex/nav/BRDM00DLR_S_20230730000_01D_MN.rnx"
 KMS_V4 = "georust+rinex/test_resources/NAV/V4/KMS300DNK_R_20221591000_01H_MN.rnx.gz"
+BRD_V4 = "georust+rinex/test_resources/NAV/V4/BRD400DLR_S_20230710000_01D_MN.rnx.gz"
 
 
 def test_rinex3_navic_and_sbas_records_read():
@@ -90,6 +91,11 @@ def test_rinex4_unknown_record_kind_still_refused():
     bad = text.replace("> STO G26 LNAV", "> XYZ G26 LNAV", 1)
     with pytest.raises(ParseError, match="RINEX 4 record line"):
         read_rinex_nav(bad.encode("latin-1"), name="bad.rnx")
+    # a kept (CNAV-type) record whose first line names another satellite than its '>' line is refused too
+    cnav = gzip.decompress(third_party_file(BRD_V4).read_bytes()).decode("latin-1")
+    k = cnav.index("> EPH G05 CNAV\nG05")
+    with pytest.raises(ParseError, match="satellite G05 as announced"):
+        read_rinex_nav((cnav[:k] + "> EPH G05 CNAV\nG06" + cnav[k + 18:]).encode("latin-1"), name="bad.rnx")
 
 
 def test_sbas_state_vector_propagation_agrees_with_rtklib():
@@ -106,3 +112,20 @@ def test_sbas_state_vector_propagation_agrees_with_rtklib():
             rk.seph2pos(rk.timeadd(rnav.seph[i].t0, dt), rnav.seph[i], rs, dts, var)
             ours = s.position_at(i, s.toc[i] + dt)
             np.testing.assert_allclose(ours, [rs[k] for k in range(3)], rtol=0, atol=1e-3)
+
+
+def test_rinex4_every_record_of_a_day_kept():
+    """DLR's 1-day RINEX 4.00 broadcast file: NavIC LNAV are ephemerides, SBAS state vectors, and the 2 300
+    CNAV/CNV1/CNV2/STO/EOP/ION records are messages (none skipped); the first G05 CNAV record's numbers are those
+    of its raw lines (file order, blanks NaN)."""
+    nav = read_rinex_nav(third_party_file(BRD_V4))
+    assert nav.skipped == {} and nav.warnings == []
+    assert len(nav.kepler["I"]) == 283 and len(nav.sbas) == 9072
+    kinds: dict = {}
+    for m in nav.messages:
+        kinds[(m.kind, m.msg_type)] = kinds.get((m.kind, m.msg_type), 0) + 1
+    assert kinds[("EPH", "CNAV")] == 432 and kinds[("EPH", "CNV1")] == 634 and kinds[("EPH", "CNV2")] == 1024
+    g05 = next(m for m in nav.messages if m.sat == "G05" and m.msg_type == "CNAV")
+    assert g05.values[:4].tolist() == [-1.191107148770e-04, -1.470823463023e-12, 0.0, -6.441593170166e-03]
+    assert g05.values.size == 3 + 4 * 8
+    assert g05.values[-4:-2].tolist() == [1.2e+01, 2.252e+03] and np.isnan(g05.values[-2:]).all()

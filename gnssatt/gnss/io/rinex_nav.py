@@ -587,7 +587,9 @@ def _v4_message(ctx: _Ctx, kind: str, sat: str, msg_type: str, i0: int, body) ->
         _, parts, _ = _epoch_v3(ctx, head + first[4:23], fi + 1)
         label, vals = " ".join(first[23:].split()), []
     else:
-        _, parts, vals = _epoch_v3(ctx, head + first[4:], fi + 1)
+        got, parts, vals = _epoch_v3(ctx, head + first[4:], fi + 1)
+        if kind == "EPH" and got != _sat_norm(sat):
+            raise ctx.error(fi + 1, f"satellite {sat} as announced on line {i0 + 1}", first, 1)
         label = ""
     _check_epoch(ctx, parts, fi + 1, first)
     for k, (oi, ol) in enumerate(body[1:]):
