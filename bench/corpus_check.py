@@ -300,7 +300,8 @@ def _check_nav_sbas_and_messages(lines: list[str], nav) -> int:
     n = 0
     s = getattr(nav, "sbas", None)
     for r, ln0 in enumerate(getattr(s, "line_no", [])):
-        toks = _D19.findall(lines[ln0 - 1][23:]) + [t for k in range(1, 4) for t in _D19.findall(lines[ln0 - 1 + k][3:])]
+        toks = _D19.findall(lines[ln0 - 1][23:])
+        toks += [t for k in range(1, 4) for t in _D19.findall(lines[ln0 - 1 + k][3:])]
         vals = [float(t.replace("D", "E").replace("d", "e")) for t in toks[:15]]
         for a in range(3):
             _same(float(s.position_m[r, a]), vals[3 + 4 * a] * 1000.0, f"{s.sat[r]} line {ln0} position")
