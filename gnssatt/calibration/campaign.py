@@ -59,6 +59,7 @@ class SetStats:
     batches: dict  # (first, second) -> BatchSums
     normals: dict  # (first, second, signal) -> MapNormal
     n_epochs_used: dict  # (first, second) -> int
+    position_source: str = ""  # where the platform position came from (its SP3 or single point positioning)
 
 
 def _usable_epochs(ex, bi: int, apriori_body: np.ndarray, max_deviation_m: float):
@@ -85,7 +86,8 @@ def set_statistics(data: SetData, options: CampaignOptions) -> SetStats:
             fp = ex.fixed_phases[(bi, sig)]
             fp = fp.subset(np.isin(fp.epoch, good_epochs))
             normals[bl + (sig,)] = map_normal(options.grid, fp)
-    return SetStats(data.label, len(ex.epochs), data.reference.coverage, batches, normals, used)
+    return SetStats(data.label, len(ex.epochs), data.reference.coverage, batches, normals, used,
+                    data.position_source)
 
 
 def reduce_baselines(stats: list[SetStats], platform) -> list[BaselineRow]:

@@ -64,9 +64,11 @@ def grid_summary(options) -> dict:
 
 
 def per_set_rows(result) -> list[dict]:
-    """Per calibration set: epochs, reference coverage, epochs used per baseline, each pass's wall and CPU s."""
+    """Per calibration set: epochs, reference coverage, epochs used per baseline, where the platform position came
+    from, each pass's wall and CPU s."""
     return [{"set": s.label, "epochs": s.n_epochs, "reference_coverage": round(s.coverage, 4),
              "epochs_used": {f"{a}>{b}": n for (a, b), n in s.n_epochs_used.items()},
+             "platform_position": getattr(s, "position_source", ""),
              "pass1_seconds": round(r["seconds"], 3), "pass1_cpu_s": round(r.get("cpu_s", np.nan), 3),
              "pass2_seconds": round(q["seconds"], 3), "pass2_cpu_s": round(q.get("cpu_s", np.nan), 3)}
             for s, r, q in zip(result.stats, result.pass1_runs, result.pass2_runs)]
