@@ -291,6 +291,9 @@ def extract(data: SetData, baselines_body: dict, options: ExtractOptions,
     fixes, fixed, az_list, el_list = [], {}, [], []
     sat_idx = np.broadcast_to(np.arange(len(data.sats))[None, :], data.los_ecef.shape[:2])
     ep_idx = np.broadcast_to(np.arange(len(data.epochs))[:, None], data.los_ecef.shape[:2])
+    if options.producer not in PRODUCERS:
+        raise ValueError(f"ExtractOptions.producer {options.producer!r} is not one of {PRODUCERS} "
+                         "(gnssatt/calibration/extract.py)")
     kin = filter_run(data, baselines_body, options) if options.producer == "filter-kinematic" else None
     for bi, (a1, a2) in enumerate(plat.baselines):
         b_body = np.asarray(baselines_body[(a1, a2)], dtype=np.float64)
