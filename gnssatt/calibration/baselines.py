@@ -149,11 +149,13 @@ class BaselineRow:
     a_priori_m: np.ndarray
     estimate: BaselineEstimate
     n_sets: int = 0
+    split: dict | None = None  # the baseline/map split and the sky it was made over (campaign.split_baselines)
 
 
 def baselines_document(platform: str, rows: list[BaselineRow]) -> dict:
-    """baselines.json (CONVENTIONS.md "Output: calibrated baselines"), with extra keys sigma_formal_m, n_batches
-    and n_sets after the fixed ones."""
+    """baselines.json (CONVENTIONS.md "Output: calibrated baselines"), with extra keys sigma_formal_m, n_batches,
+    n_sets and (when the split was made) `split`, the part of the sky the split was made over, after the fixed
+    ones."""
     out = []
     for r in rows:
         e = r.estimate
@@ -164,6 +166,8 @@ def baselines_document(platform: str, rows: list[BaselineRow]) -> dict:
                     "n_epochs": int(e.n_epochs),
                     "sigma_formal_m": [round(float(v), 8) for v in e.sigma_formal_m],
                     "n_batches": int(e.n_batches), "n_sets": int(r.n_sets)})
+        if r.split is not None:
+            out[-1]["split"] = r.split
     return {"platform": platform, "frames": "body", "baselines": out}
 
 

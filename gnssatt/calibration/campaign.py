@@ -21,7 +21,7 @@ import numpy as np
 from gnssatt.calibration.baselines import (BatchSums, BaselineRow, batch_sums, body_from_ecef, combine,
                                           gate_epochs)
 from gnssatt.calibration.binning import BinSums, Grid2D, finalize
-from gnssatt.calibration.decomposition import apply_split, bin_los_body, offset_split
+from gnssatt.calibration.decomposition import apply_split, bin_los_body, observed_sky, offset_split, split_weights
 from gnssatt.calibration.smoothing import smooth_map
 from gnssatt.calibration.extract import ExtractOptions, SetData, extract
 from gnssatt.calibration.pcv import (MapNormal, iterate_map, map_lookup, map_normal, residual_bin_sums,
@@ -59,6 +59,7 @@ class SetStats:
     batches: dict  # (first, second) -> BatchSums
     normals: dict  # (first, second, signal) -> MapNormal
     n_epochs_used: dict  # (first, second) -> int
+    position_source: str = ""  # where the platform position came from (its SP3 or single point positioning)
 
 
 def _usable_epochs(ex, bi: int, apriori_body: np.ndarray, max_deviation_m: float):
@@ -85,7 +86,8 @@ def set_statistics(data: SetData, options: CampaignOptions) -> SetStats:
             fp = ex.fixed_phases[(bi, sig)]
             fp = fp.subset(np.isin(fp.epoch, good_epochs))
             normals[bl + (sig,)] = map_normal(options.grid, fp)
-    return SetStats(data.label, len(ex.epochs), data.reference.coverage, batches, normals, used)
+    return SetStats(data.label, len(ex.epochs), data.reference.coverage, batches, normals, used,
+                    data.position_source)
 
 
 def reduce_baselines(stats: list[SetStats], platform) -> list[BaselineRow]:
@@ -111,14 +113,15 @@ class MapResult:
     count_pass1: np.ndarray
     baseline_m: np.ndarray | None = None  # (3,) the baseline this map goes with (after the split, if made)
     shift_m: np.ndarray | None = None     # (3,) baseline change made by the split (decomposition.py)
+    observed: dict | None = None          # the part of the split's sky this map covers (decomposition.observed_sky)
 
 
 def reduce_maps(stats: list[SetStats], calibrated: dict, signals: list, options: CampaignOptions,
                 boresights: dict | None = None) -> list[MapResult]:
     """Iterated maps per baseline and signal with the calibrated baselines ((first, second) -> (3,) m).
 
-    With `boresights` (antenna id -> body boresight), the baseline/map split is then made explicit
-    (gnssatt.calibration.decomposition, bin counts as weights): every MapResult of a baseline carries the split
+    With `boresights` (antenna id -> body boresight), the baseline/map split of CONVENTIONS.md is then made
+    explicit (gnssatt.calibration.decomposition: solid-angle weights over the bins with a value): every MapResult of a baseline carries the split
     baseline (`baseline_m`, use it with these maps) and the change (`shift_m`); without, baseline_m is the input.
     """
     out = []
@@ -139,10 +142,11 @@ def reduce_maps(stats: list[SetStats], calibrated: dict, signals: list, options:
             mine.append(MapResult(bl[0], bl[1], sig, it.map_m, it.changes_mm, it.converged, normal.count,
                                   np.asarray(b, dtype=np.float64), np.zeros(3)))
         if g is not None and mine:
-            db, a = offset_split([r.map_m for r in mine], [r.count_pass1.astype(float) for r in mine], g)
+            db, a = offset_split([r.map_m for r in mine], [split_weights(options.grid, r.map_m) for r in mine], g)
             b_new, maps_new = apply_split(b, [r.map_m for r in mine], g, db, a)
             for r, m in zip(mine, maps_new):
                 r.map_m, r.baseline_m, r.shift_m = m, b_new, db
+                r.observed = observed_sky(options.grid, m)
         out += mine
     return out
 
@@ -152,9 +156,15 @@ def split_baselines(rows: list[BaselineRow], results: list[MapResult]) -> dict:
     (their sigmas stay the batch-means sigmas of the epoch-wise baselines)."""
     out = {}
     for r in rows:
-        mr = next((m for m in results if (m.first, m.second) == (r.first, r.second)), None)
+        mine = [m for m in results if (m.first, m.second) == (r.first, r.second)]
+        mr = mine[0] if mine else None
         if mr is not None and mr.baseline_m is not None:
             r.estimate.mean_m = np.asarray(mr.baseline_m, dtype=np.float64)
+            if mr.observed is not None:
+                r.split = {"definition": "CONVENTIONS.md: the maps have no least-squares c0_f + c . e part, solid-"
+                                         "angle weighted over the antenna-frame elevations -10 to 90 deg; bins "
+                                         "without a value extended by that fitted model",
+                           "observed": {m.signal: m.observed for m in mine}}
         out[(r.first, r.second)] = r.estimate.mean_m
     return out
 

@@ -1,20 +1,25 @@
-"""The split between a calibrated baseline and its PCV maps, made explicit.
+"""The split between a calibrated baseline and its PCV maps, as CONVENTIONS.md fixes it ("Output: calibrated
+baselines").
 
 With body-fixed antennas, a baseline change db moves every single difference by -g.db (g the body-frame unit
 line of sight), and g is a function of the direction (az, el) in the first antenna's frame: a map holding
 a - g.db is the same model as the baseline shifted by db. Baseline and maps are therefore only defined
-together, and the calibration defines the split by a constraint: over the bins with a value, with the bins'
-sample weights W_fB, the maps of a baseline (all frequencies together) have no least-squares component of the
-form a_f - g_B . db:
-    (db, a) = argmin sum_f sum_B W_fB (m_f(B) - a_f + g_B . db)^2,
+together, and the split is fixed by a constraint: the maps of a baseline (all frequencies together, one db, one
+constant a_f per frequency) have no least-squares part a_f - g . db, solid-angle weighted over the elevations
+SPLIT_ELEVATION_RANGE_DEG (-10 to 90 deg) of the first antenna's frame:
+    (db, a) = argmin sum_f sum_B W_B (m_f(B) - a_f + g_B . db)^2,   W_B = solid angle of bin B,
     b' = b + db,  m'_f(B) = m_f(B) + g_B . db - a_f.
-The baseline is then the one that best explains the data without maps (it absorbs the offset-like part of the
-PCV, as seed 000's "baseline first" does), the maps hold only what no baseline can, and the split is a property
-of the model (b, m) alone, not of how the estimator got there. The same projection of an injected truth
-(physical baseline per frequency and PCV) gives the truth in this decomposition (tests, bench).
+A map estimated over part of that sky is extended by its fitted model for this purpose: with the fitted model
+a_f - g.db itself in the bins without a value, those bins add nothing to the normal equations at the solution,
+so the fit is the solid-angle-weighted fit over the bins with a value (`split_weights`), and the report states
+which part of the sky that was (`observed_sky`). The baseline is then the one that best explains the data
+without maps (it absorbs the offset-like part of the PCV, as seed 000's "baseline first" does), the maps hold
+only what no baseline can, and the split is a property of the model (b, m) and of the observed sky alone, not of
+how the estimator got there or of the sample counts. The same projection of an injected truth (physical baseline
+per frequency and PCV) on the same bins gives the truth in this split (tests, bench).
 
 Implements: the linear least-squares projection above; g at the bin centres, antenna frame of
-gnssatt.gnss.geometry.R_antenna_from_body.
+gnssatt.gnss.geometry.R_antenna_from_body; bin solid angle d_az (sin el_top - sin el_bottom).
 """
 from __future__ import annotations
 
@@ -22,7 +27,44 @@ import numpy as np
 
 from gnssatt.calibration.binning import Grid2D
 
-__all__ = ["bin_los_body", "offset_split", "apply_split"]
+__all__ = ["SPLIT_ELEVATION_RANGE_DEG", "bin_los_body", "bin_solid_angle_sr", "split_weights", "observed_sky",
+           "offset_split", "apply_split"]
+
+#: antenna-frame elevations (deg) over which the split is defined (CONVENTIONS.md "Output: calibrated baselines")
+SPLIT_ELEVATION_RANGE_DEG = (-10.0, 90.0)
+
+
+def bin_solid_angle_sr(az_centres_deg, el_centres_deg) -> np.ndarray:
+    """(n_el, n_az) solid angle (sr) of each bin of a regular grid given by its centres, clipped to
+    SPLIT_ELEVATION_RANGE_DEG (0 outside): d_az (sin el_top - sin el_bottom)."""
+    az = np.asarray(az_centres_deg, dtype=np.float64)
+    el = np.asarray(el_centres_deg, dtype=np.float64)
+    d_az = np.radians(az[1] - az[0]) if az.size > 1 else 2 * np.pi
+    d_el = el[1] - el[0] if el.size > 1 else 1.0
+    lo, hi = SPLIT_ELEVATION_RANGE_DEG
+    top = np.radians(np.clip(el + d_el / 2, lo, hi))
+    bottom = np.radians(np.clip(el - d_el / 2, lo, hi))
+    return np.broadcast_to((d_az * (np.sin(top) - np.sin(bottom)))[:, None], (el.size, az.size)).copy()
+
+
+def split_weights(grid: Grid2D, map_values: np.ndarray) -> np.ndarray:
+    """(n_bins,) weights of the split for one map on `grid`: the bin's solid angle where the map has a value, 0
+    where it has none (the model extension, module docstring)."""
+    w = bin_solid_angle_sr(grid.x_centres_deg, grid.y_centres_deg).ravel()
+    return np.where(np.isfinite(np.asarray(map_values, dtype=np.float64).ravel()), w, 0.0)
+
+
+def observed_sky(grid: Grid2D, map_values: np.ndarray) -> dict:
+    """Which part of the split's sky a map covers: {"elevation_range_deg" (the split's), "observed_elevation_deg"
+    [lowest, highest bin centre with a value], "observed_solid_angle_fraction" (of the split's range)}."""
+    w_all = bin_solid_angle_sr(grid.x_centres_deg, grid.y_centres_deg)
+    full = 2 * np.pi * (np.sin(np.radians(SPLIT_ELEVATION_RANGE_DEG[1])) - np.sin(np.radians(SPLIT_ELEVATION_RANGE_DEG[0])))
+    have = np.isfinite(np.asarray(map_values, dtype=np.float64).reshape(w_all.shape))
+    rows = np.flatnonzero(have.any(axis=1))
+    el = np.asarray(grid.y_centres_deg, dtype=np.float64)
+    return {"elevation_range_deg": list(SPLIT_ELEVATION_RANGE_DEG),
+            "observed_elevation_deg": [float(el[rows[0]]), float(el[rows[-1]])] if rows.size else None,
+            "observed_solid_angle_fraction": round(float(w_all[have].sum() / full), 4)}
 
 
 def bin_los_body(grid: Grid2D, boresight_first_body) -> np.ndarray:

@@ -1,16 +1,25 @@
 """The ONE adapter between calibration and whatever produces fixed single-difference phases and epoch-wise
 baselines for an observation set. Everything else in gnssatt/calibration works on what this module returns
-(`SetExtraction`), so swapping the producer (e.g. for the attitude filter's kinematic mode of issue 6, once it
-lands) touches this file only.
+(`SetExtraction`); `ExtractOptions.producer` chooses the producer.
 
-Producer today ("reference-aided kinematic", gnssatt.calibration.kinematic): RINEX observations of the platform's
-antennas, broadcast (or SP3) GNSS orbits, the platform's own SP3 for its position, and the reference attitude,
-which predicts each baseline to fix the single-difference integers epoch by epoch; then epoch-wise least squares
-baselines (3 components + one clock per signal). Epoch-wise fixing cannot be derailed by cycle slips, so loss-of-
-lock flags are not needed here.
+Producers:
+- "filter-kinematic" (default, seed 000 sec. 3.1): the attitude filter in kinematic mode
+  (gnssatt.calibration.filter_baselines) gives the epoch-wise ECEF baselines and their covariances at the epochs
+  where it has them fixed; the single-difference integers of the map statistics are those of the filter's fixed
+  baseline at each epoch (rounded from it after removing the epoch's common phase, gnssatt.calibration.kinematic),
+  the samples screened by the epoch-wise least squares' 5 cm gate. No reference attitude is used to fix anything.
+- "reference-aided-ablation": the calibration's former own processor, kept only as an ablation
+  (gnssatt.calibration.kinematic): the reference attitude predicts each baseline, the integers are rounded from
+  that prediction and the baselines come from epoch-wise least squares (3 components + one clock per signal).
+Both use the reference attitude to rotate the baselines and lines of sight into the body frame.
+
+Inputs: RINEX observations of the platform's antennas, broadcast (or SP3) GNSS orbits, the reference attitude and,
+when the set has one, the platform's own SP3 for its position and velocity; without it they come from single point
+positioning of the master antenna's code (gnssatt.calibration.platform_state; CONVENTIONS.md "The platform's own
+orbit").
 
 Interface:
-    load_set(input_set, options) -> SetData           (files -> arrays; JobInputError naming the set and file)
+    load_set(input_set, options) -> SetData           (files -> arrays; SetInputError naming the set and file)
     extract(set_data, baselines_body, options, corrections=None) -> SetExtraction
 SetExtraction: epochs, reference (R_body_from_ecef, ok), per baseline the epoch-wise ECEF baseline with covariance
 and a `FixedPhases` table per signal (see gnssatt.calibration.pcv).
@@ -49,6 +58,13 @@ class ExtractOptions:
     # time-correlated multipath that C/N0 does not see (docs/calibration.md); False = equal weights (Table 1)
     cn0_weighting: bool = False
     cn0_reference_dbhz: float = 45.0
+    # where the epoch-wise baselines come from (module docstring): the attitude filter's kinematic mode, or the
+    # former reference-aided processor as an ablation
+    producer: str = "filter-kinematic"
+
+
+#: ExtractOptions.producer values: the attitude filter's kinematic mode (default) and the ablation
+PRODUCERS = ("filter-kinematic", "reference-aided-ablation")
 
 
 def cn0_variance_factor(cn0_a_dbhz: np.ndarray, cn0_b_dbhz: np.ndarray, reference_dbhz: float = 45.0) -> np.ndarray:
@@ -85,6 +101,8 @@ class SetData:
     range_rate_m_s: np.ndarray  # (n_ep, n_sat)
     reference: ReferenceAtEpochs
     position_source: str = "platform SP3"
+    attitude_inputs: object = None  # gnssatt.attitude.process.AttitudeInputs of the same parsed files
+    filter_runs: dict = field(default_factory=dict)  # cache: baselines key -> FilterBaselines
 
 
 @dataclass
@@ -149,16 +167,13 @@ def load_set(input_set, options: ExtractOptions) -> SetData:
         else:
             own_sp3 = s
     nav_files = input_set.of_kind("rinex_nav")
+    nav = read_rinex_nav(nav_files[0].path, name=nav_files[0].name) if nav_files else None
     if gnss_sp3 is not None:
-        eph = PreciseEphemeris(gnss_sp3, nav=read_rinex_nav(nav_files[0].path, name=nav_files[0].name)
-                               if nav_files else None)
-    elif nav_files:
-        eph = BroadcastEphemeris(read_rinex_nav(nav_files[0].path, name=nav_files[0].name))
+        eph = PreciseEphemeris(gnss_sp3, nav=nav)
+    elif nav is not None:
+        eph = BroadcastEphemeris(nav)
     else:
         raise SetInputError("has no GNSS orbits (a RINEX navigation file or an SP3 of the GNSS satellites)")
-    if own_sp3 is None:
-        raise SetInputError("has no SP3 of the platform itself; calibration takes the platform position from it "
-                            "(a code-only position fallback is not implemented yet)")
 
     antennas = list(platform.antennas)
     tags = [_tag_ms(obs[a].time) for a in antennas]
@@ -192,10 +207,22 @@ def load_set(input_set, options: ExtractOptions) -> SetData:
     t = GpsTime(all_tags // 1000, (all_tags % 1000) / 1000.0)
     reference = reference_at_epochs(ref, t, max_gap_s=options.max_reference_gap_s)
 
-    # geometry at the platform's centre (one line of sight for all antennas: < 1e-7 rad apart)
-    pos, _ = interpolate_sp3(own_sp3, [own_sp3.sats[0]], t)
-    vel = interpolate_sp3_velocity(own_sp3, [own_sp3.sats[0]], t)
-    r_rx, v_rx = pos[:, 0], vel[:, 0]
+    # geometry at the platform's centre (one line of sight for all antennas: < 1e-7 rad apart): the platform's
+    # SP3, else single point positioning of the master antenna's code
+    if own_sp3 is not None:
+        pos, _ = interpolate_sp3(own_sp3, [own_sp3.sats[0]], t)
+        vel = interpolate_sp3_velocity(own_sp3, [own_sp3.sats[0]], t)
+        r_rx, v_rx = pos[:, 0], vel[:, 0]
+        source = f"platform SP3 {own_sp3.name}"
+    else:
+        from gnssatt.calibration.platform_state import platform_state_from_code
+
+        master = platform.master if platform.master in obs else antennas[0]
+        try:
+            st = platform_state_from_code(obs[master], eph, t, mapping[master])
+        except ValueError as exc:
+            raise SetInputError(f"has no SP3 of the platform and {exc}", file=mapping[master]) from exc
+        r_rx, v_rx, source = st.r_ecef_m, st.v_ecef_m_s, st.source
     seen = np.zeros((n_ep, n_sat), bool)
     for a in antennas:
         seen |= np.isfinite(phase[a]).any(-1)
@@ -206,7 +233,42 @@ def load_set(input_set, options: ExtractOptions) -> SetData:
         res = emission_time_and_position(eph.state, np.asarray(sats)[js], r_rx[ie], GpsTime(t.s[ie], t.frac[ie]))
         los[ie, js] = res.los_ecef
         rr[ie, js] = np.einsum("ij,ij->i", res.los_ecef, res.v_sat_ecef_m_s - np.nan_to_num(v_rx[ie]))
-    return SetData(label, platform, t, sats, sigs, lam, code, phase, cn0, los, rr, reference)
+    from gnssatt.attitude.process import AttitudeInputs
+
+    att_inputs = AttitudeInputs(platform, obs, dict(mapping), nav=nav, gnss_sp3=gnss_sp3, platform_sp3=own_sp3,
+                                reference=ref)
+    return SetData(label, platform, t, sats, sigs, lam, code, phase, cn0, los, rr, reference, source, att_inputs)
+
+
+def filter_run(data: SetData, baselines_body: dict, options: ExtractOptions):
+    """FilterBaselines (gnssatt.calibration.filter_baselines) of the set with these body baselines, run once per
+    set and baselines (cached on `data`: pass 2 and the held-out comparison reuse pass 1's run of the same task).
+    Raises SetInputError when the filter cannot process the set."""
+    from gnssatt.calibration.filter_baselines import filter_baselines
+
+    key = tuple((tuple(k), tuple(round(float(x), 9) for x in v)) for k, v in sorted(baselines_body.items()))
+    if key not in data.filter_runs:
+        try:
+            data.filter_runs[key] = filter_baselines(data, baselines_body, options)
+        except ValueError as exc:
+            raise SetInputError(f"could not be processed by the attitude filter's kinematic mode: {exc}") from exc
+    return data.filter_runs[key]
+
+
+def _filter_fix(obs: BaselineObservations, kin, bi: int, corr, options: ExtractOptions) -> BaselineFix:
+    """BaselineFix of baseline bi from the filter's kinematic run `kin`: the integers of the filter's fixed
+    baseline (rounded from it; epochs it has not fixed give nothing), the samples screened by the epoch-wise
+    least squares' gate. Without corrections the baselines and covariances are the filter's; with PCV
+    corrections (the epoch-wise held-out comparison) they are the corrected epoch-wise least squares on the
+    filter's integers."""
+    b_f = kin.b_ecef_m[bi]
+    fix = solve_baseline(obs, b_f, correction_m=corr, gate_m=options.gate_m, fix_correction_m=None)
+    if corr is not None:
+        return fix
+    ok = fix.ok & kin.fixed[:, bi]
+    return BaselineFix(np.where(ok[:, None], b_f, np.nan), np.where(ok[:, None, None], kin.cov_ecef_m2[bi], np.nan),
+                       ok, np.where(ok[:, None, None], fix.y_m, np.nan), np.where(ok[:, None, None], fix.weight, 0.0),
+                       np.where(ok[:, None, None], fix.residual_m, np.nan))
 
 
 def extract(data: SetData, baselines_body: dict, options: ExtractOptions,
@@ -214,8 +276,9 @@ def extract(data: SetData, baselines_body: dict, options: ExtractOptions,
     """SetExtraction of a loaded set.
 
     Args:
-        baselines_body: (first, second) -> (3,) body-frame baseline used to predict (fix) and, for the
-            epoch-wise solution, nothing else (the solution is free).
+        baselines_body: (first, second) -> (3,) body-frame baseline: with the filter the body baselines of its
+            length validation; in the ablation the prediction that fixes the integers. The epoch-wise solutions
+            are free either way.
         corrections: optional (first, second, signal) -> callable(az_deg, el_deg) -> mm, PCV maps subtracted from
             the single differences before the epoch-wise solution (not used for fixing or FixedPhases).
     """
@@ -228,6 +291,10 @@ def extract(data: SetData, baselines_body: dict, options: ExtractOptions,
     fixes, fixed, az_list, el_list = [], {}, [], []
     sat_idx = np.broadcast_to(np.arange(len(data.sats))[None, :], data.los_ecef.shape[:2])
     ep_idx = np.broadcast_to(np.arange(len(data.epochs))[:, None], data.los_ecef.shape[:2])
+    if options.producer not in PRODUCERS:
+        raise ValueError(f"ExtractOptions.producer {options.producer!r} is not one of {PRODUCERS} "
+                         "(gnssatt/calibration/extract.py)")
+    kin = filter_run(data, baselines_body, options) if options.producer == "filter-kinematic" else None
     for bi, (a1, a2) in enumerate(plat.baselines):
         b_body = np.asarray(baselines_body[(a1, a2)], dtype=np.float64)
         b_pred = np.einsum("eji,j->ei", R_be, b_body)  # R^T b
@@ -258,7 +325,10 @@ def extract(data: SetData, baselines_body: dict, options: ExtractOptions,
         vfac = cn0_variance_factor(data.cn0_dbhz[a1], data.cn0_dbhz[a2], options.cn0_reference_dbhz) \
             if options.cn0_weighting else None
         obs = BaselineObservations(ph, cd, data.los_ecef, data.range_rate_m_s, data.wavelength_m, sigma_sd, vfac)
-        fix = solve_baseline(obs, b_pred, correction_m=corr, gate_m=options.gate_m, fix_correction_m=None)
+        if kin is None:
+            fix = solve_baseline(obs, b_pred, correction_m=corr, gate_m=options.gate_m, fix_correction_m=None)
+        else:
+            fix = _filter_fix(obs, kin, bi, corr, options)
         fixes.append(fix)
         az_list.append(az)
         el_list.append(el)
@@ -272,5 +342,5 @@ def extract(data: SetData, baselines_body: dict, options: ExtractOptions,
                          el_list)
 
 
-__all__ = ["SIGNALS", "ExtractOptions", "cn0_variance_factor", "SetInputError", "SetData", "SetExtraction", "load_set", "extract",
+__all__ = ["SIGNALS", "PRODUCERS", "ExtractOptions", "filter_run", "cn0_variance_factor", "SetInputError", "SetData", "SetExtraction", "load_set", "extract",
            "BaselineFix"]

@@ -1,6 +1,10 @@
-"""Epoch-wise ("kinematic") baselines from fixed single-difference carrier phases, with ambiguities fixed with the
-help of the reference attitude: the calibration's own residual extraction until the attitude filter's kinematic
-mode (issue 6) is plugged in through gnssatt.calibration.extract.
+"""Epoch-wise least squares of fixed single-difference carrier phases, and integer fixing by rounding from a
+predicted baseline. Two uses (gnssatt.calibration.extract):
+- with the attitude filter's kinematic mode (the default producer): the prediction is the filter's own fixed
+  baseline, so the integers are the filter's; the least squares only screens the samples (5 cm gate) and, on
+  the held-out set's epoch-wise comparison, solves the PCV-corrected epochs;
+- the "reference-aided-ablation" producer, kept ONLY as an ablation of seed 000 sec. 3.1: the prediction is the
+  reference attitude times the a priori body baseline, and the baselines are these epoch-wise least squares.
 
 Single differences (second minus first antenna, same receiver time tag, metres):
     SD_i = -e_i . b + (c - rhodot_i) dt_21 + lambda (N_i + beta) + dPCV_i + noise,
@@ -11,15 +15,17 @@ With kappa = c dt_21 taken from the code single differences (to ~1 m, so kappa r
     y_i = SD_i + kappa rhodot_i / c - lambda n_i = -e_i . b + c_e + dPCV_i + noise
 with one constant c_e per epoch and signal (c_e = kappa + lambda (k + beta)).
 
-Ambiguities. The reference attitude and the a priori baseline predict -e . b to within the baseline error and the
-PCV (a few cm, well under half an L1 cycle); per epoch z_i = (SD_i + kappa rhodot_i / c + e_i . b_pred - corr_i)
+Ambiguities. The prediction (the filter's fixed baseline, or in the ablation the reference attitude and the a
+priori baseline) gives -e . b to within the baseline error and the PCV (a few cm, well under half an L1 cycle);
+per epoch z_i = (SD_i + kappa rhodot_i / c + e_i . b_pred - corr_i)
 / lambda = N_i + (kappa + lambda beta) / lambda + small, so after removing the circular weighted mean phi of z at
 the epoch, n_i = round(z_i - phi) are the single-difference integers up to one integer common to the epoch, which
 c_e absorbs. Wrong integers show as residuals of a good fraction of a cycle and are rejected by the gate below.
 
 Baselines. Per epoch, weighted least squares of y = -e . b + c_sig with b (3) and one constant per signal;
 residuals beyond `gate_m` are removed one (the worst) per epoch and round, up to `max_rejections` rounds.
-The process-noise-free limit of the seed 000 sec. 3.1 kinematic mode (100 cm per 1 s): every epoch independent.
+In the ablation this stands in for the seed 000 sec. 3.1 kinematic mode in its limit of unbounded baseline process
+noise (every epoch independent; the filter uses 100 cm per 1 s).
 
 Implements: seed 000 sec. 2 eq. 1 (single-difference phase model) and sec. 3.1 (kinematic baselines); the
 clock/range-rate coupling of the receivers' sampling times.

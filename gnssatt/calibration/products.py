@@ -16,8 +16,11 @@ from gnssatt.calibration.baselines import baselines_document, baselines_table_cs
 __all__ = ["EXTRACTOR", "map_document", "maps_summary", "grid_summary", "per_set_rows", "held_out_table",
            "campaign_summary", "campaign_products"]
 
-EXTRACTOR = ("reference-aided kinematic (gnssatt.calibration.extract): epoch-wise integer fixing with the "
-             "reference attitude, epoch-wise least-squares baselines")
+EXTRACTOR = {"filter-kinematic": "the attitude filter's kinematic mode (seed 000 sec. 3.1; "
+                                   "gnssatt.calibration.filter_baselines): epoch-wise baselines of the filter's fixed "
+                                   "epochs, single-difference integers of its fixed baselines",
+             "reference-aided-ablation": "ABLATION, reference-aided (gnssatt.calibration.kinematic): integers rounded "
+                                         "from the reference attitude, epoch-wise least-squares baselines"}
 
 
 def map_document(platform: str, key: tuple, grid, values_mm, count, sigma_mm) -> dict:
@@ -61,9 +64,11 @@ def grid_summary(options) -> dict:
 
 
 def per_set_rows(result) -> list[dict]:
-    """Per calibration set: epochs, reference coverage, epochs used per baseline, each pass's wall and CPU s."""
+    """Per calibration set: epochs, reference coverage, epochs used per baseline, where the platform position came
+    from, each pass's wall and CPU s."""
     return [{"set": s.label, "epochs": s.n_epochs, "reference_coverage": round(s.coverage, 4),
              "epochs_used": {f"{a}>{b}": n for (a, b), n in s.n_epochs_used.items()},
+             "platform_position": getattr(s, "position_source", ""),
              "pass1_seconds": round(r["seconds"], 3), "pass1_cpu_s": round(r.get("cpu_s", np.nan), 3),
              "pass2_seconds": round(q["seconds"], 3), "pass2_cpu_s": round(q.get("cpu_s", np.nan), 3)}
             for s, r, q in zip(result.stats, result.pass1_runs, result.pass2_runs)]
@@ -105,7 +110,7 @@ def campaign_summary(result, products_s: float = 0.0, workers: dict | None = Non
     runtime's per-worker record when given (`workers`)."""
     summary = {
         "platform": result.platform.name, "sets": len(result.sets), "held_out_set": list(result.held_out_set),
-        "extractor": EXTRACTOR, "grid": grid_summary(result.options),
+        "extractor": EXTRACTOR[result.options.extract.producer], "grid": grid_summary(result.options),
         "baselines": baselines_document(result.platform.name, result.baselines)["baselines"],
         "maps": maps_summary(result), "timing_s": _timing(result, products_s), "per_set": per_set_rows(result),
         "reader_warnings": list(getattr(result, "reader_warnings", []))}

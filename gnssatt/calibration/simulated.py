@@ -92,14 +92,15 @@ def compare_maps_mm(values_mm: np.ndarray, truth_mm: np.ndarray, weight: np.ndar
 def truth_split(truth: dict, pair: tuple, az_deg: np.ndarray, el_deg: np.ndarray, weights: dict,
                 boresight_first=(0.0, 0.0, -1.0)) -> tuple[np.ndarray, dict]:
     """The injected truth of a baseline in the calibration's decomposition (gnssatt.calibration.decomposition):
-    (baseline (3,) m, {signal: map (n_el, n_az) mm}) such that, over the bins with weight > 0 (bin counts of the
-    estimated maps), the maps have no least-squares part a_f - g.db, exactly as the calibration splits its own
-    estimate. The physical model per frequency (ARP + PCO baseline b_f, injected differential PCV) is the
+    (baseline (3,) m, {signal: map (n_el, n_az) mm}) such that, solid-angle weighted over the bins with
+    weight > 0 (the bins where the estimated maps have a value: the same observed sky), the maps have no
+    least-squares part a_f - g.db, exactly as the calibration splits its own estimate (CONVENTIONS.md). The physical model per frequency (ARP + PCO baseline b_f, injected differential PCV) is the
     single-difference term T_f(az, el) = -g.b_f + PCV_f; this function only re-expresses it.
 
-    Args: az_deg (n_az,), el_deg (n_el,) bin centres; weights: signal -> (n_el, n_az) bin counts (0 = empty).
+    Args: az_deg (n_az,), el_deg (n_el,) bin centres (a regular grid); weights: signal -> (n_el, n_az), > 0 where
+        the estimated map has a value (e.g. its bin counts there), 0 = empty.
     """
-    from gnssatt.calibration.decomposition import offset_split
+    from gnssatt.calibration.decomposition import bin_solid_angle_sr, offset_split
     from gnssatt.gnss.geometry import R_antenna_from_body
     from gnssatt.sim.observables import bilinear_pcv_mm
 
@@ -108,13 +109,14 @@ def truth_split(truth: dict, pair: tuple, az_deg: np.ndarray, el_deg: np.ndarray
     d_ant = np.stack([np.cos(e) * np.cos(a), np.cos(e) * np.sin(a), np.sin(e)], axis=-1).reshape(-1, 3)
     g = d_ant @ R_antenna_from_body(np.asarray(boresight_first, float))
     sigs = sorted(weights)
+    solid = bin_solid_angle_sr(az_deg, el_deg).ravel()
     T, W = [], []
     for sig in sigs:
         doc = truth["pcv"][tuple(pair) + (sig,)]
         grid = np.array([[np.nan if v is None else v for v in row] for row in doc["values_mm"]], float)
         pcv = bilinear_pcv_mm(grid, A, E).ravel()
         b_f = truth["baselines"][tuple(pair)]["per_frequency_m"][sig]
-        w = np.asarray(weights[sig], float).ravel()
+        w = np.where(np.asarray(weights[sig], float).ravel() > 0, solid, 0.0)
         T.append(np.where(w > 0, -(g @ b_f) * 1e3 + pcv, np.nan))
         W.append(w)
     db_mm, a_f = offset_split(T, W, g)

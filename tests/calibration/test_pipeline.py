@@ -69,8 +69,10 @@ def test_campaign_recovers_maps_and_is_deterministic(tmp_path, pcv_campaign):
             # 10 x 5 deg bins averaging a bilinear 5-deg pattern with up to 50 mm p-p: a few mm of smoothing
             assert rms < 2.5, (first, second, sig, rms)
             assert np.nanmax(values) - np.nanmin(values) > 15.0  # a real pattern, not a flat map
-    # the baselines against the injected truth in the calibration's baseline/map split (no twin needed): without
-    # noise only the within-bin spread of the samples (10 x 5 deg bins) separates them
+    # the baselines against the injected truth in the calibration's baseline/map split (CONVENTIONS.md, no twin
+    # needed): without noise only the within-bin spread of the samples (10 x 5 deg bins, g taken at the bin centres)
+    # separates them; the solid-angle weights of the split give the low bins, where that spread matters most, more
+    # weight than the former count weights (z -0.25 mm here, was < 0.2): 0.3 mm is issue 21's figure
     for first, second in cal:
         counts = {}
         for sig in ("L1", "L2"):
@@ -80,7 +82,7 @@ def test_campaign_recovers_maps_and_is_deterministic(tmp_path, pcv_campaign):
         b_true, maps_true = truth_split(truth, (first, second), doc["azimuth_deg"], doc["elevation_deg"], counts)
         err_mm = (cal[(first, second)] - b_true) * 1e3
         print(first, second, "baseline - truth (split) mm", np.round(err_mm, 3))
-        assert np.all(np.abs(err_mm) < 0.2), err_mm
+        assert np.all(np.abs(err_mm) < 0.3), err_mm
         phys_mm = (truth["baselines"][(first, second)]["mean_m"] - b_true) * 1e3
         assert np.max(np.abs(phys_mm)) > 1.0, phys_mm   # the PCV's offset-like part is in the baseline
     res = json.loads(prod["residual_statistics.json"])

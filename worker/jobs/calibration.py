@@ -74,6 +74,12 @@ class CalibrationConfig(BaseModel):
                                           description="Fraction of a set's epochs the reference must cover.")
     batch_s: float = Field(300.0, ge=10.0, le=86400.0,
                            description="Batch length of the batch-means sigma of the baselines.")
+    epoch_baselines: Literal["filter-kinematic", "reference-aided-ablation"] = Field(
+        "filter-kinematic",
+        description="Where the epoch-wise baselines come from: 'filter-kinematic', the attitude filter in kinematic "
+                    "mode (seed 000 sec. 3.1: baseline process noise, the filter's own integers); "
+                    "'reference-aided-ablation', ONLY an ablation: the former processor that rounds the integers "
+                    "from the reference attitude and solves each epoch by least squares.")
     max_deviation_mm: float = Field(50.0, gt=0.0, le=1000.0,
                                     description="An epoch-wise baseline further than this from the a priori in any "
                                                 "component is left out (a wrong fix).")
@@ -105,7 +111,8 @@ class CalibrationConfig(BaseModel):
 JOB_TYPE = JobType(
     name="calibration", title="Calibrate antenna baselines and differential PCV maps",
     description="From many observation sets of one platform, each with a reference attitude (star tracker): "
-                "epoch-wise baselines rotated into the body frame and averaged (seed 000 Table 3), then "
+                "epoch-wise baselines of the attitude filter's kinematic mode rotated into the body frame and "
+                "averaged (seed 000 sec. 3.1, Table 3), then "
                 "differential phase-centre-variation maps per antenna pair and frequency, iterated with the "
                 "previous map applied. Fans out one task per set over all workers.",
     config_model=CalibrationConfig, pipeline="worker.jobs.calibration:run",
@@ -127,7 +134,8 @@ def _options(cfg: dict):
     ext = ExtractOptions(signals=tuple(cfg["frequencies"]), sigma_phase_m=cfg["sigma_phase_mm"] * 1e-3,
                          cn0_mask_dbhz={"L1": cfg["cn0_mask_l1_dbhz"], "L2": cfg["cn0_mask_l2_dbhz"]},
                          elevation_mask_antenna_deg=cfg["elevation_mask_antenna_deg"],
-                         max_reference_gap_s=cfg["max_reference_gap_s"])
+                         max_reference_gap_s=cfg["max_reference_gap_s"],
+                         producer=cfg.get("epoch_baselines", "filter-kinematic"))
     grid = Grid2D.regular(cfg["azimuth_step_deg"], cfg["elevation_step_deg"],
                           y_range_deg=(cfg["elevation_min_deg"], cfg["elevation_max_deg"]))
     return CampaignOptions(ext, grid, min_count=cfg["min_count"], tolerance_mm=cfg["tolerance_mm"],
