@@ -219,7 +219,8 @@ class FilterRun:
     def _init_noise_model(self, q_omega):
         """Process noise (Table 1, the manoeuvre detector) and the measurement noise model's estimator state."""
         s, n_bl, n_sig = self.s, self.n_bl, self.n_sig
-        self.q_w = q_w = (s.table1.sigma_omega_deg_s * DEG) ** 2 / s.table1.tau_omega_s          # rad^2/s^2 per s
+        sig_w = s.sigma_omega_with_acceleration_deg_s if self.accel else s.table1.sigma_omega_deg_s
+        self.q_w = q_w = (sig_w * DEG) ** 2 / s.table1.tau_omega_s          # rad^2/s^2 per s
         self.adapter = ManoeuvreDetector(
             q_w, (s.adaptive.sigma_omega_raised_deg_s * DEG) ** 2 / s.table1.tau_omega_s, n_bl, s.adaptive.threshold,
             s.adaptive.mix_at, s.adaptive.sigma_acc_deg_s2 * DEG, s.adaptive.hold_epochs,
