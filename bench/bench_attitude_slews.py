@@ -63,9 +63,10 @@ def pass_rows(tmp: Path, minutes: float) -> list[str]:
     runs = {"forward": {}, "forward + acceleration": {"angular_acceleration_state": True},
             "smoother, adaptive noise": RUNS["smoother, adaptive noise"],
             "+ angular acceleration state": RUNS["+ angular acceleration state"]}
-    out = ["", f"The four {minutes:.0f}-minute passes (bench_attitude_lengths.py, simulator seed {SEED}, \"all phases\", "
-           "dynamic mode):", "", "| pass | run | wrong integers | attitude fix rate | std yaw / pitch / roll deg | "
-           "max deg | tilt chi-square first 10 / rest |", "|---|---|---|---|---|---|---|"]
+    out = ["", f"The four {minutes:.0f}-minute passes (bench_attitude_lengths.py, simulator seed {SEED}, "
+           "\"all phases\", dynamic mode):", "",
+           "| pass | run | wrong integers | attitude fix rate | std yaw / pitch / roll deg | max deg | "
+           "tilt chi-square first 10 / rest |", "|---|---|---|---|---|---|---|"]
     for label, (preset, over) in PASSES.items():
         d = tmp / f"pass_{label}"
         simulate_scenario(preset, d, seed=SEED, overrides={"duration_s": minutes * 60.0, **over})
@@ -99,9 +100,9 @@ def main() -> None:
     lines = [f"Machine: {machine_line()}. One BLAS thread. Seed 000 Fig. 6's slews (bench_attitude.py `SLEWS`), clean, "
              f"simulator seeds {', '.join(map(str, seeds))}, dynamic mode, \"all phases\"; `smoother_adaptive_noise` "
              "without and with `angular_acceleration_state` (its defaults: jerk 0.0005 deg/s^2 per sqrt(s), omega "
-             "random walk 0.01 deg/s per sqrt(s), sigma0 0.05 deg/s^2). Max error over every fixed epoch from the first "
-             "one (s after the first fix), max after the first 30 s, smoother tilt chi-square (2 dof) over the first "
-             "10 fixed epochs / the rest:", "",
+             "random walk 0.01 deg/s per sqrt(s), sigma0 0.05 deg/s^2). Max error over every fixed epoch from the "
+             "first one (s after the first fix), max after the first 30 s, smoother tilt chi-square (2 dof) over "
+             "the first 10 fixed epochs / the rest:", "",
              "| slew | seed | settings | max error deg (s after fix) | max after 30 s | chi-square first 10 / rest |",
              "|---|---|---|---|---|---|"]
     summary = {name: [] for name in RUNS}

@@ -4,6 +4,7 @@ with the right integers and an attitude no worse than without it."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from gnssatt.attitude.angular_acceleration import propagate_acceleration, sub_transition
 from gnssatt.attitude.process import load_inputs, process
@@ -61,3 +62,22 @@ def test_slew_with_the_acceleration_state(slew_pass):
     assert out[True][0] >= out[False][0], out
     assert out[True][1] < 0.3, out
     assert out[True][2] < 1.1 * out[False][2], out
+
+
+@pytest.mark.xfail(strict=True, reason="issue 21 item 3 not met: the first fixed epoch of this slew is 0.43 deg off "
+                                       "with the option (0.61 without), smoother tilt chi-square 5.2 over the first "
+                                       "10 fixed epochs (docs/attitude.md 'Angular-acceleration state')")
+def test_slew_target_from_the_first_fixed_epoch(slew_pass):
+    """The issue's target on the short slew: with angular_acceleration_state and smoother_adaptive_noise, every fixed
+    epoch from the first one below 0.3 deg, and the smoother's tilt chi-square (2 dof) over the first 10 fixed epochs
+    within 1.0-1.5 (honest sigmas from the first fixed epoch)."""
+    from gnssatt.attitude.truth import attitude_errors_deg
+
+    sol = process(load_inputs(set_files(slew_pass)), AttitudeSettings.preset(
+        "all-phases", mode="dynamic", smoother=True, smoother_adaptive_noise=True, angular_acceleration_state=True))
+    ang, de = attitude_errors_deg(slew_pass, sol)
+    fi = np.flatnonzero(sol.att_fixed)
+    z = de[fi[:10], 1:3] / sol.sigma_euler_deg[fi[:10], 1:3]
+    chi2 = (z ** 2).sum(1)
+    assert ang[fi].max() < 0.3
+    assert 1.0 <= chi2.mean() <= 1.5
