@@ -76,13 +76,16 @@ class FilterResult:
 class FilterState:
     """x, P and the index maps (seed 000 eq. 1); the ambiguity states and the arcs they belong to."""
 
-    def __init__(self, n_bl: int, n_sat: int, n_sig: int, dynamic: bool, phase_clock: bool):
+    def __init__(self, n_bl: int, n_sat: int, n_sig: int, dynamic: bool, phase_clock: bool,
+                 acceleration: bool = False):
         self.n_bl, self.n_sat, self.n_sig, self.dynamic = n_bl, n_sat, n_sig, dynamic
+        # states of the rotation ahead of the baselines: omega (3) [+ alpha (3), gnssatt.attitude.angular_acceleration]
+        self.n_rate = (6 if acceleration else 3) if dynamic else 0
         self.off_w = 0
         n_pc = n_sig if phase_clock else 0
         n_bias = max(n_sig - 1, 0)               # inter-signal (frequency, system) code bias vs signal 1
         blk = 4 + n_bias + n_pc
-        base0 = 3 if dynamic else 0
+        base0 = self.n_rate
         # baseline j: b at b_off[j]..+2, clock +3, [code bias of signals 2.. +4..], [phase clock per signal]
         self.b_off = base0 + blk * np.arange(n_bl)
         self.clk = self.b_off + 3
@@ -178,7 +181,9 @@ class FilterRun:
         n_ant, self.n_ep, self.n_sat, self.n_sig = pobs.code_m.shape
         n_bl = self.n_bl = len(baselines)
         self.dynamic = s.mode == "dynamic"
-        self.st = FilterState(n_bl, self.n_sat, self.n_sig, self.dynamic, s.noise.separate_phase_clock)
+        self.accel = self.dynamic and bool(s.angular_acceleration_state)
+        self.st = FilterState(n_bl, self.n_sat, self.n_sig, self.dynamic, s.noise.separate_phase_clock,
+                              self.accel)
         self.lam = np.ascontiguousarray(pobs.wavelength_m, dtype=np.float64)
         t_s = (pobs.time - pobs.time[0]) if self.n_ep else np.zeros(0)
         self.t_s = np.asarray(t_s, dtype=np.float64)
@@ -208,16 +213,21 @@ class FilterRun:
             st.P[st.bias[j, 1:], st.bias[j, 1:]] = s.table1.sigma0_code_bias_m ** 2
         if self.dynamic:
             st.P[0:3, 0:3] = np.eye(3) * (s.table1.sigma0_omega_deg_s * DEG) ** 2
+        if self.accel:
+            st.P[3:6, 3:6] = np.eye(3) * (s.sigma0_angular_acceleration_deg_s2 * DEG) ** 2
 
     def _init_noise_model(self, q_omega):
         """Process noise (Table 1, the manoeuvre detector) and the measurement noise model's estimator state."""
         s, n_bl, n_sig = self.s, self.n_bl, self.n_sig
-        self.q_w = q_w = (s.table1.sigma_omega_deg_s * DEG) ** 2 / s.table1.tau_omega_s          # rad^2/s^2 per s
+        sig_w = s.sigma_omega_with_acceleration_deg_s if self.accel else s.table1.sigma_omega_deg_s
+        self.q_w = q_w = (sig_w * DEG) ** 2 / s.table1.tau_omega_s          # rad^2/s^2 per s
         self.adapter = ManoeuvreDetector(
             q_w, (s.adaptive.sigma_omega_raised_deg_s * DEG) ** 2 / s.table1.tau_omega_s, n_bl, s.adaptive.threshold,
             s.adaptive.mix_at, s.adaptive.sigma_acc_deg_s2 * DEG, s.adaptive.hold_epochs,
             s.rk4_step_s, not (s.smoothing.enabled or s.smoothing.adaptive_noise)) \
-            if self.dynamic and s.adaptive.enabled else None
+            if self.dynamic and s.adaptive.enabled and not self.accel else None
+        # angular-acceleration random walk (rad^2/s^4 per s) with angular_acceleration_state
+        self.q_alpha = (s.sigma_angular_jerk_deg_s3 * DEG) ** 2 / s.table1.tau_omega_s
         self.q_b = s.table1.sigma_baseline_kinematic_m ** 2 / s.table1.tau_baseline_s       # m^2 per s
         self.var_clk = (s.table1.sigma_clock_s * C_M_S) ** 2
         self.Qw_iso = np.eye(3) * q_w
@@ -252,7 +262,7 @@ class FilterRun:
         self.out_n = np.zeros((n_ep, n_bl), np.int64)
         self.out_ratio = np.full((n_ep, n_bl), np.nan)
         self.out_w = np.full((n_ep, 3), np.nan)
-        n_sub = self.n_sub = 3 + 3 * n_bl
+        n_sub = self.n_sub = max(self.st.n_rate, 3) + 3 * n_bl
         self.record = self.dynamic and (self.s.smoothing.enabled or self.s.smoothing.adaptive_noise)
         if self.record:
             self.sm_xp, self.sm_xf = np.full((n_ep, n_sub), np.nan), np.full((n_ep, n_sub), np.nan)
@@ -329,7 +339,8 @@ class FilterRun:
         self.bs_b_T = np.asfortranarray(bs[self.ib].T)   # former `@ boresight_body[ia].T`: same BLAS call)
         self.z_f, self.z_i = np.zeros(0), np.zeros(2 * n_sig + 1, np.int64)
         self.w_idx3 = np.arange(3)
-        self.sub_w_b = np.concatenate([self.w_idx3, self.all_b_idx])   # omega and baselines (smoother's sub-state)
+        # omega [, alpha] and baselines (the smoother's sub-state)
+        self.sub_w_b = np.concatenate([np.arange(max(self.st.n_rate, 3)), self.all_b_idx])
         self.ix_sub = np.ix_(self.sub_w_b, self.sub_w_b)
 
     def set_residual_buffers(self, ints: np.ndarray, floats: np.ndarray) -> None:

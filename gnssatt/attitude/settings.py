@@ -261,6 +261,21 @@ class AttitudeSettings:
              "constraint of this sigma after each update (gnssatt.attitude.length_constraint; without it the "
              "lengths drift by mm over an hour; 5e-4 keeps them within 0.07 mm on the clean 106-min pass); 0: off "
              "(m).", ge=0, le=1)
+    angular_acceleration_state: bool = _f(
+        False, "Dynamic mode: an angular acceleration (3 states, rad/s^2) after the angular velocity, a random walk "
+               "of rate sigma_angular_jerk_deg_s3 (constant-acceleration model, gnssatt.attitude.angular_acceleration;"
+               " the smoother then passes constant angular accelerations unbiased up to the edge of a run). Not "
+               "combined with adaptive_omega_noise (the manoeuvre detector is off with it). true / false.")
+    sigma_angular_jerk_deg_s3: float = _f(
+        0.0005, "With angular_acceleration_state: random walk of the angular acceleration, sigma per tau_omega_s "
+               "(deg/s^2 per sqrt(s), i.e. deg/s^3 as a rate); 0 < value <= 10.", gt=0, le=10)
+    sigma_omega_with_acceleration_deg_s: float = _f(
+        0.01, "With angular_acceleration_state: the angular-velocity random walk per tau_omega_s in place of Table "
+              "1's sigma_omega_deg_s (deg/s; the acceleration state carries the slow changes); 0 <= value <= 100.",
+        ge=0, le=100)
+    sigma0_angular_acceleration_deg_s2: float = _f(
+        0.05, "With angular_acceleration_state: initial sigma of the angular acceleration, also after an omega reset "
+              "(deg/s^2); 0 < value <= 100.", gt=0, le=100)
     rk4_step_s: float = _f(1.0, "Step of the Runge-Kutta propagation of the attitude between epochs (s).",
                            gt=0, le=60)
     initial_attitude: Literal["earth-pointing", "level", "given"] = _f(

@@ -83,14 +83,15 @@ def smooth_filter_result(fr, settings=None) -> int:
     xs, Ps = rts_smooth(sd["x_post"], sd["P_post"], sd["x_prior"], sd["P_prior"], sd["Phi"], start)
     ep = np.flatnonzero(linked & np.isfinite(xs).all(1))
     fr.omega_ecef_rad_s[ep] = xs[ep, 0:3]
-    b_s = xs[ep, 3:].reshape(ep.size, n_bl, 3)
+    r0 = xs.shape[1] - 3 * n_bl                      # omega (3) [+ alpha (3)] ahead of the baselines
+    b_s = xs[ep, r0:].reshape(ep.size, n_bl, 3)
     if settings is not None and settings.length_constraint_sigma_m > 0:
         # the forward filter's lengths (held to the body length, gnssatt.attitude.length_constraint)
         b_s = rescale_lengths(b_s, np.linalg.norm(fr.b_ecef_m[ep], axis=-1))
     fr.b_ecef_m[ep] = b_s
     f = np.clip(sd.get("corr_share", np.zeros(n_ep)), 0.0, 1.0)[ep, None, None]
-    P_post = sd["P_post"][ep, 3:, 3:]
-    fr.P_b_m2[ep] = Ps[ep, 3:, 3:] + f * (P_post - Ps[ep, 3:, 3:])
+    P_post = sd["P_post"][ep, r0:, r0:]
+    fr.P_b_m2[ep] = Ps[ep, r0:, r0:] + f * (P_post - Ps[ep, r0:, r0:])
     sd["epochs_smoothed"] = int(ep.size)
     return int(ep.size)
 

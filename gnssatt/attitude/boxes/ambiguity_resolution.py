@@ -101,9 +101,13 @@ def _reset_omega(run: FilterRun, k: int, j: int, turn_deg: float) -> None:
     """The angular velocity was learnt with a baseline that the fix has just turned: its estimate and covariance
     (linearised about the wrong baseline) are not to be trusted; back to Table 1's sigma0."""
     st = run.st
-    st.P[0:3, :] = 0.0
-    st.P[:, 0:3] = 0.0
+    nr = st.n_rate                                   # omega [and alpha]
+    st.P[0:nr, :] = 0.0
+    st.P[:, 0:nr] = 0.0
     st.P[0:3, 0:3] = np.eye(3) * (run.s.table1.sigma0_omega_deg_s * DEG) ** 2
+    if nr == 6:
+        st.x[3:6] = 0.0
+        st.P[3:6, 3:6] = np.eye(3) * (run.s.sigma0_angular_acceleration_deg_s2 * DEG) ** 2
     run.events.add(k, "omega_reset", j, detail=f"the fix turned the baseline by {turn_deg:.2f} deg")
     run.mark_segment_start(k)
     if run.adapter is not None:

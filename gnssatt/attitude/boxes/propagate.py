@@ -2,12 +2,14 @@
 
 Implements: seed 000 sec. 2 eq. 2 (b' = omega x b by fixed-step RK4, omega a random walk, Table 1 sigma 0.03 deg/s
 per tau 1 s; the differential clocks white noise, reset to 1 us each epoch); kinematic mode: the baselines a random
-walk (sec. 4.1). P <- Phi P Phi^T + Q (standard EKF time update).
+walk (sec. 4.1). P <- Phi P Phi^T + Q (standard EKF time update). With angular_acceleration_state, omega += alpha dt
+first (gnssatt.attitude.angular_acceleration).
 """
 from __future__ import annotations
 
 import numpy as np
 
+from gnssatt.attitude.angular_acceleration import propagate_acceleration, sub_transition
 from gnssatt.attitude.filter_state import EpochData, FilterRun
 from gnssatt.attitude.qc_kernels import propagate_dynamic, propagate_kinematic, reset_white_clocks
 
@@ -27,11 +29,15 @@ def propagate(run: FilterRun, ep: EpochData) -> None:
     # then the white-noise clocks are reset (gnssatt.attitude.qc_kernels)
     Qw = run.q_omega[k] if run.q_omega is not None else (run.adapter.q_rate(dt) if run.adapter is not None
                                                           else run.Qw_iso)       # (3, 3) rad^2/s^3
+    if run.accel:        # omega += alpha dt first (gnssatt.attitude.angular_acceleration)
+        propagate_acceleration(st.x, st.P, run.q_alpha, float(dt))
     Pbb, Pbw = propagate_dynamic(st.x, st.P, run.w_idx3, run.b_idx, Qw, float(dt), run.s.rk4_step_s, st.white,
                                  run.var_clk)
     if run.record:
-        run.sm_Phi[k] = np.eye(run.n_sub)
+        Phi = np.eye(run.n_sub)
+        r0 = run.n_sub - 3 * run.n_bl
         for j in range(run.n_bl):
-            run.sm_Phi[k, 3 + 3 * j:6 + 3 * j, 3 + 3 * j:6 + 3 * j] = Pbb
-            run.sm_Phi[k, 3 + 3 * j:6 + 3 * j, 0:3] = Pbw[j]
+            Phi[r0 + 3 * j:r0 + 3 + 3 * j, r0 + 3 * j:r0 + 3 + 3 * j] = Pbb
+            Phi[r0 + 3 * j:r0 + 3 + 3 * j, 0:3] = Pbw[j]
+        run.sm_Phi[k] = sub_transition(Phi, float(dt)) if run.accel else Phi
         run.sm_xp[k], run.sm_Pp[k], run.sm_start[k], run.sm_dt[k] = st.x[run.sub_w_b], st.P[run.ix_sub], False, dt

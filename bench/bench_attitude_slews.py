@@ -1,0 +1,137 @@
+"""Slews from the first fixed epoch (issue 21 item 3): seed 000 Fig. 6's two manoeuvres (bench_attitude.SLEWS), clean,
+simulator seeds 0-7, dynamic mode, "all phases", `smoother_adaptive_noise` without and with the angular-acceleration
+state (settings.angular_acceleration_state, gnssatt/attitude/angular_acceleration.py, its default noise).
+
+Per run: max attitude error over every fixed epoch (from the first fixed epoch) with its time after the first fix,
+max after the first 30 s, and the smoother's tilt chi-square (pitch and roll error over their predicted sigmas,
+squared and summed: 2 degrees of freedom) as the mean over the first 10 fixed epochs and over the rest.
+
+With --passes also the four 106-minute passes of bench_attitude_lengths.py (wrong integers, attitude std, chi-square).
+
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_slews.py [--seeds 0,1,2,3,4,5,6,7] [--passes] [--write]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+
+from bench._report import machine_line, replace_section  # noqa: E402
+from bench.bench_attitude import CLEAN, SLEWS, files_of  # noqa: E402
+
+RUNS = {"smoother, adaptive noise": {"smoother": True, "smoother_adaptive_noise": True},
+        "+ angular acceleration state": {"smoother": True, "smoother_adaptive_noise": True,
+                                         "angular_acceleration_state": True}}
+
+
+def figures(d: Path, inputs, cfg: dict) -> dict:
+    """Max error (deg) over fixed epochs and its time after the first fix (s), max after 30 s, tilt chi-square."""
+    from gnssatt.attitude.process import process
+    from gnssatt.attitude.settings import AttitudeSettings
+    from gnssatt.attitude.truth import attitude_errors_deg
+
+    sol = process(inputs, AttitudeSettings.preset("all-phases", mode="dynamic", **cfg))
+    ang, de = attitude_errors_deg(d, sol)
+    fi = np.flatnonzero(sol.att_fixed)
+    t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]
+    t0 = t[fi[0]]
+    chi2 = (de[:, 1] / sol.sigma_euler_deg[:, 1]) ** 2 + (de[:, 2] / sol.sigma_euler_deg[:, 2]) ** 2
+    i = fi[int(np.argmax(ang[fi]))]
+    late = fi[t[fi] > t0 + 30.0]
+    return {"max": float(ang[i]), "at_s": float(t[i] - t0), "late": float(ang[late].max()),
+            "chi2_first": float(chi2[fi[:10]].mean()), "chi2_rest": float(chi2[fi[10:]].mean())}
+
+
+def pass_rows(tmp: Path, minutes: float) -> list[str]:
+    """The four 106-minute passes of bench_attitude_lengths.py (seed 0, "all phases", dynamic mode): forward and
+    smoother_adaptive_noise, each without and with the acceleration state: wrong integers against truth/arcs.csv,
+    attitude fix rate, yaw / pitch / roll error std over fixed epochs, max error, tilt chi-square first 10 / rest."""
+    from bench.bench_attitude_lengths import PASSES, SEED
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
+    from gnssatt.attitude.truth import attitude_errors_deg, score_fixes
+    from gnssatt.sim import simulate_scenario
+
+    runs = {"forward": {}, "forward + acceleration": {"angular_acceleration_state": True},
+            "smoother, adaptive noise": RUNS["smoother, adaptive noise"],
+            "+ angular acceleration state": RUNS["+ angular acceleration state"]}
+    out = ["", f"The four {minutes:.0f}-minute passes (bench_attitude_lengths.py, simulator seed {SEED}, "
+           "\"all phases\", dynamic mode):", "",
+           "| pass | run | wrong integers | attitude fix rate | std yaw / pitch / roll deg | max deg | "
+           "tilt chi-square first 10 / rest |", "|---|---|---|---|---|---|---|"]
+    for label, (preset, over) in PASSES.items():
+        d = tmp / f"pass_{label}"
+        simulate_scenario(preset, d, seed=SEED, overrides={"duration_s": minutes * 60.0, **over})
+        inputs = load_inputs(files_of(d))
+        for name, cfg in runs.items():
+            sol = process(inputs, AttitudeSettings.preset("seed000", **{**ALL_PHASES, "mode": "dynamic", **cfg}))
+            ang, de = attitude_errors_deg(d, sol)
+            f = sol.att_fixed
+            fi = np.flatnonzero(f)
+            sc = score_fixes(sol, d / "truth")
+            chi2 = (de[:, 1] / sol.sigma_euler_deg[:, 1]) ** 2 + (de[:, 2] / sol.sigma_euler_deg[:, 2]) ** 2
+            sd = de[f].std(0)
+            out.append(f"| {label} | {name} | {sc['wrong_constraints']} of {sc['constraints']} | {f.mean():.4f} | "
+                       f"{sd[0]:.4f} / {sd[1]:.4f} / {sd[2]:.4f} | {ang[f].max():.2f} | "
+                       f"{chi2[fi[:10]].mean():.2f} / {chi2[fi[10:]].mean():.2f} |")
+            print(out[-1], flush=True)
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--seeds", default="0,1,2,3,4,5,6,7")
+    ap.add_argument("--write", action="store_true")
+    ap.add_argument("--passes", action="store_true", help="also the four 106-minute passes")
+    ap.add_argument("--minutes", type=float, default=106.0, help="length of those passes")
+    args = ap.parse_args()
+    from gnssatt.attitude.process import load_inputs
+    from gnssatt.sim import simulate_scenario
+
+    seeds = [int(x) for x in args.seeds.split(",")]
+    lines = [f"Machine: {machine_line()}. One BLAS thread. Seed 000 Fig. 6's slews (bench_attitude.py `SLEWS`), clean, "
+             f"simulator seeds {', '.join(map(str, seeds))}, dynamic mode, \"all phases\"; `smoother_adaptive_noise` "
+             "without and with `angular_acceleration_state` (its defaults: jerk 0.0005 deg/s^2 per sqrt(s), omega "
+             "random walk 0.01 deg/s per sqrt(s), sigma0 0.05 deg/s^2). Max error over every fixed epoch from the "
+             "first one (s after the first fix), max after the first 30 s, smoother tilt chi-square (2 dof) over "
+             "the first 10 fixed epochs / the rest:", "",
+             "| slew | seed | settings | max error deg (s after fix) | max after 30 s | chi-square first 10 / rest |",
+             "|---|---|---|---|---|---|"]
+    summary = {name: [] for name in RUNS}
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, over in SLEWS.items():
+            for seed in seeds:
+                d = Path(tmp) / f"{label.split()[0].replace('/', '')}_{seed}"
+                simulate_scenario("slew", d, seed=seed, overrides={**over, **CLEAN})
+                inputs = load_inputs(files_of(d))
+                for name, cfg in RUNS.items():
+                    r = figures(d, inputs, cfg)
+                    summary[name].append(r)
+                    lines.append(f"| {label} | {seed} | {name} | {r['max']:.2f} ({r['at_s']:.0f} s) | {r['late']:.2f} "
+                                 f"| {r['chi2_first']:.2f} / {r['chi2_rest']:.2f} |")
+                    print(lines[-1], flush=True)
+        pass_lines = pass_rows(Path(tmp), args.minutes) if args.passes else []
+    lines.append("")
+    for name, rs in summary.items():
+        mx = np.array([r["max"] for r in rs])
+        c1 = np.array([r["chi2_first"] for r in rs])
+        lines.append(f"- {name}: max error over all fixed epochs above 0.3 deg on {int((mx > 0.3).sum())} of {mx.size} "
+                     f"runs (worst {mx.max():.2f}, median {np.median(mx):.2f}); chi-square over the first 10 fixed "
+                     f"epochs {c1.min():.2f}-{c1.max():.2f} (median {np.median(c1):.2f}).")
+    lines += pass_lines
+    lines += ["", "Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_slews.py --passes --write`."]
+    print("\n".join(lines[-4:]))
+    if args.write:
+        replace_section(ROOT / "docs" / "BENCHMARKS.md", "Slews from the first fixed epoch", "\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,83 @@
+"""The angular-acceleration state of dynamic mode (gnssatt.attitude.angular_acceleration, issue 21 item 3): the time
+update's algebra against the model it states, and on a short clean slew the option runs through filter and smoother
+with the right integers and an attitude no worse than without it."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from gnssatt.attitude.angular_acceleration import propagate_acceleration, sub_transition
+from gnssatt.attitude.process import load_inputs, process
+from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
+from tests.attitude.conftest import set_files
+
+
+def test_propagation_is_the_constant_acceleration_transition():
+    """omega += alpha dt exactly; P equals A P A^T + q dt on alpha with A = I + dt E_omega,alpha (dense reference);
+    the baselines' rows untouched."""
+    rng = np.random.default_rng(3)
+    n = 9
+    M = rng.normal(size=(n, n))
+    P = M @ M.T
+    x = rng.normal(size=n)
+    A = np.eye(n)
+    A[0:3, 3:6] = 2.0 * np.eye(3)
+    P_ref = A @ P @ A.T
+    P_ref[3:6, 3:6] += np.eye(3) * 1e-6 * 2.0
+    x_ref = A @ x
+    propagate_acceleration(x, P, 1e-6, 2.0)
+    assert np.allclose(x, x_ref, atol=1e-15) and np.allclose(P, P_ref, atol=1e-12)
+
+
+def test_sub_transition_is_rotation_after_acceleration():
+    """Phi_rot A on the sub-state [omega, alpha, b]: alpha's columns = dt x omega's, everything else Phi_rot's."""
+    rng = np.random.default_rng(4)
+    Phi_rot = np.eye(9)
+    Phi_rot[6:9, 6:9] = np.eye(3) + 0.01 * rng.normal(size=(3, 3))
+    Phi_rot[6:9, 0:3] = rng.normal(size=(3, 3))
+    A = np.eye(9)
+    A[0:3, 3:6] = 0.5 * np.eye(3)
+    assert np.allclose(sub_transition(Phi_rot, 0.5), Phi_rot @ A, atol=1e-15)
+
+
+def test_slew_with_the_acceleration_state(slew_pass):
+    """Clean 6-min slew (seed 000 Fig. 6's preset), dynamic mode with the smoother: with angular_acceleration_state
+    the run keeps every fix (fixed share after the first fix >= the run without it), and the smoothed attitude's
+    error after the first 30 s of fix stays below 0.3 deg (the slews' target) and within 10 % of the run without
+    it (95th percentile, deg)."""
+    from gnssatt.attitude.truth import attitude_errors_deg
+
+    inputs = load_inputs(set_files(slew_pass))
+    out = {}
+    for acc in (False, True):
+        sol = process(inputs, AttitudeSettings.preset("all-phases", mode="dynamic", smoother=True,
+                                                      angular_acceleration_state=acc))
+        ang, _ = attitude_errors_deg(slew_pass, sol)
+        f = sol.att_fixed
+        i0 = int(np.argmax(f))
+        late = f.copy()
+        late[:i0 + 30] = False
+        assert sol.fr.smoother_data["x_post"].shape[1] == (6 if acc else 3) + 3 * sol.fr.fixed.shape[1]
+        out[acc] = (f[i0:].mean(), float(ang[late].max()), float(np.percentile(ang[late], 95)))
+    assert out[True][0] >= out[False][0], out
+    assert out[True][1] < 0.3, out
+    assert out[True][2] < 1.1 * out[False][2], out
+
+
+@pytest.mark.xfail(strict=True, reason="issue 21 item 3 not met: the first fixed epoch of this slew is 0.43 deg off "
+                                       "with the option (0.61 without), smoother tilt chi-square 5.2 over the first "
+                                       "10 fixed epochs (docs/attitude.md 'Angular-acceleration state')")
+def test_slew_target_from_the_first_fixed_epoch(slew_pass):
+    """The issue's target on the short slew: with angular_acceleration_state and smoother_adaptive_noise, every fixed
+    epoch from the first one below 0.3 deg, and the smoother's tilt chi-square (2 dof) over the first 10 fixed epochs
+    within 1.0-1.5 (honest sigmas from the first fixed epoch)."""
+    from gnssatt.attitude.truth import attitude_errors_deg
+
+    sol = process(load_inputs(set_files(slew_pass)), AttitudeSettings.preset(
+        "all-phases", mode="dynamic", smoother=True, smoother_adaptive_noise=True, angular_acceleration_state=True))
+    ang, de = attitude_errors_deg(slew_pass, sol)
+    fi = np.flatnonzero(sol.att_fixed)
+    z = de[fi[:10], 1:3] / sol.sigma_euler_deg[fi[:10], 1:3]
+    chi2 = (z ** 2).sum(1)
+    assert ang[fi].max() < 0.3
+    assert 1.0 <= chi2.mean() <= 1.5
