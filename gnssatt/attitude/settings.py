@@ -249,9 +249,9 @@ class AttitudeSettings:
                                                           "velocity (seed 000 sec. 2, 4.1).")
     signals: list[str] = _f(None, "Signal names of SIGNALS, each one system on one frequency (GPS L1 + L2 by "
                                   "default).", factory=lambda: ["L1", "L2"], min_length=1, max_length=16)
-    systems: list[Literal["G", "E", "C", "J"]] | None = _f(
+    systems: list[Literal["G", "E", "C", "J", "R"]] | None = _f(
         None, "Preset replacing `signals`: the first two frequencies of each system (SYSTEM_SIGNALS, RTKLIB "
-              "'L1+L2'), e.g. ['G', 'E', 'C', 'J']. GLONASS is not supported.", min_length=1, max_length=4)
+              "'L1+L2'), e.g. ['G', 'E', 'C', 'J', 'R'] (R: GLONASS FDMA G1 + G2).", min_length=1, max_length=5)
     platform_defaults: bool = _f(
         True, "Defaults by platform kind for what is left as it is (gnssatt.attitude.platform_defaults): terrestrial "
               "platforms use every system of G/E/C/J in the files and elevation weights; spacecraft keep seed 000 "
