@@ -162,7 +162,7 @@ def test_job_config_systems_and_signals():
         and cn0_mask_of(s, "E:E5b") == 30.0                                       # defaults: Table 2 style
     assert AttitudeConfig(signals=["L1", "E:E1"]).to_settings().signals == ["L1", "E:E1"]
     assert AttitudeConfig().to_settings().signals == ["L1", "L2"] and AttitudeConfig().systems is None
-    for bad in ({"signals": ["L1", "G:L1"]}, {"signals": ["E6"]}, {"systems": ["R"]}, {"systems": ["G", "G"]},
+    for bad in ({"signals": ["L1", "G:L1"]}, {"signals": ["E6"]}, {"systems": ["X"]}, {"systems": ["G", "G"]},
                 {"cn0_mask_dbhz": {"X": 30.0}}):
         with pytest.raises(ValidationError):
             AttitudeConfig(**bad)

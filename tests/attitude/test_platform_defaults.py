@@ -84,3 +84,18 @@ def test_table_kinds_are_platform_kinds(kind):
     from gnssatt.gnss.io.platform import KINDS
 
     assert kind in KINDS
+
+
+def test_mixed_receivers_leave_glonass_out_with_a_reason():
+    """Receivers of different models: GLONASS inter-channel biases do not cancel, so the default leaves R out and
+    says so; same-model receivers keep it (their inter-channel biases cancel)."""
+    def obs(model):
+        return SimpleNamespace(sats=["G01", "G02", "R01", "R02", "E01"], header=SimpleNamespace(receiver_type=model))
+
+    s, applied = apply_platform_defaults(AttitudeSettings.preset("seed000"), "terrestrial",
+                                         {"A": obs("SEPT POLARX5"), "B": obs("TRIMBLE NETR9")})
+    assert s.systems == ["G", "E"]
+    assert applied[0]["value"] == "without R" and "TRIMBLE NETR9" in applied[0]["reason"]
+    s, _ = apply_platform_defaults(AttitudeSettings.preset("seed000"), "terrestrial",
+                                   {"A": obs("SEPT POLARX5"), "B": obs("SEPT POLARX5")})
+    assert s.systems == ["G", "E", "R"]
