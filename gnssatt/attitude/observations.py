@@ -28,7 +28,7 @@ from gnssatt.attitude.settings import SIGNALS
 from gnssatt.gnss.constants import C_M_S
 from gnssatt.gnss.time import GpsTime
 
-__all__ = ["PlatformObs", "build_platform_obs"]
+__all__ = ["PlatformObs", "build_platform_obs", "glonass_channels"]
 
 
 @dataclass

@@ -12,7 +12,7 @@ import numpy as np
 
 from gnssatt.attitude.filter import FilterResult, run_filter
 from gnssatt.attitude.geometry import EpochGeometry, compute_geometry, platform_state_from_sp3
-from gnssatt.attitude.observations import PlatformObs, build_platform_obs
+from gnssatt.attitude.observations import PlatformObs, build_platform_obs, glonass_channels
 from gnssatt.attitude.platform_defaults import apply_platform_defaults
 from gnssatt.attitude.settings import AttitudeSettings, effective_signals, signal_system
 from gnssatt.attitude.solution import attitude_from_baselines, attitude_quaternion, baseline_az_el, euler_and_sigma
@@ -253,7 +253,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     except ValueError as e:
         raise InputProblem("Unknown signals", str(e), field="signals") from e
     systems = list(dict.fromkeys(signal_system(x) for x in signals))
-    pobs = build_platform_obs(inputs.obs, signals)
+    pobs = build_platform_obs(inputs.obs, signals, channels=glonass_channels(inputs.obs, inputs.nav))
     if len(pobs.time) == 0 or len(pobs.sats) == 0:
         raise InputProblem("No observations", f"the observation files hold no {'/'.join(systems)} epochs for "
                            f"{'/'.join(signals)}")

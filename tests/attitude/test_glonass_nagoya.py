@@ -53,9 +53,10 @@ def test_one_wavelength_for_every_channel_fails(tmp_path, monkeypatch):
     model) fixes 4 % of the epochs and puts the baseline 4.7 deg off in azimuth and 13 deg in elevation
     (measured), so a regression to one wavelength per signal cannot pass the tests above."""
     import gnssatt.attitude.observations as obs_mod
+    import gnssatt.attitude.process as process_mod
 
     orig = obs_mod.glonass_channels
-    monkeypatch.setattr(obs_mod, "glonass_channels", lambda o, nav=None: {s: 0 for s in orig(o, nav)})
+    monkeypatch.setattr(process_mod, "glonass_channels", lambda o, nav=None: {s: 0 for s in orig(o, nav)})
     sol = _run(tmp_path, {"systems": ["R"], "noise": {"weighting": "elevation"}})
     b = sol.summary["baselines"][0]
     assert sol.baseline_table["fixed"].mean() < 0.5 or abs(b["median_azimuth_deg"] - 193.03) > 0.5
