@@ -184,7 +184,11 @@ class FilterRun:
         self.accel = self.dynamic and bool(s.angular_acceleration_state)
         self.st = FilterState(n_bl, self.n_sat, self.n_sig, self.dynamic, s.noise.separate_phase_clock,
                               self.accel)
-        self.lam = np.ascontiguousarray(pobs.wavelength_m, dtype=np.float64)
+        # (n_sat, n_sig) wavelength per satellite (GLONASS FDMA: one per channel) and (n_sig,) the signal's nominal
+        self.lam_sig = np.ascontiguousarray(pobs.wavelength_m, dtype=np.float64)
+        lam_sat = np.asarray(getattr(pobs, "wavelength_sat_m", None) if getattr(pobs, "wavelength_sat_m", None)
+                             is not None else np.repeat(self.lam_sig[None, :], self.n_sat, axis=0), np.float64)
+        self.lam = np.ascontiguousarray(np.where(np.isfinite(lam_sat), lam_sat, self.lam_sig[None, :]))
         t_s = (pobs.time - pobs.time[0]) if self.n_ep else np.zeros(0)
         self.t_s = np.asarray(t_s, dtype=np.float64)
         self.lengths = np.linalg.norm(body_baselines_m, axis=1)
@@ -319,7 +323,7 @@ class FilterRun:
         self.qc_limits = tuple(QcLimits(
             el_mask_ant_rad=float(s.table2.elevation_mask_antenna_deg * DEG), clock_jump_m=CLOCK_JUMP_M,
             td_max_dt_s=TD_MAX_DT_S, td_code_m=float(s.table2.td_code_m), td_phase_cyc=float(s.table2.td_phase_cyc),
-            max_gap_s=float(s.ambiguity.max_gap_s), wavelength_m=self.lam))
+            max_gap_s=float(s.ambiguity.max_gap_s), wavelength_m=self.lam_sig))
         work = QcWork(el_rad=np.zeros((3, n_bl, n_sat)), reason=np.zeros(shp, np.int64),
                       masks=np.zeros((9,) + shp, bool), values_m=np.zeros((4,) + shp),
                       median_td_m=np.zeros((2, n_bl, n_sig)))

@@ -43,7 +43,7 @@ def true_integer_floor(sol, truth_dir: Path, sigma_m=None, mask: np.ndarray | No
     pobs, geom = sol.pobs, sol.geom
     t_s = np.asarray(pobs.time - pobs.time[0], float)
     arcs = load_arcs(Path(truth_dir), pobs.time[0])
-    lam = np.asarray(pobs.wavelength_m, float)
+    lam = np.asarray(pobs.wavelength_sat_m, float)                                  # (n_sat, n_sig)
     n_ep, n_sat, n_sig = t_s.size, len(pobs.sats), len(pobs.signals)
     w_sig = np.ones(n_sig) if sigma_m is None else 1.0 / np.asarray(sigma_m, float)
     out = np.full((n_ep, len(sol.baselines), 3), np.nan)
@@ -53,7 +53,7 @@ def true_integer_floor(sol, truth_dir: Path, sigma_m=None, mask: np.ndarray | No
         for s, sat in enumerate(pobs.sats):
             for f, sg in enumerate(pobs.signals):
                 dn[:, s, f] = ambiguity_at(arcs, (b, sat, sg), t_s) - ambiguity_at(arcs, (a, sat, sg), t_s)
-        sd = pobs.phase_m[ib] - pobs.phase_m[ia] - lam[None, None, :] * dn          # (n_ep, n_sat, n_sig)
+        sd = pobs.phase_m[ib] - pobs.phase_m[ia] - lam[None, :, :] * dn          # (n_ep, n_sat, n_sig)
         ok = np.isfinite(sd) & geom.valid[:, :, None]
         if mask is not None:
             ok &= mask[:, j]

@@ -303,7 +303,7 @@ def measurement_rows(rows: UsedRows, layout: StateLayout, obs: UpdateObs):
         else:
             cols[r, 3] = pclk[j, f]
             cols[r, 4] = amb_index[j, s, f]
-            coef[r, 4] = wavelength_m[f]
+            coef[r, 4] = wavelength_m[s, f]
             z[r] = sdp_c_m[j, s, f] - pcv_m[j, s, f]
     return cols, coef, z
 
@@ -321,7 +321,7 @@ def warm_up() -> None:
     layout = StateLayout(b_idx=np.zeros((1, 3), np.int64), clk=i0, pclk=idx2, bias=idx2,
                          amb_index=np.zeros((1, 3, 2), np.int64), n_fixed_part=8)
     el = np.ones((1, 3))
-    obs = UpdateObs(u=np.ones((3, 3)), clock_factor=np.ones(3), wavelength_m=np.ones(2), sdc_c_m=td, sdp_c_m=td,
+    obs = UpdateObs(u=np.ones((3, 3)), clock_factor=np.ones(3), wavelength_m=np.ones((3, 2)), sdc_c_m=td, sdp_c_m=td,
                     pcv_m=td, cn0_dbhz=td, el_e_rad=el, el_w_rad=el)
     measurement_rows(tuple(rows), tuple(layout), tuple(obs))
     xs, rs, off = cn0_growth_samples(td, td, ok, ok, m, m, td, np.ones(2))

@@ -13,7 +13,10 @@ differences (its own phase clock, own ambiguity group) and whose wavelength is o
 Implements: RINEX 3.04 LLI (bit 0 loss of lock, bit 1 half-cycle ambiguity) and SSI semantics; signal choice
 L1 C/A + L2 P(Y) (semi-codeless W first, else L2C) per seed 000 sec. 1; RINEX 3.04 Tables 4-8 codes for Galileo,
 BeiDou and QZSS.
-Neglects: GLONASS (FDMA: one wavelength per satellite, inter-frequency biases).
+GLONASS FDMA ("R:G1", "R:G2"): each satellite's phase is scaled by its own wavelength c / f_k, k from the file's
+GLONASS SLOT / FRQ # (RINEX 3.02+), else from `channels` (the navigation records); `wavelength_sat_m` (n_sat, n_sig)
+carries the per-satellite wavelengths to the filter (GLONASS ICD 5.1 sec. 3.3.1.4).
+Neglects: GLONASS inter-channel biases (zero for receivers of one model; see gnssatt.attitude.settings glonass_icb).
 """
 from __future__ import annotations
 
@@ -25,7 +28,7 @@ from gnssatt.attitude.settings import SIGNALS
 from gnssatt.gnss.constants import C_M_S
 from gnssatt.gnss.time import GpsTime
 
-__all__ = ["PlatformObs", "build_platform_obs"]
+__all__ = ["PlatformObs", "build_platform_obs", "glonass_channels"]
 
 
 @dataclass
@@ -53,6 +56,11 @@ class PlatformObs:
     codes_used: dict = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
     approx_position_ecef_m: dict = field(default_factory=dict)  # antenna -> (3,) header position or None
+    wavelength_sat_m: np.ndarray | None = None   # (n_sat, n_sig) per-satellite wavelength (FDMA), NaN: unknown
+
+    def __post_init__(self):
+        if self.wavelength_sat_m is None:
+            self.wavelength_sat_m = np.repeat(np.asarray(self.wavelength_m, float)[None, :], len(self.sats), axis=0)
 
 
 def _tag_ms(t: GpsTime) -> np.ndarray:
@@ -66,7 +74,38 @@ def _pick(obs, candidates: list[str], system: str = "G") -> str | None:
     return None
 
 
-def build_platform_obs(obs_by_antenna: dict, signals: list[str], system: str | None = None) -> PlatformObs:
+def glonass_channels(obs_by_antenna: dict, nav=None) -> dict[str, int]:
+    """GLONASS frequency channel k per satellite ('R01' -> 1): GLONASS SLOT / FRQ # of the files, else the
+    navigation records' frequency numbers."""
+    out: dict[str, int] = {}
+    glo = getattr(nav, "glonass", None)
+    if glo is not None and len(glo):
+        for sat, k in zip(glo.sat, glo.frequency_number):
+            if -7 <= int(k) <= 6:
+                out[str(sat)] = int(k)
+    for o in obs_by_antenna.values():
+        out.update(getattr(o.header, "glonass_slots", {}) or {})
+    return out
+
+
+def _sat_wavelengths(sats: list[str], signals: list[str], lam: np.ndarray, channels: dict) -> np.ndarray:
+    """(n_sat, n_sig) wavelength of each satellite's signal: the signal's one wavelength, or for an FDMA signal
+    c / f_k of the satellite's channel (NaN when its channel is unknown: the satellite is not used)."""
+    from gnssatt.gnss.signals import glonass_wavelength_m
+
+    out = np.repeat(lam[None, :], len(sats), axis=0)
+    for k, sig in enumerate(signals):
+        band = SIGNALS[sig].get("fdma_band")
+        if band is None:
+            continue
+        for i, sat in enumerate(sats):
+            ch = channels.get(sat)
+            out[i, k] = glonass_wavelength_m(band, ch) if ch is not None else np.nan
+    return out
+
+
+def build_platform_obs(obs_by_antenna: dict, signals: list[str], system: str | None = None,
+                       channels: dict | None = None) -> PlatformObs:
     """PlatformObs of RinexObs files (antenna id -> gnssatt.gnss.io.rinex_obs.RinexObs) for `signals` (names of
     SIGNALS, each of one system).
 
@@ -91,6 +130,8 @@ def build_platform_obs(obs_by_antenna: dict, signals: list[str], system: str | N
     lli = np.full(shape, -1, dtype=np.int8)
     present = np.zeros((n_ant, n_ep), bool)
     lam = np.array([C_M_S / SIGNALS[s]["freq_hz"] for s in signals])
+    lam_sat = _sat_wavelengths(sats, list(signals), lam, channels if channels is not None
+                               else glonass_channels(obs_by_antenna))
     used: dict = {}
     warnings: list[str] = []
     approx: dict = {}
@@ -115,7 +156,7 @@ def build_platform_obs(obs_by_antenna: dict, signals: list[str], system: str | N
             r_i, c_i = rows[:, None], cols_dst[None, :]
             code[a, r_i, c_i, k] = obs.values[:, cols_src, obs.code_index(c_code, system_k)]
             ki = obs.code_index(c_phase, system_k)
-            phase[a, r_i, c_i, k] = obs.values[:, cols_src, ki] * lam[k]
+            phase[a, r_i, c_i, k] = obs.values[:, cols_src, ki] * lam_sat[cols_dst, k][None, :]
             lli[a, r_i, c_i, k] = obs.lli[:, cols_src, ki]
             if c_snr is not None:
                 cn0[a, r_i, c_i, k] = obs.values[:, cols_src, obs.code_index(c_snr, system_k)]
@@ -124,4 +165,5 @@ def build_platform_obs(obs_by_antenna: dict, signals: list[str], system: str | N
             bad = arr[a] == 0.0
             arr[a][bad] = np.nan
     t = GpsTime(all_tags // 1000, (all_tags % 1000) / 1000.0)
-    return PlatformObs(t, antennas, sats, list(signals), lam, code, phase, cn0, lli, present, used, warnings, approx)
+    return PlatformObs(t, antennas, sats, list(signals), lam, code, phase, cn0, lli, present, used, warnings, approx,
+                       lam_sat)

@@ -1,6 +1,9 @@
 """Defaults by platform kind (issue 21 item 4): what the attitude job uses when the user leaves the signals and the
 weighting as they are.
 
+GLONASS (R, FDMA: per-satellite wavelengths, gnssatt.attitude.observations) is among them: on Nagoya with G/E/C/J/R
+the defaults give 0.24 mm, 0.030 deg azimuth and 0.064 deg elevation off the known values.
+
 Spacecraft keep seed 000 Tables 1-2 (GPS L1 C/A + L2, no weighting: the paper's configuration and the figures it
 publishes). Terrestrial platforms get every system of the `systems` preset (G, E, C, J: the first two frequencies
 of each, gnssatt.gnss.signals.SYSTEM_SIGNALS) that every antenna's file carries, and elevation weights: on the real
@@ -24,7 +27,22 @@ from gnssatt.attitude.settings import PLATFORM_DEFAULTS, AttitudeSettings
 __all__ = ["PLATFORM_DEFAULTS", "apply_platform_defaults"]
 
 DEFAULT_SIGNALS = ["L1", "L2"]
-TERRESTRIAL_SYSTEMS = ("G", "E", "C", "J")
+TERRESTRIAL_SYSTEMS = ("G", "E", "C", "J", "R")
+
+GLONASS_MIXED_REASON = ("GLONASS left out: the antennas' receivers are of different models ({models}), so their "
+                        "GLONASS inter-channel biases (cm-level per frequency channel) do not cancel in the single "
+                        "differences and the FDMA integers could be fixed wrongly; same-model receivers have none")
+
+
+def _receiver_models(obs_by_antenna: dict) -> set[str]:
+    """The receiver types (REC # / TYPE / VERS) of the files, blank ones left out."""
+    out = set()
+    for o in obs_by_antenna.values():
+        rt = getattr(getattr(o, "header", None), "receiver_type", None)
+        if rt and rt.strip():
+            out.add(rt.strip().upper())
+    return out
+
 
 def _systems_in_files(obs_by_antenna: dict) -> list[str]:
     """The systems of TERRESTRIAL_SYSTEMS with at least one satellite in every antenna's observation file."""
@@ -46,6 +64,11 @@ def apply_platform_defaults(settings: AttitudeSettings, kind: str, obs_by_antenn
     table = PLATFORM_DEFAULTS["terrestrial"]
     if out.systems is None and list(out.signals) == DEFAULT_SIGNALS:
         systems = _systems_in_files(obs_by_antenna)
+        models = _receiver_models(obs_by_antenna)
+        if "R" in systems and len(models) > 1:       # mixed receivers: GLONASS inter-channel biases (issue 21)
+            systems = [x for x in systems if x != "R"]
+            applied.append({"setting": "systems", "value": "without R",
+                            "reason": GLONASS_MIXED_REASON.format(models=", ".join(sorted(models)))})
         if systems and systems != ["G"]:
             out = replace(out, systems=systems)
             applied.append({"setting": "systems", "value": systems, "reason": table["systems"]["reason"]})

@@ -12,7 +12,7 @@ import numpy as np
 
 from gnssatt.attitude.filter import FilterResult, run_filter
 from gnssatt.attitude.geometry import EpochGeometry, compute_geometry, platform_state_from_sp3
-from gnssatt.attitude.observations import PlatformObs, build_platform_obs
+from gnssatt.attitude.observations import PlatformObs, build_platform_obs, glonass_channels
 from gnssatt.attitude.platform_defaults import apply_platform_defaults
 from gnssatt.attitude.settings import AttitudeSettings, effective_signals, signal_system
 from gnssatt.attitude.solution import attitude_from_baselines, attitude_quaternion, baseline_az_el, euler_and_sigma
@@ -138,8 +138,10 @@ def _sat_state(inputs: AttitudeInputs, systems=("G",)):
         from gnssatt.gnss.geometry import sp3_state
         return sp3_state(inputs.gnss_sp3), "sp3"
     from gnssatt.gnss.orbits.broadcast import BroadcastOrbit
-    have = [x for x in systems if x in inputs.nav.kepler]
-    missing = [x for x in systems if x not in inputs.nav.kepler]
+    glo = getattr(inputs.nav, "glonass", None)
+    kinds = set(inputs.nav.kepler) | ({"R"} if glo is not None and len(glo) else set())
+    have = [x for x in systems if x in kinds]
+    missing = [x for x in systems if x not in kinds]
     if not have:
         raise InputProblem("No ephemerides", f"{inputs.nav.name} holds no records of {'/'.join(systems)}",
                            file=inputs.nav.name)
@@ -148,7 +150,13 @@ def _sat_state(inputs: AttitudeInputs, systems=("G",)):
                                "satellites are not used")
     if have == ["G"]:
         return BroadcastOrbit(inputs.nav.kepler["G"]), "broadcast"
-    return _multi_system_state({x: BroadcastOrbit(inputs.nav.kepler[x]) for x in have}), "broadcast"
+    orbits = {x: BroadcastOrbit(inputs.nav.kepler[x]) for x in have if x != "R"}
+    if "R" in have:                      # GLONASS state vectors (gnssatt.gnss.orbits.glonass)
+        from gnssatt.gnss.ephemeris import BroadcastEphemeris
+        glo_eph = BroadcastEphemeris(inputs.nav)
+        orbits["R"] = lambda sats, t: (lambda st: (st.r_ecef_m, st.v_ecef_m_s, st.clock_s, st.clock_rate_s_s))(
+            glo_eph.state(sats, t))
+    return _multi_system_state(orbits), "broadcast"
 
 
 def _multi_system_state(orbits: dict):
@@ -245,7 +253,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     except ValueError as e:
         raise InputProblem("Unknown signals", str(e), field="signals") from e
     systems = list(dict.fromkeys(signal_system(x) for x in signals))
-    pobs = build_platform_obs(inputs.obs, signals)
+    pobs = build_platform_obs(inputs.obs, signals, channels=glonass_channels(inputs.obs, inputs.nav))
     if len(pobs.time) == 0 or len(pobs.sats) == 0:
         raise InputProblem("No observations", f"the observation files hold no {'/'.join(systems)} epochs for "
                            f"{'/'.join(signals)}")

@@ -65,7 +65,7 @@ class StateLayout:
 @dataclass
 class UpdateObs:
     """One epoch's inputs of the update: u (n_sat, 3) lines of sight, clock_factor (n_sat,), wavelength_m
-    (n_sig,), clock-corrected SDs sdc_c_m / sdp_c_m and the PCV correction pcv_m (n_bl, n_sat, n_sig), cn0_dbhz,
+    (n_sat, n_sig) per satellite (GLONASS FDMA: per channel), clock-corrected SDs sdc_c_m / sdp_c_m and the PCV correction pcv_m (n_bl, n_sat, n_sig), cn0_dbhz,
     el_e_rad (n_bl, n_sat) elevation for the elevation weighting, el_w_rad (n_bl, n_sat) antenna-frame
     elevation (multipath model)."""
     u: np.ndarray
@@ -159,7 +159,7 @@ def measurement_rows(rows: UsedRows, layout: StateLayout,
     cols[:mc_n, 3], cols[mc_n:, 3], coef[:, 3] = layout.clk[jc], layout.pclk[jp, fp], obs.clock_factor[sb]
     if n_sig > 1:
         cols[:mc_n, 4], coef[:mc_n, 4] = layout.bias[jc, fc], 1.0
-    cols[mc_n:, 4], coef[mc_n:, 4] = layout.amb_index[jp, sp, fp], obs.wavelength_m[fp]
+    cols[mc_n:, 4], coef[mc_n:, 4] = layout.amb_index[jp, sp, fp], obs.wavelength_m[sp, fp]
     z = np.concatenate([obs.sdc_c_m[jc, sc, fc], obs.sdp_c_m[jp, sp, fp] - obs.pcv_m[jp, sp, fp]])
     return cols, coef, z
 

@@ -14,7 +14,7 @@ from gnssatt.gnss.signals import SIGNAL_ALIASES, SIGNALS, SYSTEM_SIGNALS  # noqa
 
 
 def signal_system(name: str) -> str:
-    """System letter (G, E, C, J) of a signal name of SIGNALS."""
+    """System letter (G, E, C, J, R) of a signal name of SIGNALS."""
     return SIGNALS[name]["system"]
 
 
@@ -24,7 +24,7 @@ def effective_signals(settings: "AttitudeSettings") -> list[str]:
     if settings.systems:
         unknown = [x for x in settings.systems if x not in SYSTEM_SIGNALS]
         if unknown:
-            raise ValueError(f"systems {unknown} not supported (G, E, C, J)")
+            raise ValueError(f"systems {unknown} not supported (G, E, C, J, R)")
         sig = [name for x in dict.fromkeys(settings.systems) for name in SYSTEM_SIGNALS[x]]
     else:
         sig = list(settings.signals)
@@ -249,12 +249,12 @@ class AttitudeSettings:
                                                           "velocity (seed 000 sec. 2, 4.1).")
     signals: list[str] = _f(None, "Signal names of SIGNALS, each one system on one frequency (GPS L1 + L2 by "
                                   "default).", factory=lambda: ["L1", "L2"], min_length=1, max_length=16)
-    systems: list[Literal["G", "E", "C", "J"]] | None = _f(
+    systems: list[Literal["G", "E", "C", "J", "R"]] | None = _f(
         None, "Preset replacing `signals`: the first two frequencies of each system (SYSTEM_SIGNALS, RTKLIB "
-              "'L1+L2'), e.g. ['G', 'E', 'C', 'J']. GLONASS is not supported.", min_length=1, max_length=4)
+              "'L1+L2'), e.g. ['G', 'E', 'C', 'J', 'R'] (R: GLONASS FDMA G1 + G2).", min_length=1, max_length=5)
     platform_defaults: bool = _f(
         True, "Defaults by platform kind for what is left as it is (gnssatt.attitude.platform_defaults): terrestrial "
-              "platforms use every system of G/E/C/J in the files and elevation weights; spacecraft keep seed 000 "
+              "platforms use every system of G/E/C/J/R in the files and elevation weights; spacecraft keep seed 000 "
               "Tables 1-2. False: the settings exactly as given.")
     length_constraint_sigma_m: float = _f(
         0.0, "Dynamic mode: once a baseline has been fixed, its state is held to the known body length by a soft "
@@ -344,7 +344,7 @@ PLATFORM_DEFAULTS: dict = {
                             "reason": "seed 000 Table 1 (no weighting); no ground multipath at a spacecraft"},
     },
     "terrestrial": {
-        "systems": {"value": "every system of G, E, C, J with satellites in every antenna's file",
+        "systems": {"value": "every system of G, E, C, J, R with satellites in every antenna's file",
                     "reason": "real Nagoya 0.99 m baseline: GPS alone gives -3.4 mm length and -0.23 deg elevation, "
                               "G/E/C/J within 0.3 mm / 0.03 deg of the known baseline (more satellites, better "
                               "vertical geometry)"},

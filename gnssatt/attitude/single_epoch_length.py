@@ -30,7 +30,7 @@ def single_epoch_baseline(D: np.ndarray, a_fix: np.ndarray, x: np.ndarray, n_fix
         x: filter state (only the references' float ambiguities are read); amb_key (n_amb, 3): (baseline,
             satellite, signal) of each ambiguity state (state index - n_fixed_part).
         sdp_m, pcv_m: (n_bl, n_sat, n_sig) the epoch's clock-corrected SD phase and PCV correction (m).
-        u: (n_sat, 3) line-of-sight unit vectors; cfac: (n_sat,) clock partials; wavelength_m: (n_sig,).
+        u: (n_sat, 3) line-of-sight unit vectors; cfac: (n_sat,) clock partials; wavelength_m: (n_sat, n_sig) per satellite (GLONASS FDMA).
     """
     rows, groups = [], {}
     for drow, n_int in zip(D, a_fix):
@@ -45,7 +45,7 @@ def single_epoch_baseline(D: np.ndarray, a_fix: np.ndarray, x: np.ndarray, n_fix
     A, y = [], []
     for idx, amb_cyc, g in rows:
         j, sat, f = (int(v) for v in amb_key[idx - n_fixed_part])
-        obs = sdp_m[j, sat, f] - pcv_m[j, sat, f] - wavelength_m[f] * amb_cyc
+        obs = sdp_m[j, sat, f] - pcv_m[j, sat, f] - wavelength_m[sat, f] * amb_cyc
         if not np.isfinite(obs) or not np.all(np.isfinite(u[sat])):
             continue
         row = np.zeros(3 + len(groups))

@@ -499,7 +499,7 @@ def _warm_up_update(rows: UsedRows) -> None:
     layout = StateLayout(b_idx=np.arange(3, dtype=np.int64).reshape(1, 3), clk=np.array([3], np.int64),
                          pclk=np.array([[4, 5]], np.int64), bias=np.array([[-1, 6]], np.int64), amb_index=amb,
                          n_fixed_part=8)
-    obs = UpdateObs(u=np.eye(3), clock_factor=np.ones(3), wavelength_m=np.ones(2), sdc_c_m=td, sdp_c_m=td, pcv_m=td,
+    obs = UpdateObs(u=np.eye(3), clock_factor=np.ones(3), wavelength_m=np.ones((3, 2)), sdc_c_m=td, sdp_c_m=td, pcv_m=td,
                     cn0_dbhz=np.full((1, 3, 2), 45.0), el_e_rad=el, el_w_rad=el)
     noise = NoiseModel(est_var_code_m2=np.ones(2), est_var_phase_m2=np.ones(2), est_n=np.zeros(2), floor_code_m2=1.0,
                        floor_phase_m2=1.0, min_epochs=10, estimate=True, gamma=np.ones((2, 2)), cn0_growth=True,

@@ -59,7 +59,7 @@ class UpdateObs(NamedTuple):
     """One epoch's observations and geometry for the update rows and variances; per epoch."""
     u: np.ndarray               # (n_sat, 3) unit lines of sight, ECEF
     clock_factor: np.ndarray    # (n_sat,) clock partial 1 - rho_dot / c
-    wavelength_m: np.ndarray    # (n_sig,) carrier wavelength (m)
+    wavelength_m: np.ndarray    # (n_sat, n_sig) carrier wavelength per satellite (m; GLONASS FDMA: per channel)
     sdc_c_m: np.ndarray         # (n_bl, n_sat, n_sig) SD code minus the epoch clock estimate (m)
     sdp_c_m: np.ndarray         # (n_bl, n_sat, n_sig) SD phase minus the epoch clock estimate (m)
     pcv_m: np.ndarray           # (n_bl, n_sat, n_sig) differential PCV correction of the phase (m)

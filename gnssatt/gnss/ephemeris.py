@@ -24,7 +24,8 @@ Implements: IS-GPS-200N sec. 20.3.3.3.3.1-2 (clock, T_GD), 20.3.3.4.3 (orbit) vi
 record choice per satellite and time by gnssatt.gnss.io.rinex_nav.select_ephemeris (health, fit interval,
 nearest toe, latest transmission); SP3 Lagrange interpolation via gnssatt.gnss.orbits.sp3_interp; RINEX clock
 linear interpolation; IERS Conventions (2010) eq. 10.10 (periodic relativistic clock term -2 r.v / c^2).
-Neglects: GLONASS (no state-vector integrator here: its satellites come back invalid), satellite antenna offsets
+GLONASS: broadcast state vectors integrated per GLONASS ICD 5.1 A.3.1.2 (gnssatt.gnss.orbits.glonass).
+Neglects: satellite antenna offsets
 of SP3 products outside the igs05 era without a user ANTEX, and the satellite phase-centre variations (< 13 mm;
 see gnssatt.gnss.satellite_antenna), the GGTO/BDT broadcast offsets beyond the fixed 14 s.
 """
@@ -116,12 +117,15 @@ class BroadcastEphemeris:
     by t (start of a daily file, transmission times absent), the nearest toe (`rinex_nav.select_ephemeris`).
     This matters at an upload: on 2007-03-21 G02 carried a stale upload whose toe-14:00 record is 16 m off while
     the fresh upload's toe-13:59:44 record, transmitted 29 min later, is 0.3 m off; "nearest toe" picks the stale
-    one. Satellites without a usable record, and GLONASS, come back invalid.
+    one. GLONASS: the healthy record with the nearest t_b within MAX_AGE_S['R'] (30 min), its state vector
+    integrated (gnssatt.gnss.orbits.glonass). Satellites without a usable record come back invalid.
     """
 
     def __init__(self, nav, *, max_age_s: float | None = None, allow_unhealthy: bool = False):
         self.nav = nav
         self.kepler = dict(getattr(nav, "kepler", {}) or {})
+        glo = getattr(nav, "glonass", None)
+        self.glonass = glo if glo is not None and len(glo) else None
         self.max_age_s = max_age_s
         self.allow_unhealthy = allow_unhealthy
 
@@ -131,10 +135,17 @@ class BroadcastEphemeris:
         systems = np.array([s[:1] for s in sats]) if sats.size else np.array([], dtype=str)
         idx = np.full(sats.shape, -1, dtype=np.int64)
         for sat in np.unique(sats):
+            m = sats == sat
+            if sat[:1] == "R" and self.glonass is not None:
+                from gnssatt.gnss.io.rinex_nav import MAX_AGE_S
+                from gnssatt.gnss.orbits.glonass import select_glonass
+
+                age = MAX_AGE_S["R"] if self.max_age_s is None else float(self.max_age_s)
+                idx[m] = select_glonass(self.glonass, str(sat), ts[m], age, self.allow_unhealthy)
+                continue
             eph = self.kepler.get(sat[:1])
             if eph is None:
                 continue
-            m = sats == sat
             idx[m] = _select_as_receiver(eph, str(sat), ts[m], self.max_age_s, self.allow_unhealthy)
         return systems, idx
 
@@ -149,6 +160,11 @@ class BroadcastEphemeris:
         systems, idx = self.select(sats, ts)
         for sysl in np.unique(systems[idx >= 0]) if np.any(idx >= 0) else []:
             m = (systems == sysl) & (idx >= 0)
+            if sysl == "R":
+                from gnssatt.gnss.orbits.glonass import glonass_state_ecef
+
+                r[m], v[m], clk[m], rate[m] = glonass_state_ecef(self.glonass, idx[m], ts[m])
+                continue
             rr, vv, cc, cr = kepler_position_ecef(self.kepler[sysl], idx[m], ts[m], apply_tgd=False)
             r[m], v[m], clk[m], rate[m] = rr, vv, cc, cr
         ok = np.isfinite(clk) & np.all(np.isfinite(r), axis=-1)
@@ -165,6 +181,9 @@ class BroadcastEphemeris:
         systems, idx = self.select(sats, ts)
         for sysl in np.unique(systems[idx >= 0]) if np.any(idx >= 0) else []:
             m = (systems == sysl) & (idx >= 0)
+            if sysl == "R":           # GLONASS: tau_n refers to the L1 C/A user (ICD 5.1 sec. 3.3.3); the L2 user
+                out[m] = 0.0          # adds Delta tau_n, not modelled
+                continue
             tgd = np.asarray(self.kepler[sysl].tgd_s, dtype=np.float64)[idx[m]]
             out[m] = np.where(np.isfinite(tgd), tgd, 0.0)
         return out

@@ -48,7 +48,9 @@ Implements: IS-GPS-200N sec. 20.3.3.3.3.2-3 (T_GD, ionosphere-free L1/L2), 20.3.
 20.3.3.4.3.4 (Earth rotation correction); Saastamoinen (1972) with the standard atmosphere of RTKLIB `tropmodel`;
 Brown (1992) RAIM.
 Neglects: P1-C1 differential code biases (a C1 + P2 combination keeps them, < 1 m), the Shapiro delay (< 2 cm),
-solid Earth tides, the receiver antenna offset (positions are of the antenna phase centre the code sees), GLONASS.
+solid Earth tides, the receiver antenna offset (positions are of the antenna phase centre the code sees), GLONASS
+phase (its code is used: ionosphere-free with the 9/7 FDMA coefficients, its own inter-system bias; the
+Klobuchar delay of single-frequency GLONASS rows is the GPS L1 one, not scaled to the channel's frequency).
 (Satellite antenna offsets of SP3 orbits are the ephemeris' business: gnssatt.gnss.ephemeris.PreciseEphemeris.)
 """
 from __future__ import annotations
@@ -84,6 +86,8 @@ CODE_PREFERENCE = {
     ("G", 2): ("C2W", "C2P", "C2L", "C2X", "C2S", "C2C", "C2D"),
     ("J", 1): ("C1C", "C1X", "C1L", "C1S"),
     ("J", 2): ("C2L", "C2X", "C2S"),
+    ("R", 1): ("C1P", "C1C"),          # GLONASS FDMA G1 / G2 (code only: no phase smoothing, no Doppler velocity)
+    ("R", 2): ("C2P", "C2C"),
 }
 DOPPLER_PREFERENCE = {"G": ("D1C", "D1W", "D1P", "D1X"), "J": ("D1C", "D1X")}
 PHASE_PREFERENCE = {"G": ("L1C", "L1W", "L1P", "L1X"), "J": ("L1C", "L1X")}
@@ -101,7 +105,10 @@ GF_SLIP_M = 0.10
 #: ~10 sigma of the ionosphere-free code noise; catches gross slips and code-only 1 ms clock jumps (300 km).
 SMOOTH_RESET_M = 20.0
 #: carrier frequency of each (system, band number) of the code/phase preferences (gnssatt.gnss.signals)
-BAND_FREQ_HZ = {(s, b): FREQ_BY_SYSTEM_BAND_HZ[(s, str(b))] for s, b in CODE_PREFERENCE}
+BAND_FREQ_HZ = {(s, b): FREQ_BY_SYSTEM_BAND_HZ[(s, str(b))] for s, b in CODE_PREFERENCE if s != "R"}
+#: GLONASS FDMA: f1 / f2 = 9 / 7 on every channel (GLONASS ICD 5.1 sec. 3.3.1.4), so one pair of ionosphere-free
+#: coefficients for all its satellites: g1 = 81 / 32, g2 = 49 / 32.
+_IF_COEFFS = {"R": (81.0 / 32.0, 49.0 / 32.0)}
 
 #: Noise gain of the L1/L2 ionosphere-free combination: sqrt(g1^2 + g2^2), g1 = f1^2/(f1^2-f2^2) = 2.546.
 _G1 = FREQ_GPS_L1_HZ ** 2 / (FREQ_GPS_L1_HZ ** 2 - FREQ_GPS_L2_HZ ** 2)
@@ -555,7 +562,9 @@ def _code_observables(obs, c: _Columns, P1: np.ndarray, P2: np.ndarray, opts: Sp
     """
     n, m = P1.shape
     use_if = np.isfinite(P1) & np.isfinite(P2) if opts.iono_free else np.zeros((n, m), dtype=bool)
-    P_if = _G1 * P1 - _G2 * P2
+    g1 = np.array([_IF_COEFFS.get(x, (_G1, _G2))[0] for x in c.sys_of]) if len(c.sys_of) else np.zeros(0)
+    g2 = np.array([_IF_COEFFS.get(x, (_G1, _G2))[1] for x in c.sys_of]) if len(c.sys_of) else np.zeros(0)
+    P_if = g1[None, :] * P1 - g2[None, :] * P2
     n_smooth = np.ones((n, m))
     if opts.smoothing_window_s is not None:
         P1s, P_ifs, n_smooth = _smoothed_codes(obs, c, P1, P_if, use_if, float(opts.smoothing_window_s))
@@ -979,6 +988,8 @@ def _smoothed_codes(obs, c: _Columns, P1, P_if, use_if, window_s):
     for sysl in sys_list:
         mk = sys_of == sysl
         for band, arr in ((1, L1), (2, L2)):
+            if (sysl, band) not in BAND_FREQ_HZ:        # GLONASS FDMA: no phase here (per-satellite wavelengths)
+                continue
             lam = C_M_S / BAND_FREQ_HZ[(sysl, band)]
             for code in PHASE_PREFERENCE_BAND.get((sysl, band), ()):
                 k = obs.code_index(code, sysl)

@@ -28,7 +28,7 @@ from gnssatt.gnss.constants import C_M_S
 
 __all__ = [
     "FREQ_BY_SYSTEM_BAND_HZ", "SIGNALS", "SIGNAL_ALIASES", "SYSTEM_SIGNALS", "antex_frequency_hz",
-    "glonass_frequency_hz", "wavelength_m",
+    "glonass_frequency_hz", "glonass_wavelength_m", "is_fdma", "wavelength_m",
 ]
 
 # --- carrier frequencies (Hz) and wavelengths (m) ---------------------------------------------------
@@ -108,6 +108,11 @@ def glonass_frequency_hz(band: int, k) -> float:
     raise ValueError(f"GLONASS FDMA band must be 1 or 2, got {band!r}")
 
 
+def glonass_wavelength_m(band: int, k) -> float:
+    """Carrier wavelength (m) c / f of GLONASS FDMA band 1 or 2 for channel k (GLONASS ICD 5.1 sec. 3.3.1.4)."""
+    return C_M_S / glonass_frequency_hz(band, k)
+
+
 def antex_frequency_hz(code: str) -> float | None:
     """Frequency (Hz) of an ANTEX 1.4 frequency code ('G01', 'E07', 'C02', ...), None for an unknown code.
 
@@ -125,8 +130,10 @@ def antex_frequency_hz(code: str) -> float | None:
 #: Signals per name: system letter, (code, phase, C/N0) RINEX 3 codes in order of preference, carrier frequency
 #: (Hz), wavelength (m) and the default C/N0 mask (dB-Hz, seed 000 Table 2: L1 35, L2 30; the other signals as
 #: the GPS signal of their role). Names are system-qualified ("E:E5b"); "L1" and "L2" are the GPS signals under
-#: their historical names (every GPS-only config, product and test keeps them). GLONASS (FDMA: one wavelength
-#: per satellite) has no named signal.
+#: their historical names (every GPS-only config, product and test keeps them). GLONASS FDMA signals ("R:G1",
+#: "R:G2") carry `fdma_band`: their frequency and wavelength are those of channel 0, each satellite's own are
+#: `glonass_frequency_hz(band, k)` with its channel number k (the observation file's GLONASS SLOT / FRQ #, else
+#: the navigation records).
 _GPS_L1 = {"system": "G", "code": ["C1C"], "phase": ["L1C"], "snr": ["S1C"], "freq_hz": FREQ_GPS_L1_HZ,
            "wavelength_m": WAVELENGTH_GPS_L1_M, "cn0_mask_dbhz": 35.0}
 _GPS_L2 = {"system": "G", "code": ["C2W", "C2L", "C2X", "C2S"], "phase": ["L2W", "L2L", "L2X", "L2S"],
@@ -159,12 +166,24 @@ SIGNALS: dict[str, dict] = {
     "J:L1": _spec("J", "1", "CXZ", 35.0),
     "J:L2": _spec("J", "2", "LXS", 30.0),
     "J:L5": _spec("J", "5", "QXI", 30.0),
+    "R:G1": {"system": "R", "code": ["C1C", "C1P"], "phase": ["L1C", "L1P"], "snr": ["S1C", "S1P"],
+             "freq_hz": glonass_frequency_hz(1, 0), "wavelength_m": glonass_wavelength_m(1, 0), "cn0_mask_dbhz": 35.0,
+             "fdma_band": 1},
+    "R:G2": {"system": "R", "code": ["C2P", "C2C"], "phase": ["L2P", "L2C"], "snr": ["S2P", "S2C"],
+             "freq_hz": glonass_frequency_hz(2, 0), "wavelength_m": glonass_wavelength_m(2, 0), "cn0_mask_dbhz": 30.0,
+             "fdma_band": 2},
 }
 #: historical names -> system-qualified names
 SIGNAL_ALIASES = {"L1": "G:L1", "L2": "G:L2"}
 #: the `systems` preset: per system its first two frequency slots as RTKLIB 2.4.3 numbers them ("L1+L2":
-#: GPS/QZSS L1 + L2, Galileo E1 + E5b, BeiDou B1I + B2I). GLONASS (FDMA) is not supported.
-SYSTEM_SIGNALS = {"G": ("G:L1", "G:L2"), "E": ("E:E1", "E:E5b"), "C": ("C:B1I", "C:B2I"), "J": ("J:L1", "J:L2")}
+#: GPS/QZSS L1 + L2, Galileo E1 + E5b, BeiDou B1I + B2I, GLONASS G1 + G2 (FDMA, per-satellite wavelengths).
+SYSTEM_SIGNALS = {"G": ("G:L1", "G:L2"), "E": ("E:E1", "E:E5b"), "C": ("C:B1I", "C:B2I"), "J": ("J:L1", "J:L2"),
+                  "R": ("R:G1", "R:G2")}
+
+
+def is_fdma(name: str) -> bool:
+    """True for a GLONASS FDMA signal of SIGNALS (one wavelength per satellite)."""
+    return "fdma_band" in SIGNALS[name]
 
 
 def wavelength_m(name: str) -> float:

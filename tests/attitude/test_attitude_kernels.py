@@ -136,7 +136,7 @@ def test_measurement_rows_equal_the_numpy_assembly():
         u, cfac, lam = rng.normal(size=(n_sat, 3)), 1.0 + rng.normal(size=n_sat) * 1e-6, rng.uniform(0.1, 0.3, n_sig)
         sdc_c, sdp_c, pcv_m = rng.normal(size=(3, n_bl, n_sat, n_sig))
         nan2 = np.full((n_bl, n_sat), np.nan)
-        obs = RU.UpdateObs(u, cfac, lam, sdc_c, sdp_c, pcv_m, np.full(sdc_c.shape, 45.0), nan2, nan2)
+        obs = RU.UpdateObs(u, cfac, np.repeat(lam[None, :], n_sat, axis=0), sdc_c, sdp_c, pcv_m, np.full(sdc_c.shape, 45.0), nan2, nan2)
         use_c = rng.random((n_bl, n_sat, n_sig)) < 0.7
         use_p = use_c & (rng.random(use_c.shape) < 0.8)
         rows = RU.UsedRows.from_masks(use_c, use_p)

@@ -121,7 +121,7 @@ def test_effective_signals_and_masks():
     s = AttitudeSettings.preset("seed000", systems=["G", "E", "C", "J"])
     assert effective_signals(s) == [x for sysl in "GECJ" for x in SYSTEM_SIGNALS[sysl]]
     assert effective_signals(AttitudeSettings.preset("seed000", systems=["C"])) == ["C:B1I", "C:B2I"]
-    for bad in (AttitudeSettings.preset("seed000", systems=["R"]), AttitudeSettings.preset("seed000", signals=["L1", "G:L1"]),
+    for bad in (AttitudeSettings.preset("seed000", signals=["L1", "G:L1"]),
                 AttitudeSettings.preset("seed000", signals=["E:E6"])):
         with pytest.raises(ValueError):
             effective_signals(bad)
@@ -162,7 +162,7 @@ def test_job_config_systems_and_signals():
         and cn0_mask_of(s, "E:E5b") == 30.0                                       # defaults: Table 2 style
     assert AttitudeConfig(signals=["L1", "E:E1"]).to_settings().signals == ["L1", "E:E1"]
     assert AttitudeConfig().to_settings().signals == ["L1", "L2"] and AttitudeConfig().systems is None
-    for bad in ({"signals": ["L1", "G:L1"]}, {"signals": ["E6"]}, {"systems": ["R"]}, {"systems": ["G", "G"]},
+    for bad in ({"signals": ["L1", "G:L1"]}, {"signals": ["E6"]}, {"systems": ["X"]}, {"systems": ["G", "G"]},
                 {"cn0_mask_dbhz": {"X": 30.0}}):
         with pytest.raises(ValidationError):
             AttitudeConfig(**bad)

@@ -19,7 +19,7 @@ def _obs(*systems_per_antenna):
 
 def test_terrestrial_gets_the_systems_in_every_file_and_elevation_weights():
     s, applied = apply_platform_defaults(AttitudeSettings.preset("seed000"), "terrestrial",
-                                         _obs("GECJR", "GEC"))          # J on one antenna only; R not supported
+                                         _obs("GECJR", "GEC"))          # J and R on one antenna only
     assert s.systems == ["G", "E", "C"] and s.noise.weighting == "elevation"
     assert [a["setting"] for a in applied] == ["systems", "noise.weighting"]
     assert all(a["reason"] for a in applied)
@@ -71,7 +71,7 @@ def test_nagoya_with_the_defaults_and_no_options(tmp_path):
 
     sol = process(load_inputs(nagoya_files(d, plat)), AttitudeConfig.model_validate({}).to_settings())
     b = sol.summary["baselines"][0]
-    assert sol.pobs.signals == ["G:L1", "G:L2", "E:E1", "E:E5b", "C:B1I", "C:B2I", "J:L1", "J:L2"]
+    assert sol.pobs.signals == ["G:L1", "G:L2", "E:E1", "E:E5b", "C:B1I", "C:B2I", "J:L1", "J:L2", "R:G1", "R:G2"]
     assert [a["setting"] for a in sol.summary["platform_defaults"]] == ["systems", "noise.weighting"]
     assert abs(b["median_length_m"] - 0.9902) < 0.003
     assert abs(b["median_azimuth_deg"] - 193.03) < 0.05
@@ -84,3 +84,18 @@ def test_table_kinds_are_platform_kinds(kind):
     from gnssatt.gnss.io.platform import KINDS
 
     assert kind in KINDS
+
+
+def test_mixed_receivers_leave_glonass_out_with_a_reason():
+    """Receivers of different models: GLONASS inter-channel biases do not cancel, so the default leaves R out and
+    says so; same-model receivers keep it (their inter-channel biases cancel)."""
+    def obs(model):
+        return SimpleNamespace(sats=["G01", "G02", "R01", "R02", "E01"], header=SimpleNamespace(receiver_type=model))
+
+    s, applied = apply_platform_defaults(AttitudeSettings.preset("seed000"), "terrestrial",
+                                         {"A": obs("SEPT POLARX5"), "B": obs("TRIMBLE NETR9")})
+    assert s.systems == ["G", "E"]
+    assert applied[0]["value"] == "without R" and "TRIMBLE NETR9" in applied[0]["reason"]
+    s, _ = apply_platform_defaults(AttitudeSettings.preset("seed000"), "terrestrial",
+                                   {"A": obs("SEPT POLARX5"), "B": obs("SEPT POLARX5")})
+    assert s.systems == ["G", "E", "R"]

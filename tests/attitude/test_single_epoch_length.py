@@ -34,7 +34,7 @@ def _epoch(rng, n_sat=8, noise_m=0.0):
 
 def _solve(e, a_fix):
     return single_epoch_baseline(e["D"], a_fix, e["x"], e["nfp"], e["amb_key"], e["sdp"], e["pcv"], e["u"], e["cf"],
-                                 e["lam"])
+                                 np.broadcast_to(np.atleast_2d(e["lam"]), e["u"].shape[:1] + np.shape(e["lam"])[-1:]))
 
 
 def test_right_integers_give_the_baseline_whatever_the_filter_floats():

@@ -144,7 +144,7 @@ def _variance_inputs(rng, n_bl, n_sat, n_sig):
     el_e[rng.random(el_e.shape) < 0.1] = np.nan
     el_w[rng.random(el_w.shape) < 0.1] = np.nan
     z3 = np.zeros((n_bl, n_sat, n_sig))
-    obs = RU.UpdateObs(np.zeros((n_sat, 3)), np.ones(n_sat), np.ones(n_sig), z3, z3, z3, cn0, el_e, el_w)
+    obs = RU.UpdateObs(np.zeros((n_sat, 3)), np.ones(n_sat), np.ones((n_sat, n_sig)), z3, z3, z3, cn0, el_e, el_w)
     return RU.UsedRows.from_masks(use_c, use_p), obs
 
 
@@ -219,7 +219,7 @@ def _filter_epoch(rng, realistic=False, n_sig=2, n_bl=2, n_sat=10):
     lam = np.array([0.19029, 0.24421, 0.2548])[:n_sig]
     sdc_c, sdp_c = rng.normal(size=(2, n_bl, n_sat, n_sig)) * (np.array([0.3, 0.003])[:, None, None, None]
                                                                 if realistic else 1.0)
-    obs = RU.UpdateObs(u, 1.0 + rng.normal(size=n_sat) * 1e-6, lam, sdc_c, sdp_c,
+    obs = RU.UpdateObs(u, 1.0 + rng.normal(size=n_sat) * 1e-6, np.repeat(np.atleast_1d(lam)[None, :], n_sat, axis=0), sdc_c, sdp_c,
                        rng.normal(size=(n_bl, n_sat, n_sig)) * 1e-3, rng.uniform(30, 50, (n_bl, n_sat, n_sig)),
                        rng.uniform(0.1, 1.5, (n_bl, n_sat)), rng.uniform(0.1, 1.5, (n_bl, n_sat)))
     model = RU.VarianceModel(np.full(n_sig, 0.09), np.full(n_sig, 1e-5), np.ones((2, n_sig)), True, False, True,

@@ -31,7 +31,10 @@ def test_wavelengths_are_c_over_f_and_named_signals_consistent():
         bands = {c[1] for c in spec["code"] + spec["phase"] + spec["snr"]}
         assert len(bands) == 1, name  # one carrier per named signal
         band = bands.pop()
-        assert spec["freq_hz"] == sg.FREQ_BY_SYSTEM_BAND_HZ[(system, band)], name
+        if "fdma_band" in spec:          # GLONASS FDMA: channel 0 of the band, each satellite its own (k)
+            assert spec["freq_hz"] == sg.glonass_frequency_hz(int(band), 0) and spec["fdma_band"] == int(band), name
+        else:
+            assert spec["freq_hz"] == sg.FREQ_BY_SYSTEM_BAND_HZ[(system, band)], name
         assert sg.wavelength_m(name) == C_M_S / spec["freq_hz"], name
         assert [c[0] for c in spec["code"]] == ["C"] * len(spec["code"])
         assert [c[2:] for c in spec["code"]] == [c[2:] for c in spec["phase"]] == [c[2:] for c in spec["snr"]]
@@ -64,3 +67,11 @@ def test_former_copies_read_the_table():
     assert positioning.BAND_FREQ_HZ[("G", 2)] == sg.FREQ_GPS_L2_HZ
     assert observables.FREQS == {"L1": sg.FREQ_GPS_L1_HZ, "L2": sg.FREQ_GPS_L2_HZ}
     assert sim_constants.C_M_S == C_M_S
+
+
+def test_glonass_fdma_wavelengths_per_channel():
+    """GLONASS ICD 5.1 sec. 3.3.1.4: G1 1602 + 0.5625 k MHz; k = -7 gives 1598.0625 MHz, k = +6 1605.375 MHz."""
+    assert sg.glonass_wavelength_m(1, -7) == pytest.approx(C_M_S / 1598.0625e6, rel=1e-15)
+    assert sg.glonass_wavelength_m(2, 6) == pytest.approx(C_M_S / 1248.625e6, rel=1e-15)
+    assert sg.is_fdma("R:G1") and sg.is_fdma("R:G2") and not sg.is_fdma("G:L1")
+    assert sg.SYSTEM_SIGNALS["R"] == ("R:G1", "R:G2")

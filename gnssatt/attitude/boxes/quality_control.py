@@ -113,11 +113,12 @@ def edit_epoch(run: FilterRun, ep: EpochData) -> None:
         # a common phase jump without a code jump: a receiver clock jump not applied to phase -> integer shift
         common = _nz(ep.mp - ep.mc)
         for j, f in zip(*np.nonzero(np.abs(common) > 1000.0)):
-            n_cyc = np.round(common[j, f] / lam[f])
-            sel = (st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f)
-            st.x[st.n_fixed_part + np.flatnonzero(sel)] += n_cyc
-            ep.mp[j, f] -= n_cyc * lam[f]
-            ep.td_p[j, :, f] -= n_cyc * lam[f]
+            n_cyc_sat = np.round(common[j, f] / lam[:, f])         # per satellite (FDMA: per-channel wavelength)
+            n_cyc = np.round(common[j, f] / run.lam_sig[f])
+            sel = np.flatnonzero((st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f))
+            st.x[st.n_fixed_part + sel] += n_cyc_sat[st.amb_key[sel, 1]]
+            ep.mp[j, f] -= n_cyc * run.lam_sig[f]
+            ep.td_p[j, :, f] -= n_cyc_sat * lam[:, f]
             run.events.add(k, "phase_clock_jump", j, sig=run.pobs.signals[f],
                            detail=f"{n_cyc:.0f} cycles common to all satellites")
 
@@ -133,7 +134,7 @@ def noise_weights(run: FilterRun, ep: EpochData):
         return run.w_glw
     lw = run.blk_lw[ep.i]
     if run.cn0_growth:
-        xs, rs, g_off = cn0_growth_samples(ep.td_c, ep.td_p, ep.td_c_ok, ep.td_p_ok, ep.mc, ep.mp, lw, run.lam)
+        xs, rs, g_off = cn0_growth_samples(ep.td_c, ep.td_p, ep.td_c_ok, ep.td_p_ok, ep.mc, ep.mp, lw, run.lam_sig)
         growth_weights(True, xs, np.log(rs), g_off, run.mom, run.gam_n, run.gamma, NOISE_EPOCHS, NOISE_MIN_EPOCHS,
                        0.05, lw, run.w_glw)
     else:
@@ -179,5 +180,5 @@ def ambiguity_bookkeeping(run: FilterRun, ep: EpochData) -> None:
         n_need = int(need.sum())
     if n_need:
         jj, ss, ff = np.nonzero(need)
-        vals = (ep.sdp_c[jj, ss, ff] - ep.sdc_c[jj, ss, ff]) / lam[ff]
+        vals = (ep.sdp_c[jj, ss, ff] - ep.sdc_c[jj, ss, ff]) / lam[ss, ff]
         st.add_ambiguities(np.stack([jj, ss, ff], 1), vals, run.s.table1.sigma0_ambiguity_cyc, ep.t)
