@@ -3,7 +3,7 @@ the 0.6 m three-antenna set with a 10 Hz gyro, GPS faults of 35 % of a wavelengt
 outage and a 10x gyro drift fault after the orbit; run gnssatt.gyro.fuse and score against the truth.
 
     PYTHONPATH=. python bench/bench_gyro_fusion.py [--orbit equatorial|polar] [--seed 2] [--out DIR]
-        [--clean] [--duration-s S] [--runs N]
+        [--clean] [--duration-s S] [--runs N] [--kappa K] [--threshold-model chi2|gaussian]
 
 Prints one JSON document (timings: median of --runs runs of the job after one warm-up; scores of the last run).
 """
@@ -31,6 +31,8 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=1)
     ap.add_argument("--step", action="store_true", help="gyro fault as a step (default: ramp over 300 s)")
     ap.add_argument("--kappa", type=float, default=3.0, help="GPS threshold control parameter")
+    ap.add_argument("--threshold-model", default="chi2", choices=["chi2", "gaussian"],
+                    help="GPS threshold: chi-square quantile (default) or the paper's mu + kappa sigma")
     ap.add_argument("--no-products", action="store_true", help="time the fusion only")
     a = ap.parse_args()
     from gnssatt.gyro.api import fuse
@@ -48,7 +50,7 @@ def main() -> None:
     t = time.perf_counter()
     gs = simulate_gyro_set(sc, out / "set", seed=a.seed)
     sim_s = time.perf_counter() - t
-    settings = {"gps_fdi": {"kappa": a.kappa}}
+    settings = {"gps_fdi": {"kappa": a.kappa, "threshold_model": a.threshold_model}}
     fuse(gs.files, settings)                             # warm-up (numba cache)
     times, cpu = [], []
     for _ in range(a.runs):
@@ -68,7 +70,7 @@ def main() -> None:
         after = attitude_scores(gs.sim.dir, res.run, res.gps)
         sc_att["whole_run_with_gyro_fault_fused"] = after["fused"]
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
-    doc = {"orbit": a.orbit, "seed": a.seed, "kappa": a.kappa, "gyro_fault": "step" if a.step else "ramp 300 s",
+    doc = {"orbit": a.orbit, "seed": a.seed, "kappa": a.kappa, "threshold_model": a.threshold_model, "gyro_fault": "step" if a.step else "ramp 300 s",
            "duration_s": dur, "clean": a.clean, "commit": commit,
            "machine": f"{_platform.processor() or _platform.machine()}, {os.cpu_count()} cpu",
            "simulate_s": round(sim_s, 2), "fuse_s_median": round(float(np.median(times)), 2),

@@ -67,7 +67,7 @@ def _snapshot(gps, k, R_be_prior, P_prior, s: FusionSettings):
     if Z is None:
         return None, ep, idx, ratio
     bank = run_bank(Z, ep, gps.baselines_body_m, R_be_prior, [int(r) for r in refs], s.gps_fdi.kappa,
-                    s.gps_fdi.enabled)
+                    s.gps_fdi.enabled, s.gps_fdi.threshold_model)
     bank.integers = (ep.sats[int(refs[0])], [ep.sats[j] for j in range(len(ep.sats)) if j != int(refs[0])], N)
     return bank, ep, idx, ratio
 

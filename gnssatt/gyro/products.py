@@ -108,7 +108,7 @@ def fault_rows(res) -> list[dict]:
             cur["_end"], cur["end_gps"] = k, iso[k]
             continue
         cur = {"sensor": "gps", "antenna": ant, "satellite": sat, "axis": "", "start_gps": iso[k], "end_gps": iso[k],
-               "detected_gps": iso[k], "detection_delay_s": 0.0, "test": "exclusion bank J > mu + kappa sigma_J",
+               "detected_gps": iso[k], "detection_delay_s": 0.0, "test": "exclusion bank J > J*(mu, kappa)",
                "statistic": float(J), "threshold": float(thr), "_end": k, "_t": float(gps.time[k] - gps.time[0])}
         rows.append(cur)
     bank_delays = res.settings.gyro_fdi.delay_step_s

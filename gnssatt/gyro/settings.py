@@ -41,10 +41,13 @@ class GpsNoise:
 
 @dataclass
 class GpsFdi:
-    """Exclusion bank of sec. 3.1: threshold J* = mu + kappa sigma_J, sigma_J = sqrt(2 mu)."""
+    """Exclusion bank of sec. 3.1: threshold from kappa, by default the chi-square quantile with the normal
+    kappa-sigma tail; threshold_model "gaussian" is the paper's J* = mu + kappa sigma_J, sigma_J = sqrt(2 mu)
+    (gnssatt.gyro.exclusion_bank.threshold)."""
 
     kappa: float = 3.0
     enabled: bool = True
+    threshold_model: str = "chi2"
 
 
 @dataclass

@@ -95,5 +95,19 @@ def test_no_fault_no_detection_most_of_the_time():
         ep, R_true, _ = _epoch(rng)
         Z, _, _ = integer_corrected(ep, B, R_true, np.eye(3) * np.radians(0.2) ** 2, 0)
         det += run_bank(Z, ep, B, R_true, [0, 1], kappa=3.0).detected
-    # P(chi2_11 > 11 + 3 sqrt(22)) = 0.7 %; 200 epochs: expect 1.4, allow up to 8 (p ~ 1e-4)
-    assert det <= 8
+    # chi2 threshold: P(J > J*) = Q(3) = 0.135 % at any dof; 200 epochs: expect 0.27, allow up to 4 (p ~ 2e-4)
+    assert det <= 4
+
+
+def test_threshold_models():
+    """"gaussian" is the paper's mu + kappa sqrt(2 mu); "chi2" has the normal kappa-sigma tail at every dof, so
+    with few dof it lies above the paper's (whose chi-square tail at kappa = 3 is 0.8-1.1 % for mu = 7-17)."""
+    from scipy.stats import chi2, norm
+
+    for mu in (3, 7, 11, 17, 40):
+        assert threshold(mu, 3.0, "gaussian") == pytest.approx(mu + 3.0 * np.sqrt(2.0 * mu), rel=1e-12)
+        assert chi2.sf(threshold(mu, 3.0), mu) == pytest.approx(norm.sf(3.0), rel=1e-6)
+        assert threshold(mu, 3.0) > threshold(mu, 3.0, "gaussian")
+        assert chi2.sf(threshold(mu, 3.0, "gaussian"), mu) > 2 * norm.sf(3.0)
+    with pytest.raises(ValueError, match="threshold model"):
+        threshold(9, 3.0, "student")

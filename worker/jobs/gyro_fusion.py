@@ -6,6 +6,8 @@ gnssatt.gyro.fuse and writes its products, plots and report.html. See docs/gyro_
 The science is imported inside run() (the API imports this module for the config model)."""
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import BaseModel, ConfigDict, Field
 
 from worker.context import JobContext
@@ -17,8 +19,11 @@ class GyroFusionConfig(BaseModel):
     """Seed 002 Table 1 defaults; every field maps onto gnssatt.gyro.settings.FusionSettings."""
 
     model_config = ConfigDict(extra="forbid")
-    kappa: float = Field(3.0, ge=0.0, le=10.0, description="GPS fault threshold J* = mu + kappa sqrt(2 mu) "
-                         "(seed 002 sec. 3.1: 0-5, 3 from simulation).")
+    kappa: float = Field(3.0, ge=0.0, le=10.0, description="GPS fault threshold control parameter (seed 002 "
+                         "sec. 3.1: 0-5, 3 from simulation).")
+    gps_threshold_model: Literal["chi2", "gaussian"] = Field(
+        "chi2", description="chi2: J* is the chi-square quantile with the tail of a normal kappa-sigma test; "
+                            "gaussian: the paper's J* = mu + kappa sqrt(2 mu).")
     gps_fdi: bool = Field(True, description="Run the exclusion bank (false: every snapshot is used as it is).")
     n_propagators: int = Field(5, ge=1, le=20, description="Delayed attitude propagators of the gyro test.")
     delay_step_s: float = Field(60.0, gt=0.0, le=3600.0, description="Delay of propagator j is j times this.")
@@ -48,7 +53,7 @@ class GyroFusionConfig(BaseModel):
             gps=GpsNoise(phase_sigma_m=self.phase_sigma_m, multipath_zenith_m=self.multipath_zenith_m,
                          multipath_horizon_m=self.multipath_horizon_m, multipath_tau_s=self.multipath_tau_s,
                          elevation_mask_deg=self.elevation_mask_deg),
-            gps_fdi=GpsFdi(kappa=self.kappa, enabled=self.gps_fdi),
+            gps_fdi=GpsFdi(kappa=self.kappa, enabled=self.gps_fdi, threshold_model=self.gps_threshold_model),
             gyro_fdi=GyroFdi(n_propagators=self.n_propagators, delay_step_s=self.delay_step_s,
                              threshold_sigma=self.gyro_threshold_sigma, persistence=self.gyro_persistence))
 
