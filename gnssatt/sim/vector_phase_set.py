@@ -20,6 +20,7 @@ from gnssatt.gnss.rotations import dcm_to_quat
 from gnssatt.gnss.time import GpsTime
 from gnssatt.sim._rinex_obs_out import ObsHeader, write_obs
 from gnssatt.vector_phase.pattern_file import antenna_pattern_doc
+from gnssatt.vector_phase.troposphere import slant_delay_m
 from gnssatt.vector_phase.scenario import C_M_S, ScenarioSpec, simulate
 
 __all__ = ["write_vector_phase_set", "F_L1_HZ"]
@@ -36,8 +37,12 @@ def _reference_csv(t0: GpsTime, dt_s: np.ndarray, R_body_from_ecef: np.ndarray) 
     return "time_gps,frame,qw,qx,qy,qz\n" + "\n".join(rows) + "\n"
 
 
-def write_vector_phase_set(out_dir, spec: ScenarioSpec, *, antenna_id: str = "ANT", include_pattern: bool = True):
-    """Write the set into out_dir; returns (paths, observations, truth, mount) of gnssatt.vector_phase.scenario."""
+def write_vector_phase_set(out_dir, spec: ScenarioSpec, *, antenna_id: str = "ANT", include_pattern: bool = True,
+                           troposphere: bool = True):
+    """Write the set into out_dir; returns (paths, observations, truth, mount) of gnssatt.vector_phase.scenario.
+
+    troposphere: delay code and phase by the Saastamoinen slant delay (the model the reader removes); False
+    writes the scenario's vacuum ranges (the code solution is then ~9 m low, as it corrects a delay not there)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     obs, truth, mount = simulate(spec)
@@ -46,8 +51,9 @@ def write_vector_phase_set(out_dir, spec: ScenarioSpec, *, antenna_id: str = "AN
     rho = np.linalg.norm(obs.r_sat_ecef_m - truth.position_ecef_m, axis=-1)
     _, dt_sv = const.position_clock((t0 - const.t_ref) + dt[:, None] - rho / C_M_S, idx)
     rng = np.random.default_rng(spec.seed + 1000)
-    code = rho - C_M_S * dt_sv + rng.normal(0.0, SIGMA_CODE_M, rho.shape)
-    phase = obs.phase_cyc - F_L1_HZ * dt_sv
+    tropo_m = slant_delay_m(truth.position_ecef_m, obs.r_sat_ecef_m) if troposphere else np.zeros_like(rho)
+    code = rho + tropo_m - C_M_S * dt_sv + rng.normal(0.0, SIGMA_CODE_M, rho.shape)
+    phase = obs.phase_cyc + tropo_m * F_L1_HZ / C_M_S - F_L1_HZ * dt_sv
     values = np.stack([code, phase], axis=-1)
     lli = np.zeros(values.shape, int)
     ssi = np.full(values.shape, 7)

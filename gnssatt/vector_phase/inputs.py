@@ -125,6 +125,13 @@ def _geometry(obs, ephemeris, spp_sol, r0, gps_cols, elevation_mask_deg: float):
     return r_sat, clock, np.isfinite(clock) & (el > elevation_mask_deg)
 
 
+def _troposphere_cyc(r0, r_sat) -> np.ndarray:
+    """Saastamoinen slant delay (the code solution's model, gnssatt.gnss.positioning) at r0 in L1 cycles."""
+    from gnssatt.vector_phase.troposphere import slant_delay_m
+
+    return slant_delay_m(r0, r_sat) * F_L1_HZ / 299792458.0
+
+
 def _observations(obs, name, nav, sigma_phase_cyc, elevation_mask_deg, axes):
     from gnssatt.gnss.ephemeris import BroadcastEphemeris
     from gnssatt.gnss.positioning import spp
@@ -143,7 +150,7 @@ def _observations(obs, name, nav, sigma_phase_cyc, elevation_mask_deg, axes):
     r_sat, clock_sv, usable = _geometry(obs, ephemeris, sol, r0, gps_cols, elevation_mask_deg)
     L = obs.values[:, gps_cols, col]
     clock_rx = np.where(np.isfinite(sol.clock_s), sol.clock_s, np.nan)
-    phase = L + F_L1_HZ * (clock_sv - clock_rx[:, None])
+    phase = L + F_L1_HZ * (clock_sv - clock_rx[:, None]) - _troposphere_cyc(r0, r_sat)
     phase = np.where(usable & ok[:, None], phase, np.nan)
     lli = obs.lli[:, gps_cols, col]
     present = np.isfinite(phase)

@@ -112,3 +112,27 @@ def test_antenna_pattern_as_its_own_file_in_the_set(tmp_path):
     ya = [r["yaw_deg"] for r in csv.DictReader(io.StringIO(a["attitude.csv"].read_text()))]
     yb = [r["yaw_deg"] for r in csv.DictReader(io.StringIO(b["attitude.csv"].read_text()))]
     assert ya == yb and ya[0] != ""    # the same inputs by two routes: the same written attitude
+
+
+def test_vector_phase_job_without_the_true_position(tmp_path):
+    """The start is then the median code solution: with the troposphere simulated as the code solution models it
+    (Saastamoinen), it is ~3 m off (0.3 m code noise, 40 epochs), not the ~9 m of vacuum data corrected for a
+    delay that was not there."""
+    from gnssatt.gnss.ephemeris import BroadcastEphemeris
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+    from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+    from gnssatt.gnss.positioning import spp
+
+    obs_set, truth = _set(tmp_path)
+    sol = spp(read_rinex_obs(tmp_path / "set" / "ANT.rnx"), BroadcastEphemeris(read_rinex_nav(tmp_path / "set" / "brdc.nav")))
+    ok = np.all(np.isfinite(sol.position_ecef_m), axis=1)
+    start_error_m = np.linalg.norm(np.median(sol.position_ecef_m[ok], axis=0) - truth.position_ecef_m)
+    assert start_error_m < 5.0          # 0.3 m code noise x PDOP ~3-5, median over 40 epochs; was 9 m
+    out = _run(tmp_path, obs_set, sigma_phase_mm=0.951)
+    summary = json.loads(out["summary.json"].read_text())
+    comp = summary["reference_comparison"]
+    # yaw and roll stay within the bounds of the run given the true position; pitch does not yet (22.5 deg,
+    # 3.1 sigma on this run: the 3 m start still leaks into the tilt over 40 s; docs/vector_phase.md, open)
+    for angle in ("yaw", "roll"):
+        assert comp[angle]["rms_error_deg"] < 10.0
+        assert comp[angle]["rms_error_over_sigma"] < 2.0
