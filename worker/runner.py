@@ -300,6 +300,7 @@ def reap(rt: Runtime) -> dict[str, int]:
     """
     now = utcnow()
     to_enqueue: list[str] = []
+    ended: list[str] = []  # failed or cancelled here: their webhooks are sent once the UPDATE is committed
     counts = {"requeued": 0, "failed": 0, "cancelled": 0, "rerung": 0}
     pg = rt.engine.dialect.name == "postgresql"
     with rt.Session.begin() as s:
@@ -326,6 +327,8 @@ def reap(rt: Runtime) -> dict[str, int]:
                 counts[kind] += 1
                 if kind == "requeued":
                     to_enqueue.append(job_id)
+                else:
+                    ended.append(job_id)
         stale = now - timedelta(seconds=rt.settings.requeue_after_seconds)
         q = select(Job.id).where(Job.state == "queued", Job.enqueued_at < stale)
         if pg:
@@ -338,6 +341,11 @@ def reap(rt: Runtime) -> dict[str, int]:
                 counts["rerung"] += 1
     for job_id in to_enqueue:
         enqueue(rt.huey, job_id)
+    if ended:
+        from worker.webhooks import notify_finished
+
+        for job_id in ended:
+            notify_finished(rt, job_id)
     counts["tasks_requeued"] = reap_tasks(rt)
     if any(counts.values()):
         log.info("reaper: %s", counts)
