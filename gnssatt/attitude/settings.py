@@ -97,7 +97,7 @@ class Table2Editing:
     cn0_mask_dbhz: dict[str, float] = _f(None, "C/N0 masks (dB-Hz) per signal name (aliases 'L1'/'G:L1' match).",
                                          factory=dict)
     cn0_mask_default_dbhz: float | None = _f(None, "C/N0 mask of signals not in cn0_mask_dbhz; null: their Table 2 "
-                                                   "mask (SIGNALS: 35 on a system's first frequency, 30 on the "
+                                                   "mask (SIGNALS: 35 dB-Hz on a system's first frequency, 30 on the "
                                                    "others); 0: none ('all phases', docs/attitude.md).",
                                              ge=0, le=70)
     td_code_m: float = _f(0.50, "Triple-difference limit of code (m), Table 2.", gt=0, le=1000)
@@ -145,8 +145,8 @@ class NoiseModel:
     the separate phase clock and time-correlated multipath. Ours (seed 000 sec. 2 uses no weighting); reasons and
     measurements in docs/attitude.md 'Noise model'."""
 
-    weighting: Literal["none", "cn0", "elevation"] = _f("none", "Observation weighting (antenna-frame elevation "
-                                                                "or C/N0); none: Table 1.")
+    weighting: Literal["none", "cn0", "elevation"] = _f("none", "Observation weighting: elevation (antenna frame), "
+                                                                "cn0 (C/N0) or none (Table 1).")
     separate_phase_clock: bool = _f(True, "Phase gets its own white-noise clock per signal (enters as double "
                                           "differences; code multipath cannot leak through the ambiguity).")
     noise_estimation: bool = _f(True, "Estimate the white noise per signal from triple differences (keeps the "

@@ -48,10 +48,10 @@ def _model_of(record: type, name: str, extra: dict | None = None) -> type[BaseMo
 
 #: job-only fields of the Table 2 group: the GPS L1/L2 C/N0 masks, pinned into cn0_mask_dbhz (null: the preset's)
 _TABLE2_JOB = {
-    "cn0_mask_l1_dbhz": (float | None, Field(None, ge=0, le=70, description="C/N0 mask of GPS L1 C/A (seed 000 "
+    "cn0_mask_l1_dbhz": (float | None, Field(None, ge=0, le=70, description="C/N0 mask of GPS L1 C/A, dB-Hz (seed 000 "
                                               "Table 2: 35; 0: none); null: the preset's.")),
-    "cn0_mask_l2_dbhz": (float | None, Field(None, ge=0, le=70, description="C/N0 mask of GPS L2 (seed 000 Table "
-                                              "2: 30; 0: none); null: the preset's.")),
+    "cn0_mask_l2_dbhz": (float | None, Field(None, ge=0, le=70, description="C/N0 mask of GPS L2, dB-Hz (seed 000 "
+                                              "Table 2: 30; 0: none); null: the preset's.")),
 }
 _GROUP_MODELS = {g: _model_of(t, f"Attitude{t.__name__}", _TABLE2_JOB if g == "table2" else None)
                  for g, t in GROUPS.items()}
