@@ -90,6 +90,9 @@ def test_every_config_field_has_a_help_text():
     short = [f"{path}: {desc!r}" for path, _, _, desc in leaves if len((desc or "").strip()) < MIN_CHARS]
     assert not short, "config fields without a help text of at least %d characters (add description= to the " \
                       "Field or the settings metadata): %s" % (MIN_CHARS, short)
+    # The UI shows one field's text alone: none may lean on its neighbour's ("... and", "The same for").
+    leaning = [f"{path}: {desc!r}" for path, _, _, desc in leaves if desc.startswith(("...", "+", "The same", "Its "))]
+    assert not leaning, f"help texts that only make sense after the previous field's: {leaning}"
 
 
 def test_every_choice_field_names_its_allowed_values():

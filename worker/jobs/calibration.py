@@ -43,7 +43,8 @@ class CalibrationConfig(BaseModel):
                            description="Samples a bin needs for a value; fewer leave it empty (null). 10 with the "
                                        "smoothing (each value is a fit supported by its neighbours); raise it "
                                        "(e.g. 30) with smoothing_order 0.")
-    max_iterations: int = Field(10, ge=1, le=1000, description="Most PCV iterations.")
+    max_iterations: int = Field(10, ge=1, le=1000, description="Most PCV iterations (fewer once the map "
+                                                               "changes by less than tolerance_mm).")
     smoothing_order: int = Field(8, ge=0, le=30, description="Radial order of the Zernike fit that smooths each "
                                  "map over the hemisphere (structure finer than ~90/N deg is smoothed away); 0 = "
                                  "plain bin means. Empty bins stay empty either way.")

@@ -24,8 +24,9 @@ class GyroFusionConfig(BaseModel):
     delay_step_s: float = Field(60.0, gt=0.0, le=3600.0, description="Delay of propagator j is j times this (s).")
     gyro_threshold_sigma: float = Field(5.0, gt=0.0, le=100.0,
                                         description="A propagator flags when |residual| exceeds this many "
-                                                    "theoretical sigmas on some axis ...")
-    gyro_persistence: int = Field(3, ge=1, le=100, description="... in this many consecutive GPS epochs.")
+                                                    "theoretical sigmas on some axis, gyro_persistence times in a row.")
+    gyro_persistence: int = Field(3, ge=1, le=100, description="Consecutive GPS epochs over "
+                                                               "gyro_threshold_sigma before a propagator flags.")
     elevation_mask_deg: float = Field(15.0, ge=-10.0, le=80.0, description="Antenna-frame elevation mask (deg).")
     phase_sigma_m: float = Field(0.0019, gt=0.0, le=0.1, description="Undifferenced L1 phase white noise "
                                  "(m; Table 1: 1 % of the wavelength).")
