@@ -144,7 +144,8 @@ _JOB_EXTRA = {
     "preset": (Literal[tuple(PRESETS)], Field("seed000", description="Named settings the fields given here "
                                                "override (gnssatt.attitude.settings.PRESETS): seed000 = Tables "
                                                "1-2; all-phases = no C/N0 or antenna-frame masks; "
-                                               "all-phases-smoother; all-phases-adaptive-smoother.")),
+                                               "all-phases-smoother = all-phases + RTS smoothing; "
+                                               "all-phases-adaptive-smoother = that + the adaptive omega noise.")),
     "calibrated_baselines": (CalibratedBaselines | None, Field(
         None, description="A calibration job's baselines.json object (CONVENTIONS.md) replacing the a priori "
                           "antenna positions.")),

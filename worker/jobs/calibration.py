@@ -33,8 +33,8 @@ HELD_OUT_ATTITUDE_DEFAULT: dict = {"preset": "all-phases-smoother"}
 class CalibrationConfig(BaseModel):
     model_config = ConfigDict(extra="forbid")
     frequencies: list[Literal["L1", "L2"]] = Field(["L1", "L2"], min_length=1,
-                                                   description="Signals used (each an independent observation); one "
-                                                               "PCV map per baseline and frequency.")
+                                                   description="Signals used, L1 and/or L2 (each an independent "
+                                                               "observation); one PCV map per baseline and frequency.")
     azimuth_step_deg: float = Field(2.5, gt=0.0, le=90.0, description="Azimuth bin width (deg; divides 360).")
     elevation_step_deg: float = Field(1.0, gt=0.0, le=45.0, description="Elevation bin width (deg).")
     elevation_min_deg: float = Field(0.0, ge=-90.0, lt=90.0, description="Lowest bin edge, antenna frame (deg).")

@@ -72,7 +72,8 @@ class PlanConfig(BaseModel):
     platform: dict | None = Field(None, description="A platform.json object (CONVENTIONS.md); null: the set's.")
     attitude: AttitudeProfile = Field(default_factory=AttitudeProfile)
     systems: list[Literal["G", "E", "C", "J"]] = Field(["G"], min_length=1, max_length=4,
-                                                      description="Constellations used.")
+                                                      description="Constellations used: G (GPS), E (Galileo), "
+                                                                  "C (BeiDou), J (QZSS).")
     horizon_mask_deg: float | None = Field(None, ge=-90, le=90, description="Local-horizon elevation mask "
                                            "(deg); null: -90 for spacecraft (seed 000 Table 2), 10 on the ground.")
     antenna_mask_deg: float = Field(0.0, ge=-90, le=90, description="Antenna-frame elevation mask (deg, seed "
