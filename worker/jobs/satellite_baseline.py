@@ -16,7 +16,8 @@ class SatelliteBaselineConfig(BaseModel):
     satellites: dict = Field(default_factory=dict, description="satellites.json content: signals and attitude "
                              "models (the a priori aux_antenna_m is not needed).")
     stations: dict = Field(default_factory=dict, description="stations.json content (CONVENTIONS.md).")
-    satellite_ids: list[str] | None = Field(None, max_length=100, description="Satellites to estimate.")
+    satellite_ids: list[str] | None = Field(None, max_length=100, description="Satellites to estimate (e.g. J01); "
+                                            "default every satellite with the auxiliary signal.")
     exclude: dict[str, list[tuple[float, float]]] = Field(
         default_factory=dict, description="satellite -> [[start_s, end_s]] (seconds from the first epoch) of "
         "non-nominal attitude (manoeuvres) left out.")
