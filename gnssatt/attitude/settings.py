@@ -97,7 +97,7 @@ class Table2Editing:
     cn0_mask_dbhz: dict[str, float] = _f(None, "C/N0 masks (dB-Hz) per signal name (aliases 'L1'/'G:L1' match).",
                                          factory=dict)
     cn0_mask_default_dbhz: float | None = _f(None, "C/N0 mask of signals not in cn0_mask_dbhz; null: their Table 2 "
-                                                   "mask (SIGNALS: 35 on a system's first frequency, 30 on the "
+                                                   "mask (SIGNALS: 35 dB-Hz on a system's first frequency, 30 on the "
                                                    "others); 0: none ('all phases', docs/attitude.md).",
                                              ge=0, le=70)
     td_code_m: float = _f(0.50, "Triple-difference limit of code (m), Table 2.", gt=0, le=1000)
@@ -134,7 +134,7 @@ class AmbiguityResolution:
     fixed_min_sats: int = _f(4, "Fixed satellites in the update for an epoch to count as fixed.", ge=1, le=100)
     new_amb_round_sigma_cyc: float = _f(0.08, "A fixed baseline fixes a newcomer by rounding below this sigma "
                                               "(cycles).", gt=0, le=10)
-    new_amb_round_frac_cyc: float = _f(0.2, "... and when its float is within this of an integer (cycles).",
+    new_amb_round_frac_cyc: float = _f(0.2, "Rounding also needs the float within this of an integer (cycles).",
                                        gt=0, le=0.5)
     max_gap_s: float = _f(10.0, "An ambiguity unobserved longer than this restarts as float (s).", gt=0, le=86400)
 
@@ -145,8 +145,8 @@ class NoiseModel:
     the separate phase clock and time-correlated multipath. Ours (seed 000 sec. 2 uses no weighting); reasons and
     measurements in docs/attitude.md 'Noise model'."""
 
-    weighting: Literal["none", "cn0", "elevation"] = _f("none", "Observation weighting (antenna-frame elevation "
-                                                                "or C/N0); none: Table 1.")
+    weighting: Literal["none", "cn0", "elevation"] = _f("none", "Observation weighting: elevation (antenna frame), "
+                                                                "cn0 (C/N0) or none (Table 1).")
     separate_phase_clock: bool = _f(True, "Phase gets its own white-noise clock per signal (enters as double "
                                           "differences; code multipath cannot leak through the ambiguity).")
     noise_estimation: bool = _f(True, "Estimate the white noise per signal from triple differences (keeps the "
@@ -155,7 +155,8 @@ class NoiseModel:
     sigma_multipath_phase_m: tuple[float, float] = _f(
         (0.0015, 0.006), "Time-correlated phase error of one SD (boresight, antenna horizon) (m), growing with the "
                          "square of the off-boresight angle; (0, 0): off.")
-    sigma_multipath_code_m: tuple[float, float] = _f((0.15, 0.9), "The same for code (m).")
+    sigma_multipath_code_m: tuple[float, float] = _f((0.15, 0.9), "Time-correlated code error of one SD "
+                                                                  "(boresight, antenna horizon) (m); (0, 0): off.")
     multipath_correlation_factor: float = _f(3.0, "Dynamic mode: the correlated variance x this (epochs averaged "
                                                   "within one correlation time).", gt=0, le=1000)
     multipath_adaptive: bool = _f(True, "Scale the multipath variance by what the post-fit residuals of fixed "
@@ -173,12 +174,13 @@ class SmootherSettings:
     adaptive_noise: bool = _f(False, "Dynamic mode, implies enabled: the omega random walk per epoch from the "
                                      "smoothed angular acceleration of a first pass, then the filter run again "
                                      "(about twice the CPU). Off: Table 1's random walk.")
-    noise_floor: float = _f(0.03, "Its quiet level, a fraction of Table 1's rate.", ge=0, le=100)
-    noise_gain: float = _f(0.5, "+ gain x alpha alpha^T dt (alpha the smoothed angular acceleration).",
+    noise_floor: float = _f(0.03, "Adaptive noise: the quiet level, a fraction of Table 1's rate.", ge=0, le=100)
+    noise_gain: float = _f(0.5, "Adaptive noise: the quiet level + this x alpha alpha^T dt (alpha the smoothed "
+                                "angular acceleration).",
                            ge=0, le=1000)
     noise_window_s: float = _f(20.0, "The largest alpha within +- this sets an epoch's noise (s).", gt=0, le=3600)
-    accel_window_s: float = _f(5.0, "alpha from the smoothed omega over +- this (s).", gt=0, le=3600)
-    accel_noise_k: float = _f(3.0, "|alpha| first shrunk by this x its median over the pass.", ge=0, le=100)
+    accel_window_s: float = _f(5.0, "Adaptive noise: alpha from the smoothed omega over +- this (s).", gt=0, le=3600)
+    accel_noise_k: float = _f(3.0, "Adaptive noise: |alpha| first shrunk by this x its pass median.", ge=0, le=100)
 
 
 @dataclass

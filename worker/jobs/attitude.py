@@ -48,10 +48,10 @@ def _model_of(record: type, name: str, extra: dict | None = None) -> type[BaseMo
 
 #: job-only fields of the Table 2 group: the GPS L1/L2 C/N0 masks, pinned into cn0_mask_dbhz (null: the preset's)
 _TABLE2_JOB = {
-    "cn0_mask_l1_dbhz": (float | None, Field(None, ge=0, le=70, description="C/N0 mask of GPS L1 C/A (seed 000 "
+    "cn0_mask_l1_dbhz": (float | None, Field(None, ge=0, le=70, description="C/N0 mask of GPS L1 C/A, dB-Hz (seed 000 "
                                               "Table 2: 35; 0: none); null: the preset's.")),
-    "cn0_mask_l2_dbhz": (float | None, Field(None, ge=0, le=70, description="C/N0 mask of GPS L2 (seed 000 Table "
-                                              "2: 30; 0: none); null: the preset's.")),
+    "cn0_mask_l2_dbhz": (float | None, Field(None, ge=0, le=70, description="C/N0 mask of GPS L2, dB-Hz (seed 000 "
+                                              "Table 2: 30; 0: none); null: the preset's.")),
 }
 _GROUP_MODELS = {g: _model_of(t, f"Attitude{t.__name__}", _TABLE2_JOB if g == "table2" else None)
                  for g, t in GROUPS.items()}
@@ -144,7 +144,8 @@ _JOB_EXTRA = {
     "preset": (Literal[tuple(PRESETS)], Field("seed000", description="Named settings the fields given here "
                                                "override (gnssatt.attitude.settings.PRESETS): seed000 = Tables "
                                                "1-2; all-phases = no C/N0 or antenna-frame masks; "
-                                               "all-phases-smoother; all-phases-adaptive-smoother.")),
+                                               "all-phases-smoother = all-phases + RTS smoothing; "
+                                               "all-phases-adaptive-smoother = that + the adaptive omega noise.")),
     "calibrated_baselines": (CalibratedBaselines | None, Field(
         None, description="A calibration job's baselines.json object (CONVENTIONS.md) replacing the a priori "
                           "antenna positions.")),

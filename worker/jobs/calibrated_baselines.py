@@ -17,13 +17,14 @@ class CalibratedBaseline(BaseModel):
     from_: str = Field(alias="from", min_length=1, max_length=100, description="First antenna id.")
     to: str = Field(min_length=1, max_length=100, description="Second antenna id.")
     calibrated_m: Vector_m = Field(description="Calibrated baseline, body frame, first to second antenna (m).")
-    a_priori_m: Vector_m | None = None
-    sigma_m: Sigma_m | None = None
-    n_epochs: int | None = Field(None, ge=0, le=10**9)
+    a_priori_m: Vector_m | None = Field(None, description="A priori baseline the calibration started from, body "
+                                                         "frame (m).")
+    sigma_m: Sigma_m | None = Field(None, description="Sigma of each calibrated component, body frame (m).")
+    n_epochs: int | None = Field(None, ge=0, le=10**9, description="Number of epochs the calibration used.")
 
 
 class CalibratedBaselines(BaseModel):
     model_config = ConfigDict(extra="allow", serialize_by_alias=True)
-    platform: str | None = Field(None, max_length=300)
-    frames: Literal["body"] = "body"
+    platform: str | None = Field(None, max_length=300, description="Platform the calibration was made for.")
+    frames: Literal["body"] = Field("body", description="Frame of the vectors: body (the only one).")
     baselines: list[CalibratedBaseline] = Field(min_length=1, max_length=64)

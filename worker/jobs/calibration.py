@@ -33,17 +33,18 @@ HELD_OUT_ATTITUDE_DEFAULT: dict = {"preset": "all-phases-smoother"}
 class CalibrationConfig(BaseModel):
     model_config = ConfigDict(extra="forbid")
     frequencies: list[Literal["L1", "L2"]] = Field(["L1", "L2"], min_length=1,
-                                                   description="Signals used (each an independent observation); one "
-                                                               "PCV map per baseline and frequency.")
-    azimuth_step_deg: float = Field(2.5, gt=0.0, le=90.0, description="Azimuth bin width (divides 360).")
-    elevation_step_deg: float = Field(1.0, gt=0.0, le=45.0, description="Elevation bin width.")
-    elevation_min_deg: float = Field(0.0, ge=-90.0, lt=90.0, description="Lowest bin edge (antenna frame).")
-    elevation_max_deg: float = Field(90.0, gt=-90.0, le=90.0, description="Highest bin edge (antenna frame).")
+                                                   description="Signals used, L1 and/or L2 (each an independent "
+                                                               "observation); one PCV map per baseline and frequency.")
+    azimuth_step_deg: float = Field(2.5, gt=0.0, le=90.0, description="Azimuth bin width (deg; divides 360).")
+    elevation_step_deg: float = Field(1.0, gt=0.0, le=45.0, description="Elevation bin width (deg).")
+    elevation_min_deg: float = Field(0.0, ge=-90.0, lt=90.0, description="Lowest bin edge, antenna frame (deg).")
+    elevation_max_deg: float = Field(90.0, gt=-90.0, le=90.0, description="Highest bin edge, antenna frame (deg).")
     min_count: int = Field(10, ge=1, le=10_000_000,
                            description="Samples a bin needs for a value; fewer leave it empty (null). 10 with the "
                                        "smoothing (each value is a fit supported by its neighbours); raise it "
                                        "(e.g. 30) with smoothing_order 0.")
-    max_iterations: int = Field(10, ge=1, le=1000, description="Most PCV iterations.")
+    max_iterations: int = Field(10, ge=1, le=1000, description="Most PCV iterations (fewer once the map "
+                                                               "changes by less than tolerance_mm).")
     smoothing_order: int = Field(8, ge=0, le=30, description="Radial order of the Zernike fit that smooths each "
                                  "map over the hemisphere (structure finer than ~90/N deg is smoothed away); 0 = "
                                  "plain bin means. Empty bins stay empty either way.")
@@ -62,18 +63,19 @@ class CalibrationConfig(BaseModel):
     map_name: str | None = Field(None, max_length=150,
                                  description="Name under which the maps are published (default: '<platform> "
                                              "calibration'); each pair and frequency gets '<name> A>B L1'.")
-    sigma_phase_mm: float = Field(3.0, gt=0.0, le=100.0, description="Undifferenced phase sigma (seed 000 Table 1).")
-    cn0_mask_l1_dbhz: float = Field(35.0, ge=0.0, le=60.0, description="C/N0 mask of L1 C/A (Table 2).")
-    cn0_mask_l2_dbhz: float = Field(30.0, ge=0.0, le=60.0, description="C/N0 mask of L2 (Table 2).")
+    sigma_phase_mm: float = Field(3.0, gt=0.0, le=100.0,
+                                  description="Undifferenced phase sigma (mm; seed 000 Table 1).")
+    cn0_mask_l1_dbhz: float = Field(35.0, ge=0.0, le=60.0, description="C/N0 mask of L1 C/A (dB-Hz; Table 2).")
+    cn0_mask_l2_dbhz: float = Field(30.0, ge=0.0, le=60.0, description="C/N0 mask of L2 (dB-Hz; Table 2).")
     elevation_mask_antenna_deg: float = Field(0.0, ge=-90.0, le=90.0,
                                               description="Satellites below this elevation in either antenna's "
-                                                          "frame are not used.")
+                                                          "frame are not used (deg).")
     max_reference_gap_s: float = Field(10.0, gt=0.0, le=3600.0,
-                                       description="Longest reference-attitude gap interpolated across (slerp).")
+                                       description="Longest reference-attitude gap interpolated across by slerp (s).")
     min_reference_coverage: float = Field(0.9, ge=0.0, le=1.0,
                                           description="Fraction of a set's epochs the reference must cover.")
     batch_s: float = Field(300.0, ge=10.0, le=86400.0,
-                           description="Batch length of the batch-means sigma of the baselines.")
+                           description="Batch length of the batch-means sigma of the baselines (s).")
     epoch_baselines: Literal["filter-kinematic", "reference-aided-ablation"] = Field(
         "filter-kinematic",
         description="Where the epoch-wise baselines come from: 'filter-kinematic', the attitude filter in kinematic "
@@ -82,7 +84,7 @@ class CalibrationConfig(BaseModel):
                     "from the reference attitude and solves each epoch by least squares.")
     max_deviation_mm: float = Field(50.0, gt=0.0, le=1000.0,
                                     description="An epoch-wise baseline further than this from the a priori in any "
-                                                "component is left out (a wrong fix).")
+                                                "component is left out as a wrong fix (mm).")
 
     @model_validator(mode="after")
     def _grid(self):

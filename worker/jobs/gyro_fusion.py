@@ -26,23 +26,25 @@ class GyroFusionConfig(BaseModel):
                             "gaussian: the paper's J* = mu + kappa sqrt(2 mu).")
     gps_fdi: bool = Field(True, description="Run the exclusion bank (false: every snapshot is used as it is).")
     n_propagators: int = Field(5, ge=1, le=20, description="Delayed attitude propagators of the gyro test.")
-    delay_step_s: float = Field(60.0, gt=0.0, le=3600.0, description="Delay of propagator j is j times this.")
+    delay_step_s: float = Field(60.0, gt=0.0, le=3600.0, description="Delay of propagator j is j times this (s).")
     gyro_threshold_sigma: float = Field(5.0, gt=0.0, le=100.0,
                                         description="A propagator flags when |residual| exceeds this many "
-                                                    "theoretical sigmas on some axis ...")
-    gyro_persistence: int = Field(3, ge=1, le=100, description="... in this many consecutive GPS epochs.")
-    elevation_mask_deg: float = Field(15.0, ge=-10.0, le=80.0, description="Antenna-frame elevation mask.")
+                                                    "theoretical sigmas on some axis, gyro_persistence times in a row.")
+    gyro_persistence: int = Field(3, ge=1, le=100, description="Consecutive GPS epochs over "
+                                                               "gyro_threshold_sigma before a propagator flags.")
+    elevation_mask_deg: float = Field(15.0, ge=-10.0, le=80.0, description="Antenna-frame elevation mask (deg).")
     phase_sigma_m: float = Field(0.0019, gt=0.0, le=0.1, description="Undifferenced L1 phase white noise "
-                                 "(Table 1: 1 % of the wavelength).")
-    multipath_zenith_m: float = Field(0.0005, ge=0.0, le=0.1, description="Phase multipath sigma at boresight.")
-    multipath_horizon_m: float = Field(0.004, ge=0.0, le=0.1, description="... at the antenna horizon.")
+                                 "(m; Table 1: 1 % of the wavelength).")
+    multipath_zenith_m: float = Field(0.0005, ge=0.0, le=0.1, description="Phase multipath sigma at boresight (m).")
+    multipath_horizon_m: float = Field(0.004, ge=0.0, le=0.1,
+                                       description="Phase multipath sigma at the antenna horizon (m).")
     multipath_tau_s: float = Field(60.0, gt=0.0, le=86400.0, description="Correlation time of the GPS attitude "
-                                   "noise's Gauss-Markov part.")
-    arw_rad_sqrt_s: float = Field(1.92e-5, gt=0.0, le=0.1, description="Gyro angle random walk (Table 1: "
+                                   "noise's Gauss-Markov part (s).")
+    arw_rad_sqrt_s: float = Field(1.92e-5, gt=0.0, le=0.1, description="Gyro angle random walk, rad/sqrt(s) (Table 1: "
                                   "0.066 deg/sqrt(h)).")
     drift_sigma_rad_s: float = Field(4.85e-5, gt=0.0, le=0.1, description="Gyro drift stability, the "
-                                     "Gauss-Markov sigma (Table 1: 10 deg/h).")
-    drift_tau_s: float = Field(1800.0, gt=0.0, le=1e7, description="Gyro drift correlation time.")
+                                     "Gauss-Markov sigma, rad/s (Table 1: 10 deg/h).")
+    drift_tau_s: float = Field(1800.0, gt=0.0, le=1e7, description="Gyro drift correlation time (s).")
 
     def to_settings(self):
         from gnssatt.gyro.settings import FusionSettings, GpsFdi, GpsNoise, GyroFdi, GyroNoise

@@ -18,7 +18,7 @@ class KeplerianElements(BaseModel):
     model_config = ConfigDict(extra="forbid")
     epoch: str = Field(..., description="Epoch of the elements, ISO 8601 GPS time.")
     a_m: float = Field(..., ge=6.4e6, le=5e7, description="Semi-major axis (m).")
-    e: float = Field(0.0, ge=0, lt=0.9, description="Eccentricity.")
+    e: float = Field(0.0, ge=0, lt=0.9, description="Orbit eccentricity (0: circular).")
     i_deg: float = Field(..., ge=0, le=180, description="Inclination (deg, GCRF).")
     raan_deg: float = Field(0.0, ge=-360, le=360, description="Right ascension of the ascending node (deg).")
     argp_deg: float = Field(0.0, ge=-360, le=360, description="Argument of perigee (deg).")
@@ -35,7 +35,8 @@ class GroundPosition(BaseModel):
 class PlanOrbit(BaseModel):
     model_config = ConfigDict(extra="forbid")
     kind: Literal["tle", "keplerian", "sp3", "ground", "trajectory"] = Field(
-        ..., description="Where the platform is; trajectory: the set's velocity.csv with its x/y/z_ecef_m columns "
+        ..., description="Where the platform is: tle, keplerian, sp3 or ground (see the fields below); "
+                         "trajectory: the set's velocity.csv with its x/y/z_ecef_m columns "
                          "(docs/formats/inertial_csv.md), e.g. a ground vehicle's track.")
     tle: list[str] | None = Field(None, min_length=2, max_length=3, description="Two-line elements (an optional "
                                                                                 "name line first), for kind tle.")
@@ -71,7 +72,8 @@ class PlanConfig(BaseModel):
     platform: dict | None = Field(None, description="A platform.json object (CONVENTIONS.md); null: the set's.")
     attitude: AttitudeProfile = Field(default_factory=AttitudeProfile)
     systems: list[Literal["G", "E", "C", "J"]] = Field(["G"], min_length=1, max_length=4,
-                                                      description="Constellations used.")
+                                                      description="Constellations used: G (GPS), E (Galileo), "
+                                                                  "C (BeiDou), J (QZSS).")
     horizon_mask_deg: float | None = Field(None, ge=-90, le=90, description="Local-horizon elevation mask "
                                            "(deg); null: -90 for spacecraft (seed 000 Table 2), 10 on the ground.")
     antenna_mask_deg: float = Field(0.0, ge=-90, le=90, description="Antenna-frame elevation mask (deg, seed "

@@ -16,16 +16,17 @@ class SatelliteBaselineConfig(BaseModel):
     satellites: dict = Field(default_factory=dict, description="satellites.json content: signals and attitude "
                              "models (the a priori aux_antenna_m is not needed).")
     stations: dict = Field(default_factory=dict, description="stations.json content (CONVENTIONS.md).")
-    satellite_ids: list[str] | None = Field(None, max_length=100, description="Satellites to estimate.")
+    satellite_ids: list[str] | None = Field(None, max_length=100, description="Satellites to estimate (e.g. J01); "
+                                            "default every satellite with the auxiliary signal.")
     exclude: dict[str, list[tuple[float, float]]] = Field(
         default_factory=dict, description="satellite -> [[start_s, end_s]] (seconds from the first epoch) of "
         "non-nominal attitude (manoeuvres) left out.")
-    elevation_mask_deg: float = Field(10.0, ge=0.0, le=60.0)
-    phase_sigma_m: float = Field(0.002, gt=0.0, le=0.1)
-    code_sigma_m: float = Field(0.5, gt=0.0, le=20.0)
+    elevation_mask_deg: float = Field(10.0, ge=0.0, le=60.0, description="Station elevation mask (deg).")
+    phase_sigma_m: float = Field(0.002, gt=0.0, le=0.1, description="A priori sigma of one phase signal (m).")
+    code_sigma_m: float = Field(0.5, gt=0.0, le=20.0, description="A priori sigma of one code signal (m).")
     pcv_map: bool = Field(True, description="Estimate the differential PCV map with the baseline.")
-    nadir_step_deg: float = Field(1.0, gt=0.0, le=5.0)
-    azimuth_step_deg: float = Field(15.0, gt=0.0, le=90.0)
+    nadir_step_deg: float = Field(1.0, gt=0.0, le=5.0, description="Nadir-angle bin width of the PCV map (deg).")
+    azimuth_step_deg: float = Field(15.0, gt=0.0, le=90.0, description="Azimuth bin width of the PCV map (deg).")
     map_name: str | None = Field(None, max_length=150, description="Published map name (default '<sat> aux-main L1').")
 
 

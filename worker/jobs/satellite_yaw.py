@@ -24,10 +24,10 @@ class SatelliteYawConfig(BaseModel):
     yaw_mode: Literal["auto", "per-epoch", "offset"] = Field(
         "auto", description="per-epoch yaw, or one yaw offset from the model over the span (short spans, one "
         "or two stations); auto picks offset below 3 stations per epoch or 1 h.")
-    elevation_mask_deg: float = Field(10.0, ge=0.0, le=60.0, description="Station elevation mask.")
-    phase_sigma_m: float = Field(0.002, gt=0.0, le=0.1, description="A priori sigma of one phase signal.")
-    code_sigma_m: float = Field(0.5, gt=0.0, le=20.0, description="A priori sigma of one code signal.")
-    systematic_mm: float = Field(0.3, ge=0.0, le=20.0, description="RMS of slowly varying differential errors "
+    elevation_mask_deg: float = Field(10.0, ge=0.0, le=60.0, description="Station elevation mask (deg).")
+    phase_sigma_m: float = Field(0.002, gt=0.0, le=0.1, description="A priori sigma of one phase signal (m).")
+    code_sigma_m: float = Field(0.5, gt=0.0, le=20.0, description="A priori sigma of one code signal (m).")
+    systematic_mm: float = Field(0.3, ge=0.0, le=20.0, description="RMS of slowly varying differential errors (mm) "
                                  "added to the sigma of offset-mode yaw (gnssatt.satyaw.yaw_estimator.YawOptions).")
     smooth: bool = Field(False, description="Also a yaw-rate-limited (satellite's limit) smoothed series.")
     triple_frequency: bool = Field(False, description="Also the triple-frequency (aux L1, main L2, L5) "

@@ -16,19 +16,19 @@ from worker.jobs.registry import JobType
 
 class SelftestConfig(BaseModel):
     model_config = ConfigDict(extra="forbid")
-    duration_s: float = Field(2.0, ge=0.0, le=3600.0, description="How long the job runs, reporting progress.")
+    duration_s: float = Field(2.0, ge=0.0, le=3600.0, description="How long the job runs, reporting progress (s).")
     fail_attempts: int = Field(0, ge=0, le=100, description="Fail (as an internal error) the first N attempts.")
     fail_as_input_error: bool = Field(False, description="Fail as a user-input error instead (never retried).")
     fan_out: int = Field(0, ge=0, le=1000, description="Split into this many tasks that any worker may run.")
     fan_out_passes: int = Field(1, ge=1, le=5, description="Fan out this many times in a row (pass k squares, "
                                 "cubes, ... each task's number) to check that passes never mix.")
-    task_seconds: float = Field(0.2, ge=0.0, le=600.0, description="How long each fanned-out task works.")
+    task_seconds: float = Field(0.2, ge=0.0, le=600.0, description="How long each fanned-out task works (s).")
     publish_pcv_map: str | None = Field(None, max_length=200,
                                         description="Publish a small flat test PCV map under this name.")
     allocate_mb: int = Field(0, ge=0, le=65536, description="Allocate (and touch) this much memory, 16 MB at a "
                              "time, to check the worker's memory budget (GNSSATT_JOB_MEMORY_MB).")
     spin_s: float = Field(0.0, ge=0.0, le=3600.0, description="Compute this long without reporting progress, to "
-                          "check that the time budget and cancel stop a job that never yields.")
+                          "check that the time budget and cancel stop a job that never yields (s).")
 
 
 JOB_TYPE = JobType(

@@ -30,10 +30,11 @@ class SimOverrides(BaseModel):
     model_config = ConfigDict(extra="allow")
     duration_s: float | None = Field(None, gt=0, le=2 * 86400.0, description="Length of each set (s).")
     interval_s: float | None = Field(None, ge=0.01, le=3600.0, description="Epoch interval (s).")
-    count: int | None = Field(None, ge=1, le=100, description="Number of sets (passes).")
-    pass_spacing_s: float | None = Field(None, ge=0, le=366 * 86400.0, description="Start spacing of passes.")
-    n_channels: int | None = Field(None, ge=1, le=64, description="Receiver channels.")
-    reference_interval_s: float | None = Field(None, ge=0.01, le=3600.0, description="Reference attitude step.")
+    count: int | None = Field(None, ge=1, le=100, description="Number of sets (passes) simulated.")
+    pass_spacing_s: float | None = Field(None, ge=0, le=366 * 86400.0, description="Start spacing of passes (s).")
+    n_channels: int | None = Field(None, ge=1, le=64, description="Receiver channels: most satellites tracked at once.")
+    reference_interval_s: float | None = Field(None, ge=0.01, le=3600.0,
+                                                description="Step of the reference attitude file (s).")
 
     @model_validator(mode="after")
     def _bounded(self) -> "SimOverrides":

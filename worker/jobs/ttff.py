@@ -28,12 +28,12 @@ class TtffSimulation(BaseModel):
     model_config = ConfigDict(extra="forbid")
     count: int = Field(20, ge=1, le=5000, description="Number of random starts (sets).")
     seed: int = Field(0, ge=0, le=2**31 - 1, description="Seed of the starts and of the simulated observations.")
-    yaw_max_deg: float = Field(180.0, ge=0, le=180, description="Start yaw uniform in +-this (orbital frame).")
-    pitch_max_deg: float = Field(70.0, ge=0, le=90, description="Start pitch uniform in +-this.")
-    roll_max_deg: float = Field(40.0, ge=0, le=180, description="Start roll uniform in +-this.")
+    yaw_max_deg: float = Field(180.0, ge=0, le=180, description="Start yaw uniform in +-this, orbital frame (deg).")
+    pitch_max_deg: float = Field(70.0, ge=0, le=90, description="Start pitch uniform in +-this (deg).")
+    roll_max_deg: float = Field(40.0, ge=0, le=180, description="Start roll uniform in +-this (deg).")
     rate_deg_s: list[Annotated[float, Field(gt=0, le=10)]] = Field([0.1, 0.5], min_length=2, max_length=2,
                                     description="Peak slew-back rate uniform in [min, max] (deg/s).")
-    hold_s: float = Field(0.0, ge=0, le=3600, description="Start orientation held this long before the slew back.")
+    hold_s: float = Field(0.0, ge=0, le=3600, description="Start orientation held this long before the slew back (s).")
     realistic: bool = Field(True, description="The `ttff` preset as it is (50 mm p-p differential PCV, ~1 m code "
                                               "multipath at the antenna horizon, C/N0-dependent noise, docs/ttff.md "
                                               "'Realism'); false: white noise only, no PCV or multipath "
@@ -62,7 +62,8 @@ class TtffConfig(BaseModel):
     model_config = ConfigDict(extra="forbid")
     simulate: TtffSimulation | None = Field(None, description="Simulate the sets instead of (or as well as) using "
                                                               "uploaded ones.")
-    configurations: list[Literal["L1+L2", "L1", "L2"]] = Field(["L1+L2", "L1", "L2"], min_length=1)
+    configurations: list[Literal["L1+L2", "L1", "L2"]] = Field(["L1+L2", "L1", "L2"], min_length=1, description=(
+        "Signal configurations studied: L1+L2, L1 or L2 alone."))
     methods: list[Literal["filter", "filter-constrained", "epoch-lambda", "epoch-constrained"]] = Field(
         ["filter", "epoch-lambda", "epoch-constrained"], min_length=1,
         description="filter: the seed 000 EKF (MLAMBDA + length validation), the paper's method; "
@@ -70,17 +71,19 @@ class TtffConfig(BaseModel):
                     "(MC-LAMBDA first fix); epoch-lambda: "
                     "every epoch alone, same search and validation; epoch-constrained: every epoch alone, "
                     "C-/MC-LAMBDA with the body geometry, ratio + length + angle validation.")
-    duration_s: float = Field(120.0, ge=5, le=86400, description="Seconds of each set used from its first epoch.")
+    duration_s: float = Field(120.0, ge=5, le=86400, description="Length of each set used from its first epoch (s).")
     single_epoch_step_s: float = Field(10.0, ge=1, le=3600,
                                        description="Sampling of the single-epoch success rate (s).")
     min_ratio_constrained: float = Field(1.5, ge=1.0, le=100.0,
                                          description="Ratio of the constrained objective for an accepted fix.")
-    max_length_error_m: float = Field(0.03, gt=0, le=1.0, description="Length test (seed 000 Table 2).")
+    max_length_error_m: float = Field(0.03, gt=0, le=1.0, description="Length test: largest |length - known| of a "
+                                                                     "fix (m; seed 000 Table 2).")
     l2_min_ratio_first_fix: float = Field(2.0, ge=0.0, le=100.0,
                                           description="Paper's method (filter) in the L2-only configuration: a first "
                                                       "fix also needs this MLAMBDA ratio (0: the length test alone, "
                                                       "as seed 000; docs/ttff.md 'Wrong fixes of L2').")
-    filter_mode: Literal["dynamic", "kinematic"] = Field("dynamic", description="Attitude filter mode.")
+    filter_mode: Literal["dynamic", "kinematic"] = Field("dynamic",
+                                                   description="Attitude filter mode: dynamic or kinematic.")
 
     @model_validator(mode="after")
     def _unique(self):

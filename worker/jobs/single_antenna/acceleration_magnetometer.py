@@ -18,9 +18,10 @@ class Settings(BaseModel):
                                 "the GNSS velocity and of the low-pass of the accelerometer and magnetometer (Hz); "
                                 "lower: less noise, more lag in manoeuvres.")
     min_specific_force_m_s2: float = Field(0.5, ge=0.0, le=50.0, description="Below this specific force (GNSS or "
-                                           "accelerometer) an epoch has no attitude: free fall (LEO) is unobservable.")
+                                           "accelerometer, m/s^2) an epoch has no attitude: free fall (LEO) is "
+                                           "unobservable.")
     min_angle_deg: float = Field(10.0, ge=0.1, le=80.0, description="Smallest angle between specific force and "
-                                 "magnetic field for an attitude (nearly parallel pairs leave a rotation free).")
+                                 "magnetic field for an attitude, deg (nearly parallel pairs leave a rotation free).")
     estimate_bias: bool = Field(True, description="Estimate a constant accelerometer bias where the specific force "
                                 "turns enough in the body frame (else flagged unobservable).")
     min_bias_spread_deg: float = Field(10.0, ge=1.0, le=90.0, description="Turn of the body-frame specific force "

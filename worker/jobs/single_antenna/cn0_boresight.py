@@ -41,7 +41,7 @@ class Settings(BaseModel):
     antenna: str | None = Field(None, max_length=64, description="Antenna id of platform.json; null: the master.")
     min_sats: int = Field(5, ge=3, le=40, description="Fewest tracked satellites for a boresight.")
     min_angle_deg: float = Field(10.0, ge=0.1, le=80.0, description="Smallest angle between boresight and "
-                                 "magnetic field for a full attitude.")
+                                 "magnetic field for a full attitude (deg).")
     magnetic_model_sigma_nT: float = Field(160.0, ge=0.0, le=1e4, description="Geomagnetic model error per axis "
                                            "(nT).")
     magnetometer_noise_nT: float = Field(2.0, ge=0.0, le=1e4, description="Magnetometer noise per sample (nT).")

@@ -26,8 +26,9 @@ class Settings(BaseModel):
                            "system per epoch).")
     initial_attitude: Literal["reference", "given", "coarse-search"] = Field(
         "reference", description="The attitude at the first epoch, which the phase changes of eq. 44 are counted "
-                                 "from: the set's reference attitude file, q_body_from_ecef, or a coarse search "
-                                 "(yaw grid, the EKF scoring each start; needs the platform to rotate).")
+                                 "from: reference (the set's reference attitude file), given "
+                                 "(q_body_from_ecef) or coarse-search "
+                                 "(a yaw grid, the EKF scoring each start; needs the platform to rotate).")
     q_body_from_ecef: list[Annotated[float, Field(ge=-1.0, le=1.0)]] | None = Field(
         None, min_length=4, max_length=4, description="ECEF->body quaternion (w, x, y, z) at the first epoch, for "
                                                       "initial_attitude 'given'.")
@@ -37,23 +38,24 @@ class Settings(BaseModel):
     antenna_id: str | None = Field(None, max_length=100, description="The antenna of platform.json to use "
                                                                       "(default its master).")
     antenna_model: Literal["short-dipole", "rhcp-patch", "asymmetric-patch"] | None = Field(
-        None, description="A built-in receive antenna instead of platform.json's antenna_pattern (the defaults of "
+        None, description="A built-in receive antenna (short-dipole, rhcp-patch or asymmetric-patch) instead of "
+                          "platform.json's antenna_pattern (the defaults of "
                           "docs/formats/antenna_vector_length.md). Cylindrically symmetric ones leave a rotation "
                           "unobservable; the products say which.")
     sigma_phase_mm: float = Field(1.0, gt=0.0, le=50.0, description="Undifferenced L1 phase noise, mm (1 sigma).")
-    elevation_mask_deg: float = Field(10.0, ge=-10.0, le=80.0, description="Local-level elevation mask.")
+    elevation_mask_deg: float = Field(10.0, ge=-10.0, le=80.0, description="Local-level elevation mask (deg).")
     min_sats: int = Field(7, ge=6, le=40, description="Fewer satellites leave an epoch without a solution (7: "
                                                       "position, clock and three angles; 6 suffices for a dipole).")
     sigma_initial_attitude_deg: float = Field(0.01, gt=0.0, le=180.0, description="EKF: sigma of the initial "
-                                                                                  "attitude.")
+                                                                                  "attitude (deg).")
     rate_random_walk_deg_s_per_sqrt_s: float = Field(
         0.18, gt=0.0, le=100.0, description="EKF: angular-rate random walk (white angular acceleration), "
                                             "deg/s per sqrt(s).")
     position_random_walk_m_per_sqrt_s: float = Field(0.001, ge=0.0, le=100.0,
                                                      description="EKF: position random walk, m per sqrt(s).")
-    coarse_step_deg: float = Field(30.0, ge=5.0, le=90.0, description="Coarse search: grid step.")
+    coarse_step_deg: float = Field(30.0, ge=5.0, le=90.0, description="Coarse search: yaw grid step (deg).")
     coarse_tilt_max_deg: float = Field(0.0, ge=0.0, le=90.0, description="Coarse search: pitch and roll range "
-                                                                         "(0: level only).")
+                                                                         "(deg; 0: level only).")
     coarse_epochs: int = Field(60, ge=5, le=3600, description="Coarse search: epochs scored per candidate.")
 
     @model_validator(mode="after")
