@@ -57,6 +57,11 @@ class SingleEpochOptions:
     min_dd_constrained: int = 3
     max_length_error_m: float = 0.03       # Table 2
     min_ratio_constrained: float = 1.5     # ratio of the constrained objective (see docs/ttff.md)
+    # a baseline with at most few_dd_max DDs over the attempt's signals (7 satellites on one frequency) needs
+    # min_ratio_few_dd: with few ambiguities a given ratio means a higher failure rate (the fixed-failure-rate
+    # ratio test's critical value grows as the ambiguity count falls, Verhagen & Teunissen 2013, J Geod 87)
+    few_dd_max: int = 6
+    min_ratio_few_dd: float = 2.0
     constrained_candidates: int = 3        # C-LAMBDA candidates per baseline combined by the MC-LAMBDA objective
     constrained_ratio_cap: float = 4.0    # C-LAMBDA expands its radius up to this x the best cost
     constrained_max_nodes: int = 50_000    # budget of one C-LAMBDA search (~0.5 s); exhausted -> not fixed
@@ -490,7 +495,8 @@ class _Attempt:
 
 def _attempt(sub: FloatSolution, use: list, F: np.ndarray, opts: SingleEpochOptions) -> _Attempt:
     """The constrained search on ``sub`` (baselines ``use``, body vectors F) and its validation: ratio of the
-    constrained objective, length and angle tests on b_hat(a) with ``geometric_tolerance_m``."""
+    constrained objective (``min_ratio_few_dd`` when a baseline has ``few_dd_max`` DDs or fewer), length and angle
+    tests on b_hat(a) with ``geometric_tolerance_m``."""
     from gnssatt.estimation.ar_validation import baseline_angle_test, baseline_length_test
     from gnssatt.estimation.constrained_search import constrained_search, constrained_search_by_baselines
 
@@ -526,7 +532,9 @@ def _attempt(sub: FloatSolution, use: list, F: np.ndarray, opts: SingleEpochOpti
         tol_a = tol * (opts.max_angle_error_m / opts.max_length_error_m)
         _, ao = baseline_angle_test(B, F, tol_m=tol_a)
         ang_ok = bool(np.all(ao))
-    passed = bool(rt >= opts.min_ratio_constrained and ang_ok and np.all(len_ok))
+    dd_per_baseline = [sum(blk.n_dd for blk in sub.blocks if blk.baseline == j) for j in use]
+    min_ratio = opts.min_ratio_few_dd if min(dd_per_baseline) <= opts.few_dd_max else opts.min_ratio_constrained
+    passed = bool(rt >= max(min_ratio, opts.min_ratio_constrained) and ang_ok and np.all(len_ok))
     why = "" if passed else (f"ratio {rt:.2f}" + ("" if np.all(len_ok) else ", length") + ("" if ang_ok else ", angle"))
     return _Attempt(np.asarray(a_best, float), B, np.asarray(Bc, float).reshape(-1, 3), float(rt), passed, nodes, why)
 
