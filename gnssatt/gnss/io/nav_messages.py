@@ -15,6 +15,7 @@ Neglects: evaluating CNAV-type ephemerides (kept, not used by the ephemeris laye
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
@@ -37,6 +38,14 @@ MESSAGE_FIELDS: dict[tuple[str, str], tuple[str, ...]] = {
                       "alpha7_tecu", "alpha8_tecu", "alpha9_tecu"),
 }
 
+
+
+def int_column(v: np.ndarray, col: int, fill: int = -1) -> np.ndarray:
+    """Column ``col`` of the record values ``v`` (n, m) as int64; ``fill`` where blank (NaN) or beyond 2**53
+    (RINEX 3.05 sec. 6.12: integer quantities written as floating-point numbers)."""
+    x = v[:, col]
+    bad = ~np.isfinite(x) | (np.abs(x) > 2**53)
+    return np.where(bad, fill, np.round(np.where(bad, 0, x))).astype(np.int64)
 
 @dataclass
 class NavMessage:
@@ -108,10 +117,7 @@ def build_sbas(rows) -> SbasEphemeris:
     toc = GpsTime.from_calendar(cal[:, 0].astype(np.int64), cal[:, 1].astype(np.int64), cal[:, 2].astype(np.int64),
                                 cal[:, 3].astype(np.int64), cal[:, 4].astype(np.int64), cal[:, 5])
 
-    def ints(col):
-        x = v[:, col]
-        bad = ~np.isfinite(x) | (np.abs(x) > 2**53)
-        return np.where(bad, -1, np.round(np.where(bad, 0, x))).astype(np.int64)
+    ints = partial(int_column, v)
 
     km = 1000.0
     return SbasEphemeris(

@@ -39,13 +39,14 @@ from __future__ import annotations
 import os
 import re
 from dataclasses import dataclass, field, fields
+from functools import partial
 
 import numpy as np
 
 from gnssatt.gnss.constants import BDT_MINUS_GPST_S, BDT_WEEK_OFFSET
 from gnssatt.gnss.io.compression import read_text_bytes
 from gnssatt.gnss.io.errors import ParseError, ParseWarning
-from gnssatt.gnss.io.nav_messages import NavMessage, SbasEphemeris, build_sbas
+from gnssatt.gnss.io.nav_messages import NavMessage, SbasEphemeris, build_sbas, int_column
 from gnssatt.gnss.leap_seconds import EXPIRES as LEAP_TABLE_EXPIRES, gps_minus_utc_at_utc_s
 from gnssatt.gnss.time import SECONDS_PER_WEEK, GpsTime
 
@@ -727,10 +728,7 @@ def _build_kepler(ctx: _Ctx, sys: str, rows, lines) -> KeplerEphemeris:
     toc = GpsTime.from_calendar(cal[:, 0].astype(np.int64), cal[:, 1].astype(np.int64), cal[:, 2].astype(np.int64),
                                 cal[:, 3].astype(np.int64), cal[:, 4].astype(np.int64), cal[:, 5])
 
-    def ints(col, fill=-1):
-        x = v[:, col]
-        bad = ~np.isfinite(x) | (np.abs(x) > 2**53)
-        return np.where(bad, fill, np.round(np.where(bad, 0, x))).astype(np.int64)
+    ints = partial(int_column, v)
 
     week = ints(21)
     # Week as written vs. the week of the epoch (BDT week for BeiDou); fix a 1024-multiple (mod-1024 or GST week).
@@ -809,10 +807,7 @@ def _build_glonass(ctx: _Ctx, rows, header_leap: int | None) -> GlonassEphemeris
                                          "value was used", None))
     toc = GpsTime(toc_utc.s + leap, toc_utc.frac)
 
-    def ints(col):
-        x = v[:, col]
-        bad = ~np.isfinite(x) | (np.abs(x) > 2**53)
-        return np.where(bad, -1, np.round(np.where(bad, 0, x))).astype(np.int64)
+    ints = partial(int_column, v)
 
     km = 1000.0
     return GlonassEphemeris(
