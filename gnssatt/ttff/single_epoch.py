@@ -60,8 +60,12 @@ class SingleEpochOptions:
     # a baseline with at most few_dd_max DDs over the attempt's signals (7 satellites on one frequency) needs
     # min_ratio_few_dd: with few ambiguities a given ratio means a higher failure rate (the fixed-failure-rate
     # ratio test's critical value grows as the ambiguity count falls, Verhagen & Teunissen 2013, J Geod 87)
+    # (baselines shorter than few_dd_min_length_m keep min_ratio_constrained: there one wrong cycle, 19-24 cm, moves
+    # the baseline by more than its length and the length and angle tests catch it; the 10 cm CubeSat set had no
+    # wrong fix in 4800 epochs without the rule, docs/ttff.md "Fewer satellites")
     few_dd_max: int = 6
     min_ratio_few_dd: float = 2.0
+    few_dd_min_length_m: float = 0.5
     constrained_candidates: int = 3        # C-LAMBDA candidates per baseline combined by the MC-LAMBDA objective
     constrained_ratio_cap: float = 4.0    # C-LAMBDA expands its radius up to this x the best cost
     constrained_max_nodes: int = 50_000    # budget of one C-LAMBDA search (~0.5 s); exhausted -> not fixed
@@ -533,7 +537,9 @@ def _attempt(sub: FloatSolution, use: list, F: np.ndarray, opts: SingleEpochOpti
         _, ao = baseline_angle_test(B, F, tol_m=tol_a)
         ang_ok = bool(np.all(ao))
     dd_per_baseline = [sum(blk.n_dd for blk in sub.blocks if blk.baseline == j) for j in use]
-    min_ratio = opts.min_ratio_few_dd if min(dd_per_baseline) <= opts.few_dd_max else opts.min_ratio_constrained
+    few = any(dd <= opts.few_dd_max and length >= opts.few_dd_min_length_m
+              for dd, length in zip(dd_per_baseline, np.linalg.norm(F, axis=1)))
+    min_ratio = opts.min_ratio_few_dd if few else opts.min_ratio_constrained
     passed = bool(rt >= max(min_ratio, opts.min_ratio_constrained) and ang_ok and np.all(len_ok))
     why = "" if passed else (f"ratio {rt:.2f}" + ("" if np.all(len_ok) else ", length") + ("" if ang_ok else ", angle"))
     return _Attempt(np.asarray(a_best, float), B, np.asarray(Bc, float).reshape(-1, 3), float(rt), passed, nodes, why)
