@@ -499,8 +499,8 @@ class _Attempt:
 
 def _attempt(sub: FloatSolution, use: list, F: np.ndarray, opts: SingleEpochOptions) -> _Attempt:
     """The constrained search on ``sub`` (baselines ``use``, body vectors F) and its validation: ratio of the
-    constrained objective (``min_ratio_few_dd`` when a baseline has ``few_dd_max`` DDs or fewer), length and angle
-    tests on b_hat(a) with ``geometric_tolerance_m``."""
+    constrained objective (``min_ratio_few_dd`` when a baseline of ``few_dd_min_length_m`` or longer has
+    ``few_dd_max`` DDs or fewer), length and angle tests on b_hat(a) with ``geometric_tolerance_m``."""
     from gnssatt.estimation.ar_validation import baseline_angle_test, baseline_length_test
     from gnssatt.estimation.constrained_search import constrained_search, constrained_search_by_baselines
 
