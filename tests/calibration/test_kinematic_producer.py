@@ -9,6 +9,7 @@ import pytest
 
 from bench.local_jobs import input_set, job_context, product_bytes
 from gnssatt.calibration.simulated import compare_maps_mm, simulate_campaign, truth_of, truth_split
+from gnssatt.gnss.io.pcv_map import parse_pcv_map
 from worker.jobs.calibration import CalibrationConfig, run
 
 BENIGN = {"noise": False, "multipath": False, "cn0_jitter_db": 0.0}
@@ -37,10 +38,10 @@ def _errors(prod, truth):
         pair = (b["from"], b["to"])
         values, counts = {}, {}
         for sig in ("L1", "L2"):
-            doc = json.loads(prod[f"pcv_{pair[0]}_{pair[1]}_{sig}.json"])
-            values[sig] = np.array([[np.nan if x is None else x for x in row] for row in doc["values_mm"]])
-            counts[sig] = np.where(np.isfinite(values[sig]), np.asarray(doc["count"]), 0)
-        b_true, maps_true = truth_split(truth, pair, doc["azimuth_deg"], doc["elevation_deg"], counts)
+            m = parse_pcv_map(prod[f"pcv_{pair[0]}_{pair[1]}_{sig}.json"])
+            values[sig] = m.values_mm
+            counts[sig] = np.where(np.isfinite(m.values_mm), m.count, 0)
+        b_true, maps_true = truth_split(truth, pair, m.azimuth_deg, m.elevation_deg, counts)
         out[pair] = ((np.asarray(b["calibrated_m"]) - b_true) * 1e3,
                      {sig: compare_maps_mm(values[sig], maps_true[sig], counts[sig]) for sig in ("L1", "L2")},
                      b)
