@@ -47,8 +47,8 @@ def test_manifest_matches_the_provenance_table():
 
 
 def test_manifest_coverage():
-    """What the corpus covers (issue 23 'Done when'), asserted so that a shrinking corpus fails. ANTEX 1.3 is not
-    among the third-party files: a cut real one is held in tests/data/third_party (tests/gnss/
+    """What the corpus covers (issue 23 'Done when'), asserted so that a shrinking corpus fails. ANTEX 1.3 and RINEX 2
+    SBAS navigation are not among the third-party files: one of each is held in tests/data/third_party (tests/gnss/
     test_reader_repo_files.py). Real RINEX 4.01/4.02 observation files were not found (docs/reader_policy.md)."""
     readable = [r for r in ROWS if r.label != "broken"]
     have = defaultdict(set)
@@ -61,6 +61,8 @@ def test_manifest_coverage():
     assert "1.4" in have["atx"]
     repo_atx = Path(__file__).resolve().parents[1] / "data" / "third_party" / "igs05_1585_cut.atx"
     assert repo_atx.read_text()[:9] == "     1.3 "   # ANTEX 1.3, read by tests/gnss/test_reader_repo_files.py
+    repo_geo = repo_atx.with_name("rinex210_table_a18.00h")   # RINEX 2 SBAS navigation, same test file
+    assert repo_geo.read_text()[:40] == "     2.10           H: GEO NAV MSG DATA "
     # navigation of every system: NavIC and SBAS records in the 3.x and 4.x files read (no longer skipped)
     nav_expect = " ".join(r.expect for r in readable if r.kind == "nav")
     assert "unsupported-record" not in nav_expect

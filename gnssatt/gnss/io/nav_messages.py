@@ -21,7 +21,7 @@ import numpy as np
 
 from gnssatt.gnss.time import GpsTime
 
-__all__ = ["SbasEphemeris", "NavMessage", "MESSAGE_FIELDS", "build_sbas"]
+__all__ = ["SbasEphemeris", "NavMessage", "MESSAGE_FIELDS", "build_sbas", "sbas_records_in_metres"]
 
 #: RINEX 4.01 field names of the STO/EOP/ION messages, in file order (after the epoch), per (kind, type);
 #: '' marks a blank (spare) field. Tables A32 (STO), A33 (EOP), A34-A35 (ION).
@@ -105,8 +105,25 @@ class SbasEphemeris:
         return self.position_m[index] + self.velocity_m_s[index] * dt + 0.5 * self.acceleration_m_s2[index] * dt**2
 
 
+# A position word beyond this many "km" from the geocentre can only be metres: the GEO radius is 42,164 km, and the
+# RINEX 2.10 document's own GEO example (Table A18) writes metres where its Table A17 says km.
+SBAS_MAX_RADIUS_KM = 1.0e6
+
+
+def sbas_records_in_metres(rows) -> np.ndarray:
+    """(n,) bool: records whose position words are metres, not the km RINEX Table A16/A17 prescribes."""
+    out = np.zeros(len(rows), dtype=bool)
+    for r, (_sat, _parts, vals, _ln) in enumerate(rows):
+        if len(vals) >= 12:
+            out[r] = np.linalg.norm([vals[3], vals[7], vals[11]]) > SBAS_MAX_RADIUS_KM
+    return out
+
+
 def build_sbas(rows) -> SbasEphemeris:
-    """SbasEphemeris from (sat, calendar parts, 15 values, line) rows (rinex_nav's record rows)."""
+    """SbasEphemeris from (sat, calendar parts, 15 values, line) rows (rinex_nav's record rows).
+
+    Position, velocity and acceleration words are km, km/s, km/s^2 (RINEX 2.11 Table A16, 3.05 Table A16); a record
+    whose position is unambiguously metres (`sbas_records_in_metres`) is taken as written in metres."""
     n = len(rows)
     v = np.full((n, 15), np.nan)
     cal = np.zeros((n, 6))
@@ -119,7 +136,7 @@ def build_sbas(rows) -> SbasEphemeris:
 
     ints = partial(int_column, v)
 
-    km = 1000.0
+    km = np.where(sbas_records_in_metres(rows), 1.0, 1000.0)[:, None]
     return SbasEphemeris(
         sat=np.array([r[0] for r in rows], dtype=np.str_), toc=toc, af0_s=v[:, 0].copy(), af1_s_s=v[:, 1].copy(),
         transmission_sow=v[:, 2].copy(), position_m=v[:, [3, 7, 11]] * km, velocity_m_s=v[:, [4, 8, 12]] * km,

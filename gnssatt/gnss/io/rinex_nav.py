@@ -32,7 +32,7 @@ Time scales (kept as the file gives them, see each dataclass):
   time with the leap seconds (the project's table gnssatt.gnss.leap_seconds, the header `LEAP SECONDS` after the
   table's expiry `LEAP_TABLE_EXPIRES`; a header that disagrees with the table is reported).
 
-Neglects: RINEX 2 SBAS (type H) files (skipped with a warning); evaluating the CNAV-type RINEX 4 ephemerides.
+Neglects: evaluating the CNAV-type RINEX 4 ephemerides.
 """
 from __future__ import annotations
 
@@ -46,7 +46,7 @@ import numpy as np
 from gnssatt.gnss.constants import BDT_MINUS_GPST_S, BDT_WEEK_OFFSET
 from gnssatt.gnss.io.compression import read_text_bytes
 from gnssatt.gnss.io.errors import ParseError, ParseWarning
-from gnssatt.gnss.io.nav_messages import NavMessage, SbasEphemeris, build_sbas, int_column
+from gnssatt.gnss.io.nav_messages import NavMessage, SbasEphemeris, build_sbas, int_column, sbas_records_in_metres
 from gnssatt.gnss.leap_seconds import EXPIRES as LEAP_TABLE_EXPIRES, gps_minus_utc_at_utc_s
 from gnssatt.gnss.time import SECONDS_PER_WEEK, GpsTime
 
@@ -615,8 +615,6 @@ def read_rinex_nav(source, *, name: str | None = None) -> NavData:
     lines = _split_lines(text)
     version, file_type, system, iono, corr, leap, program, end = _parse_header(ctx, lines)
     major = int(version)
-    if major == 2 and system == "S":
-        ctx.warnings.append(ParseWarning("unsupported-system", "RINEX 2 SBAS navigation (type H) is not read", 1))
 
     rows: dict[str, list] = {s: [] for s in "GJECIRS"}
     skipped: dict[str, int] = {}
@@ -633,8 +631,6 @@ def read_rinex_nav(source, *, name: str | None = None) -> NavData:
         first_i, first = body[0]
         ln1 = first_i + 1
         if major == 2:
-            if system == "S":
-                continue
             sat, parts, clk = _epoch_v2(ctx, first, ln1, system)
             start_col = 4 if first[:1].isalpha() else 3
         else:
@@ -675,6 +671,9 @@ def read_rinex_nav(source, *, name: str | None = None) -> NavData:
         if rows[sys]:
             kepler[sys] = _build_kepler(ctx, sys, rows[sys], lines)
     glonass = _build_glonass(ctx, rows["R"], leap)
+    for r in np.flatnonzero(sbas_records_in_metres(rows["S"])):
+        ctx.warn_counted("sbas-position-in-metres", "SBAS position words written in metres, not km (read as metres)",
+                         rows["S"][r][3])
     sbas = build_sbas(rows["S"])
     ctx.flush()
     alpha = iono.get("GPSA")
