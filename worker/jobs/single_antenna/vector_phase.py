@@ -51,8 +51,9 @@ class Settings(BaseModel):
     rate_random_walk_deg_s_per_sqrt_s: float = Field(
         0.18, gt=0.0, le=100.0, description="EKF: angular-rate random walk (white angular acceleration), "
                                             "deg/s per sqrt(s).")
-    position_random_walk_m_per_sqrt_s: float = Field(0.001, ge=0.0, le=100.0,
-                                                     description="EKF: position random walk, m per sqrt(s).")
+    position_random_walk_m_per_sqrt_s: float = Field(
+        0.0, ge=0.0, le=100.0, description="EKF: position random walk, m per sqrt(s); 0 (the default) for a static "
+                                           "antenna, which keeps the attitude sigma honest (docs/vector_phase.md).")
     coarse_step_deg: float = Field(30.0, ge=5.0, le=90.0, description="Coarse search: yaw grid step (deg).")
     coarse_tilt_max_deg: float = Field(0.0, ge=0.0, le=90.0, description="Coarse search: pitch and roll range "
                                                                          "(deg; 0: level only).")
