@@ -5,7 +5,7 @@ State (error state, 10 + n_sv): position_ecef_m (3, random walk q_position), clo
 every epoch, the datum b(t0) = 0 of eq. 41), body rotation eps (3) and body angular rate omega (3, rad/s, a
 random walk q_rate: white angular acceleration), and one float phase offset N_s per satellite column (constant
 over an arc; reset at a new arc). The nominal attitude is propagated by omega dt and corrected by eps after each
-update. With the initial state known (its sigmas tiny) the first update gives every N_s to the phase noise: the
+update; the body-frame error eps turns with the body, eps(t + dt) = A(omega dt)^T eps(t) + omega_error dt. With the initial state known (its sigmas tiny) the first update gives every N_s to the phase noise: the
 filter's form of referencing the phase changes of eq. 44 to t0. The update is iterated (Gauss-Newton, Bell and
 Cathey 1993) because delta_s is strongly non-linear in the attitude.
 Per-epoch observability is that of the epoch's snapshot (observability.analyse): the filter keeps a finite
@@ -20,7 +20,7 @@ import numpy as np
 from gnssatt.vector_phase.batch import ArcReferences, epoch_geometry
 from gnssatt.vector_phase.observability import analyse
 from gnssatt.vector_phase.phase_model import AntennaMount, ReceiverState, jacobian, model_cycles, nominal_scale
-from gnssatt.vector_phase.rotation import error_rotvec_body, perturb_body
+from gnssatt.vector_phase.rotation import error_rotvec_body, perturb_body, rotation_matrix
 from gnssatt.vector_phase.solution import Solution
 
 __all__ = ["EkfOptions", "ekf_solve"]
@@ -31,14 +31,15 @@ N_CORE = 10
 @dataclass(frozen=True)
 class EkfOptions:
     """Noise model. sigma_position0_m / sigma_attitude0_deg / sigma_rate0_deg_s: the initial state's sigmas;
-    q_position_m2_s: position random walk (0.0 for a static antenna); sigma_clock_cyc: per-epoch clock sigma
+    q_position_m2_s: position random walk (default 0.0: a static antenna; a random walk on a static antenna makes
+    the filter optimistic, docs/vector_phase.md "Consistency"); sigma_clock_cyc: per-epoch clock sigma
     (white); q_rate_rad2_s3: angular-rate random walk (white angular acceleration); iterations: Gauss-Newton
     steps per update; min_sats: fewer satellites with an established offset skip the update."""
 
     sigma_position0_m: float = 1e-3
     sigma_attitude0_deg: float = 0.01
     sigma_rate0_deg_s: float = 1.0
-    q_position_m2_s: float = 1e-6
+    q_position_m2_s: float = 0.0
     sigma_clock_cyc: float = 1e4
     q_rate_rad2_s3: float = 1e-5
     iterations: int = 4
@@ -64,6 +65,7 @@ class _Filter:
         o = self.opt
         self.R = perturb_body(self.R, self.w * dt)
         F = np.eye(self.n)
+        F[4:7, 4:7] = rotation_matrix(self.w * dt).T              # body-frame error turns with the body
         F[4:7, 7:10] = np.eye(3) * dt
         Q = np.zeros((self.n, self.n))
         Q[:3, :3] = np.eye(3) * o.q_position_m2_s * dt

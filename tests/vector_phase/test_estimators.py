@@ -53,18 +53,23 @@ def test_short_dipole_two_angles_from_six_satellites():
 @pytest.mark.parametrize("solver", [batch_solve, ekf_solve], ids=["batch", "ekf"])
 def test_rhcp_patch_names_the_unobservable_rotation_and_does_not_report_it(solver):
     """Ideal RHCP: a turn about the boresight changes every satellite's phase alike (the receiver clock)."""
-    obs, truth, mount = simulate(ScenarioSpec(RhcpPatch(), n_sats=8, n_epochs=20, sigma_phase_cyc=5e-4,
-                                              pitch_amp_deg=0.0, roll_amp_deg=0.0))
-    sol = solver(obs, mount, _initial(truth))
-    assert sol.valid.all() and (sol.rank == 6).all()
-    assert all("antenna boresight" in t and "receiver clock" in t for t in sol.observability)
-    rows = euler_rows(sol, truth.R_ned_from_ecef, mount.R_ant_from_body[2])
-    # boresight up: yaw is the unobservable angle, never reported; pitch and roll only where a free turn about
-    # the boresight moves them by < 0.5 deg (observability.UNDETERMINED_SPREAD_DEG), i.e. hardly ever at a
-    # few degrees of estimated tilt; what is determined is the boresight's direction (tilt from up, ~0 here)
-    assert np.isnan(rows.euler_deg[:, 0]).all() and np.isnan(rows.sigma_deg[:, 0]).all()
-    assert not rows.determined[:, 0].any()
-    tilt_over_sigma = rows.boresight_deg[1:, 0] / rows.sigma_boresight_deg[1:, 0]   # epoch 0: the known start
+    tilt_over_sigma = []
+    for seed in (1, 2, 3, 4):
+        obs, truth, mount = simulate(ScenarioSpec(RhcpPatch(), n_sats=8, n_epochs=20, sigma_phase_cyc=5e-4,
+                                                  pitch_amp_deg=0.0, roll_amp_deg=0.0, seed=seed))
+        sol = solver(obs, mount, _initial(truth))
+        assert sol.valid.all() and (sol.rank == 6).all()
+        assert all("antenna boresight" in t and "receiver clock" in t for t in sol.observability)
+        rows = euler_rows(sol, truth.R_ned_from_ecef, mount.R_ant_from_body[2])
+        # boresight up: yaw is the unobservable angle, never reported; pitch and roll only where a free turn about
+        # the boresight moves them by < 0.5 deg (observability.UNDETERMINED_SPREAD_DEG), i.e. hardly ever at a
+        # few degrees of estimated tilt; what is determined is the boresight's direction (tilt from up, ~0 here)
+        assert np.isnan(rows.euler_deg[:, 0]).all() and np.isnan(rows.sigma_deg[:, 0]).all()
+        assert not rows.determined[:, 0].any()
+        tilt_over_sigma.append(rows.boresight_deg[1:, 0] / rows.sigma_boresight_deg[1:, 0])   # epoch 0: the start
+    tilt_over_sigma = np.concatenate(tilt_over_sigma)
+    # the tilt is the length of a 2-D error near zero: RMS tilt / sigma is sqrt(2) for an honest sigma; one
+    # 19-epoch run scatters 0.6-2.3 (its epochs are correlated), four pooled stay under 2
     assert np.all(np.isfinite(tilt_over_sigma)) and np.sqrt(np.mean(tilt_over_sigma ** 2)) < 2.0
 
 
@@ -97,3 +102,18 @@ def test_non_symmetric_antenna_ekf_errors_match_sigma():
     rms = np.sqrt(np.mean(np.concatenate(ratios) ** 2, axis=0))
     assert np.all((rms > 0.8) & (rms < 1.25)), rms
     assert np.max(sigmas) < 8.0          # the filter after 60 s, deg: 1 mm of phase noise gives degrees (bench)
+
+
+def test_seven_satellites_ekf_errors_match_sigma():
+    """Exactly seven satellites (no redundancy in a snapshot) on a static antenna modelled static: consistent at
+    0.1 mm of phase noise (5e-4 cycles): 0.92 / 0.97 / 0.95. With the former position random walk (1 mm/sqrt(s))
+    the same runs gave 1.08 / 1.26 / 1.31 (docs/vector_phase.md "Consistency"); at 1-3 mm one run in four still
+    loses the pitch (not asserted here)."""
+    ratios = []
+    for seed in range(4):
+        obs, truth, mount = simulate(ScenarioSpec(AsymmetricPatch(), n_sats=7, n_epochs=120, seed=seed,
+                                                  sigma_phase_cyc=5e-4))
+        sol = ekf_solve(obs, mount, _initial(truth))
+        ratios.append(_error_over_sigma(sol, truth, mount)[30:])
+    rms = np.sqrt(np.mean(np.concatenate(ratios) ** 2, axis=0))
+    assert np.all((rms > 0.8) & (rms < 1.25)), rms

@@ -48,11 +48,17 @@ class Settings(BaseModel):
                                                       "position, clock and three angles; 6 suffices for a dipole).")
     sigma_initial_attitude_deg: float = Field(0.01, gt=0.0, le=180.0, description="EKF: sigma of the initial "
                                                                                   "attitude (deg).")
+    sigma_initial_rate_deg_s: float = Field(
+        1.0, gt=0.0, le=100.0, description="EKF: sigma of the initial angular rate per axis (deg/s; the filter "
+                                           "starts from zero rate). With exactly 7 satellites a value near the "
+                                           "platform's true rate avoids an early wrong solution "
+                                           "(docs/vector_phase.md).")
     rate_random_walk_deg_s_per_sqrt_s: float = Field(
         0.18, gt=0.0, le=100.0, description="EKF: angular-rate random walk (white angular acceleration), "
                                             "deg/s per sqrt(s).")
-    position_random_walk_m_per_sqrt_s: float = Field(0.001, ge=0.0, le=100.0,
-                                                     description="EKF: position random walk, m per sqrt(s).")
+    position_random_walk_m_per_sqrt_s: float = Field(
+        0.0, ge=0.0, le=100.0, description="EKF: position random walk, m per sqrt(s); 0 (the default) for a static "
+                                           "antenna, which keeps the attitude sigma honest (docs/vector_phase.md).")
     coarse_step_deg: float = Field(30.0, ge=5.0, le=90.0, description="Coarse search: yaw grid step (deg).")
     coarse_tilt_max_deg: float = Field(0.0, ge=0.0, le=90.0, description="Coarse search: pitch and roll range "
                                                                          "(deg; 0: level only).")
@@ -75,6 +81,7 @@ class Settings(BaseModel):
 
         sigma_cyc = self.sigma_phase_mm / L1_WAVELENGTH_MM
         ekf = EkfOptions(sigma_attitude0_deg=self.sigma_initial_attitude_deg, min_sats=self.min_sats,
+                         sigma_rate0_deg_s=self.sigma_initial_rate_deg_s,
                          q_rate_rad2_s3=math.radians(self.rate_random_walk_deg_s_per_sqrt_s) ** 2,
                          q_position_m2_s=self.position_random_walk_m_per_sqrt_s ** 2,
                          sigma_position0_m=1e-3 if self.initial_position_ecef_m is not None else 10.0)
