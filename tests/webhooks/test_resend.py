@@ -120,11 +120,11 @@ deliver(make_sessionmaker(make_engine(settings)), sys.argv[3])
 def test_sender_killed_mid_post_is_resent_once_after_its_lease(Session, db_settings, monkeypatch):
     """A sender process is SIGKILLed while its POST is in flight: the hook stays leased (not resent while the
     lease runs), then exactly one resend delivers it, with the same delivery id."""
-    monkeypatch.setenv("GNSSATT_WEBHOOK_LEASE_S", "3")
+    monkeypatch.setenv("GNSSATT_WEBHOOK_LEASE_S", "8")
     rx = Receiver(hold=True)
     try:
         job_id = finished_job(Session, rx.url)
-        env = {**os.environ, "PYTHONPATH": str(REPO_ROOT), "GNSSATT_WEBHOOK_LEASE_S": "3"}
+        env = {**os.environ, "PYTHONPATH": str(REPO_ROOT), "GNSSATT_WEBHOOK_LEASE_S": "8"}
         proc = subprocess.Popen([sys.executable, "-c", SENDER, str(db_settings.data_dir),
                                  db_settings.database_url or "", job_id], env=env, cwd=REPO_ROOT)
         try:
