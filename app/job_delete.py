@@ -1,11 +1,10 @@
 """DELETE /v1/jobs/{id} (issue 24): a team deletes one of its finished jobs; its rows go (products, set links,
-tasks, webhook and deliveries cascade) and each product blob that no other product or set file refers to is
-removed from the content store after the commit. Queued or running jobs answer 409 (cancel first).
+tasks, webhook and deliveries cascade). Queued or running jobs answer 409 (cancel first).
 
 The blob store is content-addressed, so a blob is shared whenever two products (or a product and an uploaded
-file) have equal bytes: only the last reference frees it. A writer storing the same bytes at the same moment
-could lose its blob to this removal; the service's blob janitor (grace-period sweep) is the long-term owner of
-collection, this removal only frees what is plainly unreferenced."""
+file) have equal bytes, and a job running now may be about to re-use one. So the request deletes no blob: it
+releases the products' blobs (core.janitor.release starts their grace period) and the janitor removes those no
+row points to once the grace period is over, under the store's lock that every writer takes too."""
 from __future__ import annotations
 
 from fastapi import APIRouter, Request, Response
@@ -13,18 +12,10 @@ from sqlalchemy import select
 
 from app.deps import SessionDep, TeamDep
 from app.problems import Problem, ProblemError
-from core.models import Job, Product, SetFile
+from core.janitor import release
+from core.models import Job, Product
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
-
-
-def unreferenced(session, shas: set[str]) -> set[str]:
-    """The SHA-256 values of `shas` that no product row and no set file row refers to."""
-    if not shas:
-        return set()
-    used = set(session.execute(select(Product.sha256).where(Product.sha256.in_(list(shas)))).scalars())
-    used |= set(session.execute(select(SetFile.sha256).where(SetFile.sha256.in_(list(shas)))).scalars())
-    return shas - used
 
 
 @router.delete("/{job_id}", status_code=204, responses={401: {"model": Problem}, 404: {"model": Problem},
@@ -41,10 +32,5 @@ def delete_job(job_id: str, request: Request, team: TeamDep, session: SessionDep
     shas = set(session.execute(select(Product.sha256).where(Product.job_id == job_id)).scalars())
     session.delete(job)
     session.commit()
-    blobs = request.app.state.blobs
-    for sha in unreferenced(session, shas):
-        try:
-            blobs.path(sha).unlink()
-        except FileNotFoundError:
-            pass
+    release(request.app.state.blobs, shas)
     return Response(status_code=204)

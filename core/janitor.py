@@ -10,6 +10,10 @@
   blob is touched under its shared lock (core/blobs.py), so an upload that re-uses an old blob either re-creates
   it after the janitor removed it, or touches it first and the janitor leaves it alone.
 
+The janitor alone deletes blobs. Deleting a job or a set (by its team) only drops the rows and `release`s their
+blobs: they are touched, so the grace period counts from the deletion (a download that read its row just before
+still finds the file), and the next sweep after it takes those no other row points to.
+
 Every worker runs `sweep` from its reaper thread every few minutes; concurrent sweeps are harmless.
 """
 from __future__ import annotations
@@ -94,6 +98,20 @@ def referenced_blobs(Session: sessionmaker[Session]) -> set[str]:
             if isinstance(payload, dict) and isinstance(payload.get("_shared_sha256"), str):
                 refs.add(payload["_shared_sha256"])
     return refs
+
+
+def release(blobs: BlobStore, shas) -> int:
+    """Start the grace period of blobs whose rows were just deleted: touch each one still there, under the
+    store's shared lock (as a new blob is); returns how many. Nothing is deleted here: `sweep_blobs` does that."""
+    touched = 0
+    with blobs.lock(exclusive=False):
+        for sha in set(shas):
+            try:
+                os.utime(blobs.path(sha))
+                touched += 1
+            except FileNotFoundError:
+                continue
+    return touched
 
 
 def sweep_blobs(settings: Settings, Session: sessionmaker[Session], blobs: BlobStore, now: float) -> int:

@@ -4,6 +4,7 @@ from __future__ import annotations
 from alembic import context
 from sqlalchemy import create_engine
 
+import core.webhook_models  # noqa: F401 - its tables are part of the metadata autogenerate compares
 from core.models import Base
 
 config = context.config

@@ -292,7 +292,8 @@ def _execute_job(rt: Runtime, job_id: str) -> str | None:
 # --- the reaper -----------------------------------------------------------------------------------
 
 def reap(rt: Runtime) -> dict[str, int]:
-    """Requeue jobs whose lease ran out (their worker died) and re-ring jobs whose message was lost.
+    """Requeue jobs whose lease ran out (their worker died), re-ring jobs whose message was lost and resend
+    webhooks left pending by a dead worker (worker.webhooks.resend_pending).
 
     Every change is a conditional UPDATE that re-checks what was read (state, expired lease, same owner),
     so reapers on many machines, and a worker claiming the job meanwhile, can never be overwritten by a
@@ -347,6 +348,9 @@ def reap(rt: Runtime) -> dict[str, int]:
         for job_id in ended:
             notify_finished(rt, job_id)
     counts["tasks_requeued"] = reap_tasks(rt)
+    from worker.webhooks import resend_pending
+
+    counts["webhooks_resent"] = resend_pending(rt)
     if any(counts.values()):
         log.info("reaper: %s", counts)
     return counts

@@ -13,6 +13,7 @@ from app.schemas.common import Page
 from app.schemas.observation_sets import ObservationSetPublic, SetFilePublic
 from app.store.sets import store_set, validate_staged
 from app.store.uploads import expand_bundles, receive_multipart
+from core.janitor import release
 from core.models import Job, JobSet, ObservationSet
 
 router = APIRouter(prefix="/v1/observation-sets", tags=["observation sets"])
@@ -93,9 +94,9 @@ def get_set(set_id: str, team: TeamDep, session: SessionDep) -> ObservationSetPu
 
 @router.delete("/{set_id}", status_code=204, responses={**ERRORS, 409: {"model": Problem}},
                summary="Delete an observation set")
-def delete_set(set_id: str, team: TeamDep, session: SessionDep) -> Response:
-    """Refused with 409 while a queued or running job uses the set. Its files stay in the content store
-    while other sets or products share them."""
+def delete_set(set_id: str, request: Request, team: TeamDep, session: SessionDep) -> Response:
+    """Refused with 409 while a queued or running job uses the set. Its blobs are left to the janitor
+    (core/janitor.py), which removes those no other set or product shares once the grace period is over."""
     # Lock the set's row first (SQLite: the write lock; PostgreSQL: FOR UPDATE, which a job's foreign key
     # check waits on), so a job submitted meanwhile is either seen below (409) or fails its own commit (409).
     lock = select(ObservationSet.id).where(ObservationSet.id == set_id)
@@ -110,6 +111,8 @@ def delete_set(set_id: str, team: TeamDep, session: SessionDep) -> Response:
     if busy is not None:
         raise ProblemError(409, "set-in-use", "Observation set in use",
                            f"Job {busy[0]} uses this set and has not finished; cancel it or wait.", job_id=busy[0])
+    shas = [f.sha256 for f in obs_set.files]
     session.delete(obs_set)
     session.commit()
+    release(request.app.state.blobs, shas)
     return Response(status_code=204)

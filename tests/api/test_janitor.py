@@ -105,3 +105,101 @@ def test_concurrent_uploads_reusing_blobs_never_lose_one(api, settings):
         thread.join(timeout=10)
     assert not errors and removed[0] >= 50
     assert removed[1] > 0  # the janitor did remove the deleted sets' blobs meanwhile
+
+
+def _published_job(rt, team_id: str, payload: bytes) -> tuple[str, str]:
+    """A succeeded job with one product of `payload`, stored as a worker publishes it (blob first, then the
+    row); returns (job id, sha256)."""
+    from core.models import Job, Product, utcnow
+
+    sha, size = rt.blobs.put_bytes(payload)
+    with rt.Session.begin() as s:
+        job = Job(team_id=team_id, type="selftest", config={}, set_ids=[], state="succeeded", progress=1.0,
+                  created_at=utcnow(), finished_at=utcnow(), attempts=1, max_attempts=3, cancel_requested=False)
+        s.add(job)
+        s.flush()
+        s.add(Product(job_id=job.id, attempt=1, name="out.txt", media_type="text/plain", sha256=sha,
+                      size_bytes=size))
+        return job.id, sha
+
+
+def test_deleting_jobs_while_other_jobs_reuse_their_product_blobs_never_loses_one(api, settings):
+    """A team deletes a job while another job publishes a product of the same bytes, at a random moment within
+    twice the grace period after the delete, and a janitor with a 0.3 s grace sweeps in a loop: the new job's
+    product is always there and downloadable (the delete only releases the blob; the janitor deletes under the
+    store's exclusive lock and only what was not touched since it looked), and the janitor did take the
+    released blobs meanwhile."""
+    import random
+
+    from core.models import Job
+
+    rt = api.rt
+    settings.janitor_grace_s = 0.0
+    settings.job_time_s = 0.3
+    first = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]
+    with rt.Session() as s:
+        team_id = s.get(Job, first).team_id
+    stop, sweeps, errors = threading.Event(), [0], []
+
+    def sweeper():
+        try:
+            while not stop.is_set():
+                janitor.sweep_blobs(settings, rt.Session, rt.blobs, time.time())
+                sweeps[0] += 1
+        except BaseException as exc:  # noqa: BLE001 - reported below
+            errors.append(exc)
+
+    thread = threading.Thread(target=sweeper, daemon=True)
+    thread.start()
+    rng, gone_before_reuse = random.Random(22), 0
+    try:
+        for i in range(16):
+            payload = f"product {i} ".encode() * 1000
+            old_job, sha = _published_job(rt, team_id, payload)
+            assert api.delete(f"/v1/jobs/{old_job}").status_code == 204
+            time.sleep(rng.uniform(0.0, 0.6))
+            gone_before_reuse += not rt.blobs.exists(sha)
+            new_job, sha_again = _published_job(rt, team_id, payload)
+            assert sha_again == sha
+            before = sweeps[0]
+            while sweeps[0] < before + 2 and thread.is_alive():
+                time.sleep(0.002)
+            assert rt.blobs.exists(sha), f"round {i}: a product's blob was removed"
+            resp = api.get(f"/v1/jobs/{new_job}/products/out.txt")
+            assert resp.status_code == 200 and resp.content == payload
+    finally:
+        stop.set()
+        thread.join(timeout=10)
+    assert not errors
+    assert gone_before_reuse > 0  # the janitor did take released blobs, so the reuse raced real deletions
+
+
+def test_reuse_between_the_janitors_look_and_its_delete_keeps_the_blob(api, settings, monkeypatch):
+    """The worst moment, forced: a deleted job's blob is past its grace, the janitor has read the references
+    (none), and just then another job publishes the same bytes and its row; the janitor must not remove it."""
+    from core.models import Job
+
+    rt = api.rt
+    first = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]
+    with rt.Session() as s:
+        team_id = s.get(Job, first).team_id
+    payload = b"the same product bytes " * 500
+    old_job, sha = _published_job(rt, team_id, payload)
+    assert api.delete(f"/v1/jobs/{old_job}").status_code == 204
+    _age(rt.blobs.path(sha), 100 * HOUR)
+    looked = janitor.referenced_blobs
+    reused = []
+
+    def look_then_reuse(Session):
+        refs = looked(Session)
+        assert sha not in refs
+        reused.append(_published_job(rt, team_id, payload)[0])
+        return refs
+
+    monkeypatch.setattr(janitor, "referenced_blobs", look_then_reuse)
+    assert janitor.sweep_blobs(settings, rt.Session, rt.blobs, time.time()) == 0
+    assert rt.blobs.exists(sha) and reused
+    monkeypatch.setattr(janitor, "referenced_blobs", looked)
+    janitor.sweep(settings, rt.Session, rt.blobs, now=time.time() + 100 * HOUR)
+    assert rt.blobs.exists(sha)  # referenced now: never removed
+    assert api.get(f"/v1/jobs/{reused[0]}/products/out.txt").content == payload

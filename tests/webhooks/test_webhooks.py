@@ -152,20 +152,27 @@ def test_deliveries_visible_on_the_job_page(api):
     assert "HTTP 500" in cell and "204 ok" in cell
 
 
-def test_delete_job_frees_its_unshared_blobs(api):
-    """DELETE /v1/jobs/{id}: 204, the job and its product rows gone, blobs no one else refers to removed, blobs
-    shared with another job's product kept; unfinished jobs 409, other teams' 404."""
+def test_delete_job_leaves_its_blobs_to_the_janitor(api):
+    """DELETE /v1/jobs/{id}: 204, the job and its product rows gone, every blob still there (the request deletes
+    none); the janitor removes the blobs no one else refers to once the grace period after the deletion is over,
+    and keeps those shared with another job's product; unfinished jobs 409, other teams' 404."""
+    from core import janitor
     from core.models import Job, Product
 
     first = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]
     second = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0, "fan_out": 2}}).json()["id"]
-    blobs = api.app.state.blobs
+    blobs, settings = api.app.state.blobs, api.rt.settings
     prods = {p["name"]: p["sha256"] for p in api.get(f"/v1/jobs/{first}/products").json()}
     other = {p["sha256"] for p in api.get(f"/v1/jobs/{second}/products").json()}
     shared, own = set(prods.values()) & other, set(prods.values()) - other
     assert own, "the two jobs must differ in some product for this test"
     assert api.delete(f"/v1/jobs/{first}").status_code == 204
     assert api.get(f"/v1/jobs/{first}").status_code == 404
+    assert all(blobs.path(s).exists() for s in prods.values())  # not deleted by the request
+    grace_s = settings.janitor_grace_s + settings.job_time_s
+    janitor.sweep(settings, api.rt.Session, blobs, now=time.time() + grace_s - 60)
+    assert all(blobs.path(s).exists() for s in prods.values())  # the grace counts from the deletion
+    janitor.sweep(settings, api.rt.Session, blobs, now=time.time() + grace_s + 60)
     assert all(not blobs.path(s).exists() for s in own)
     assert all(blobs.path(s).exists() for s in shared)
     assert all(blobs.path(s).exists() for s in other)

@@ -20,3 +20,26 @@ def test_reaper_failed_job_starts_its_webhook(api, monkeypatch):
     counts = runner.reap(api.rt)
     assert counts["failed"] == 1
     assert started == [job_id]
+
+
+def test_reaper_resends_a_hook_its_dead_worker_left_pending(api):
+    """The reaper's pass starts the resend of a pending hook whose sender's lease ran out (worker.webhooks)."""
+    import time
+
+    from core.webhook_models import JobWebhook
+    from tests.webhooks.receiver import Receiver
+
+    rx = Receiver()
+    try:
+        job_id = api.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0}}).json()["id"]
+        with api.rt.Session.begin() as s:
+            s.add(JobWebhook(job_id=job_id, url=rx.url, secret="s" * 20, state="pending", attempts=0,
+                             claimed_by="gone-host:1/x", lease_until=utcnow() - timedelta(seconds=1)))
+        assert runner.reap(api.rt)["webhooks_resent"] == 1
+        deadline = time.monotonic() + 20
+        while api.get(f"/v1/jobs/{job_id}/webhook").json()["state"] != "delivered":
+            assert time.monotonic() < deadline, "the resent hook was not delivered"
+            time.sleep(0.05)
+    finally:
+        rx.close()
+    assert rx.count(job_id) == 1
