@@ -8,7 +8,7 @@ antennas, L1 C/A + L2 P(Y), 1 Hz), clean ({"pcv": false, "pco": false, "multipat
 - filter: CPU time (time.process_time) of gnssatt.attitude.filter.run_filter, epochs / s; median of --runs runs;
 - job: the attitude pipeline itself (worker.jobs.attitude.run on a JobContext like the runner builds: parse
   the uploaded files, geometry, filter, attitude, every product text, PNG plots, report.html, each product
-  hashed as the blob store does), CPU and wall time, median of --runs runs, and CPU per stage (the pipeline's
+  hashed as the blob store does), CPU (the plot process it forks included) and wall time, median of --runs runs, and CPU per stage (the pipeline's
   StageClock line of the job log);
 - service (realistic pass, both modes): upload to products through the real service as `make demo` runs it (API +
   one worker, embedded SQLite + Huey, default settings): HTTP upload of the set, job submitted, polled to
@@ -36,6 +36,7 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from bench._report import machine_line, replace_section  # noqa: E402
+from worker.forked import cpu_s  # noqa: E402
 
 SEED = 0
 CLEAN = {"pcv": False, "pco": False, "multipath": False, "noise_grows_with_cn0": False}
@@ -70,9 +71,9 @@ def run_job(d: Path, mode: str, work: Path) -> dict:
 
     P.run_filter = timed
     try:
-        t0, c0 = time.perf_counter(), time.process_time()
+        t0, c0 = time.perf_counter(), cpu_s()
         run(ctx, AttitudeConfig(mode=mode))
-        wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+        wall, cpu = time.perf_counter() - t0, cpu_s() - c0
     finally:
         P.run_filter = orig
     return {"job_wall_s": wall, "job_cpu_s": cpu, "filter_cpu_s": filt["cpu_s"], "epochs": filt["epochs"],
@@ -106,9 +107,10 @@ def run_rtklib(d: Path, work: Path) -> dict:
 
 
 def _proc_cpu_s(pid: int) -> float:
-    """utime + stime of a process (its threads included) from /proc, in seconds."""
+    """utime + stime + cutime + cstime of a process (its threads and the children it waited for, e.g. the
+    attitude job's plot process, included) from /proc, in seconds."""
     fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    return sum(int(f) for f in fields[11:15]) / os.sysconf("SC_CLK_TCK")
 
 
 def _iso_s(text: str) -> float:

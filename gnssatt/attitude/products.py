@@ -20,10 +20,23 @@ __all__ = ["attitude_csv", "baselines_csv", "residuals_csv", "events_csv", "erro
            "product_tables", "write_products"]
 
 
-def _time_cols(t) -> tuple[list[str], np.ndarray, np.ndarray]:
-    week, sow = t.week_sow()
-    iso = t.iso(3)
-    return (iso if isinstance(iso, list) else [iso]), week, sow
+def _epoch_time_texts(sol) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(ISO text as a str array, gps_week, gps_sow) of every epoch of the pass, computed once per solution (the
+    CSVs, the AEM and the plot tables index it instead of formatting the same epochs again)."""
+    cached = getattr(sol, "_epoch_time_texts", None)
+    if cached is None:
+        week, sow = sol.pobs.time.week_sow()
+        iso = sol.pobs.time.iso(3)
+        cached = (np.asarray(iso if isinstance(iso, list) else [iso], dtype=str), np.atleast_1d(week),
+                  np.atleast_1d(sow))
+        setattr(sol, "_epoch_time_texts", cached)
+    return cached
+
+
+def _time_cols(sol, epochs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(time_gps text, gps_week, gps_sow) of the epochs (indices into sol.pobs.time)."""
+    iso, week, sow = _epoch_time_texts(sol)
+    return iso[epochs], week[epochs], sow[epochs]
 
 
 def _fmt(arr: np.ndarray, fmt: str) -> np.ndarray:
@@ -44,9 +57,8 @@ def attitude_csv(sol) -> str | None:
     """attitude.csv text (CONVENTIONS.md columns + gps_time flags); None with fewer than two baselines."""
     if sol.att_epochs is None:
         return None
-    t = sol.pobs.time[sol.att_epochs]
-    iso, week, sow = _time_cols(t)
-    cols = [np.asarray(iso), _fmt(week, "%d"), _fmt(sow, "%.3f")]
+    iso, week, sow = _time_cols(sol, sol.att_epochs)
+    cols = [iso, _fmt(week, "%d"), _fmt(sow, "%.3f")]
     for q in (sol.q_body_from_ecef, sol.q_body_from_gcrf):
         cols += [_fmt(q[:, i], "%.12f") for i in range(4)]
     cols += [_fmt(sol.euler_deg[:, i], "%.6f") for i in range(3)]
@@ -67,10 +79,9 @@ def _join(header: str, cols: list[np.ndarray]) -> str:
 def baselines_csv(sol) -> str:
     """baselines.csv text, one row per epoch and baseline with a solution (CONVENTIONS.md)."""
     bt = sol.baseline_table
-    t = sol.pobs.time[bt["epoch"]]
-    iso, week, sow = _time_cols(t)
+    iso, week, sow = _time_cols(sol, bt["epoch"])
     names = np.array([f"{a}>{b}" for a, b in sol.baselines] or ["-"])
-    cols = [np.asarray(iso), _fmt(week, "%d"), _fmt(sow, "%.3f"), names[bt["bl"]]]
+    cols = [iso, _fmt(week, "%d"), _fmt(sow, "%.3f"), names[bt["bl"]]]
     cols += [_fmt(bt["b"][:, i], "%.5f") for i in range(3)]
     cols += [_fmt(bt["length_m"], "%.5f"), _fmt(bt["azimuth_deg"], "%.5f"), _fmt(bt["elevation_deg"], "%.5f"),
              _fmt(bt["sigma_azimuth_deg"], "%.5f"), _fmt(bt["sigma_elevation_deg"], "%.5f"),
@@ -88,8 +99,7 @@ def residuals_csv(sol) -> str:
               "reason")
     if r["epoch"].size == 0:
         return header + "\n"
-    iso_all = np.asarray(sol.pobs.time.iso(3))
-    _, sow_all = sol.pobs.time.week_sow()
+    iso_all, _, sow_all = _epoch_time_texts(sol)
     names = np.array([f"{a}>{b}" for a, b in sol.baselines])
     sats = np.asarray(sol.pobs.sats)
     sigs = np.asarray(sol.pobs.signals)
@@ -121,8 +131,8 @@ def events_csv(sol) -> str:
     """events.csv: fixes, failed validations, slips, clock jumps, restarts, in time order."""
     buf = io.StringIO()
     buf.write("time_gps,gps_sow,event,baseline,sat,signal,detail\n")
-    iso = sol.pobs.time.iso(3)
-    _, sow = sol.pobs.time.week_sow()
+    iso, _, sow = _epoch_time_texts(sol)
+    iso, sow = iso.tolist(), sow.tolist()
     for e in sol.fr.events:
         k = e["epoch"]
         bl = "" if e["baseline"] is None else f"{sol.baselines[e['baseline']][0]}>{sol.baselines[e['baseline']][1]}"
@@ -175,9 +185,7 @@ def aem_kvn(sol, creation_date: str | None = None, originator: str = "GNSSATT",
         raise ValueError(f"float_epochs must be 'omit' or 'segment', not {float_epochs!r}")
     if sol.att_epochs is None or sol.att_epochs.size == 0 or not sol.att_fixed.any():
         return None
-    t = sol.pobs.time[sol.att_epochs]
-    iso_all = t.iso(3)
-    iso_all = np.asarray(iso_all if isinstance(iso_all, list) else [iso_all])
+    iso_all = _time_cols(sol, sol.att_epochs)[0]
     name = sol.inputs.platform.name
     fixed = np.asarray(sol.att_fixed, bool)
     lines = ["CCSDS_AEM_VERS = 1.0", f"CREATION_DATE = {creation_date or _utc_now()}", f"ORIGINATOR = {originator}",
@@ -226,8 +234,7 @@ def errors_csv(sol, ref) -> str | None:
     the formal 1-sigma; None without a reference."""
     if ref is None:
         return None
-    t = sol.pobs.time[sol.att_epochs]
-    iso, _, sow = _time_cols(t)
+    iso, _, sow = _time_cols(sol, sol.att_epochs)
 
     def num(a):
         out = np.full(a.shape, "", dtype=object)
@@ -235,7 +242,7 @@ def errors_csv(sol, ref) -> str | None:
         out[ok] = _fmt(a[ok], "%.6f")
         return out
 
-    cols = [np.asarray(iso), _fmt(sow, "%.3f")]
+    cols = [iso, _fmt(sow, "%.3f")]
     cols += [num(ref.euler_ref_deg[:, i]) for i in range(3)] + [num(ref.error_deg[:, i]) for i in range(3)]
     cols += [_fmt(sol.sigma_euler_deg[:, i], "%.6f") for i in range(3)] + [_fmt(sol.att_fixed.astype(int), "%d")]
     header = ("time_gps,gps_sow,yaw_ref_deg,pitch_ref_deg,roll_ref_deg,yaw_error_deg,pitch_error_deg,"
@@ -281,10 +288,8 @@ def all_products(sol, creation_date: str | None = None, aem_float_epochs: str = 
 
 def _epoch_times(sol) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(time_gps as datetime64[ms], gps_week, gps_sow) of every epoch of the pass (the CSVs' time columns)."""
-    week, sow = sol.pobs.time.week_sow()
-    iso = sol.pobs.time.iso(3)
-    t = np.array(iso if isinstance(iso, list) else [iso], dtype="datetime64[ms]")
-    return t, np.asarray(week, float), np.asarray(sow, float)
+    iso, week, sow = _epoch_time_texts(sol)
+    return iso.astype("datetime64[ms]"), np.asarray(week, float), np.asarray(sow, float)
 
 
 def product_tables(sol) -> dict[str, dict[str, np.ndarray]]:

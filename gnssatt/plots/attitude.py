@@ -17,7 +17,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from gnssatt.gnss.rotations import dcm_to_euler321, euler321_to_dcm, quat_to_dcm
-from gnssatt.plots.common import (EULER_COLOURS, PlotContext, Table, categories, category_memo, column, figure_png,
+from gnssatt.plots.common import (EULER_COLOURS, Margins, PlotContext, Table, categories, category_memo, column, figure_png,
                                  first_per_epoch_and_key, gps_time, new_figure, no_data, numeric, read_csv_table,
                                  set_title, time_axis, truthy, wrap_deg)
 
@@ -179,7 +179,7 @@ def euler_figure(attitude_csv: Any, reference: Any = None, context: PlotContext 
     with the product's own 1-sigma as a band and bias/std in the legend; without a reference, the formal
     1-sigma of each angle. Errors may also come as attitude.csv extra columns `<axis>_error_deg`."""
     att = read_csv_table(attitude_csv)
-    fig = new_figure(10.0, 7.0)
+    fig = new_figure(10.0, 7.0, Margins(left=0.75, top=0.7, hgap=0.35, rows=2))
     top, bottom = fig.subplots(2, 1, sharex=True)
     if not len(column(att, "time_gps") if column(att, "time_gps") is not None else []):
         no_data(top, "no attitude epochs")
@@ -318,7 +318,8 @@ def fix_status_figure(attitude_csv: Any = None, baselines_csv: Any = None, event
         kinds = k.astype(str) if k is not None else np.array(["event"] * len(t_ev))
     kind_names = list(dict.fromkeys(kinds))
     n_rows = max(len(series), 1)
-    fig = new_figure(10.0, 3.4 + 0.5 * n_rows + 0.22 * max(len(kind_names), 1))
+    fig = new_figure(10.0, 3.4 + 0.5 * n_rows + 0.22 * max(len(kind_names), 1),
+                     Margins(left=1.7, top=0.7, hgap=0.12, rows=3))
     lanes, events, counts = fig.subplots(3, 1, sharex=True,
                                          height_ratios=[n_rows, 0.45 * max(len(kind_names), 1), 2])
     if not series:
@@ -436,7 +437,7 @@ def dop_figure(residuals_csv: Any = None, attitude_csv: Any = None,
                context: PlotContext | Mapping | None = None) -> Figure:
     """HDOP and VDOP over time: from attitude.csv columns `hdop`/`vdop` (any `*dop` column) when present,
     else per baseline from the antenna-frame directions of residuals.csv (`dop_series`)."""
-    fig = new_figure(10.0, 4.0)
+    fig = new_figure(10.0, 4.0, Margins(left=0.7, top=0.95))
     ax = fig.subplots()
     att = read_csv_table(attitude_csv)
     dop_cols = [k for k in att if k.lower().endswith("dop")]
@@ -488,7 +489,8 @@ def residuals_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
         names, base_code = categories(base)
     else:
         names, base_code = (["all"] if has_rows else []), None
-    fig = new_figure(11.0, 1.5 + 2.6 * max(len(names), 1))
+    fig = new_figure(11.0, 1.5 + 2.6 * max(len(names), 1),
+                     Margins(left=0.75, top=0.95, hgap=0.4, wgap=0.85, rows=max(len(names), 1), cols=2))
     axes = fig.subplots(max(len(names), 1), 2, sharex=True, squeeze=False)
     if not has_rows:
         for a in axes[0]:
@@ -553,7 +555,7 @@ def skyplot_figure(residuals_csv: Any, context: PlotContext | Mapping | None = N
     else:
         names, base_code = (["all"] if has_rows else []), None
     n = max(len(names), 1)
-    fig = new_figure(4.6 * n + 1.0, 5.2)
+    fig = new_figure(4.6 * n + 1.0, 5.2, Margins(left=0.45, right=0.35, top=1.35, bottom=0.3, wgap=0.9, cols=n))
     axes = [fig.add_subplot(1, n, i + 1, projection="polar") for i in range(n)]
     if not has_rows:
         no_data(axes[0], "no residuals")
@@ -607,34 +609,40 @@ def skyplot_plot(residuals_csv: Any, context: PlotContext | Mapping | None = Non
     return figure_png(skyplot_figure(residuals_csv, context))
 
 
+#: the attitude job's PNGs in report order (attitude_plots)
+PLOT_NAMES = ("euler.png", "fix_status.png", "dop.png", "residuals.png", "skyplot.png", "elevation.png",
+              "skyplot_fix.png")
+
+
 def attitude_plots(products: Mapping[str, Any], reference: Any = None,
-                   context: PlotContext | Mapping | None = None) -> dict[str, bytes]:
+                   context: PlotContext | Mapping | None = None, names: Any = PLOT_NAMES) -> dict[str, bytes]:
     """Every attitude PNG that the given products allow, by product name, in report order.
 
     products: {"attitude.csv": text, "baselines.csv": text, "residuals.csv": text, "events.csv": text}
         (any may be missing; a one-baseline platform has no attitude.csv).
     reference: the set's reference attitude CSV text (CONVENTIONS.md) or None.
+    names: the plots to draw (of PLOT_NAMES; two processes each draw a part of them).
     Returns e.g. {"euler.png", "fix_status.png", "dop.png", "residuals.png", "skyplot.png", "elevation.png",
     "skyplot_fix.png"} (the last two: gnssatt.plots.elevation).
     """
+    from gnssatt.plots.elevation import elevation_plot, fix_skyplot_plot
+
     # each CSV is parsed once here, not once per plot (residuals.csv feeds three plots)
     tab = {k: (None if v is None else read_csv_table(v)) for k, v in products.items()}
     att, bl = tab.get("attitude.csv"), tab.get("baselines.csv")
     res, ev = tab.get("residuals.csv"), tab.get("events.csv")
     reference = None if reference is None else read_csv_table(reference)
+    makers = {"euler.png": (att is not None and len(att.get("time_gps", [])),
+                            lambda: euler_plot(att, reference, context)),
+              "fix_status.png": (att is not None or bl is not None, lambda: fix_status_plot(att, bl, ev, context)),
+              "dop.png": (res is not None, lambda: dop_plot(res, att, context)),
+              "residuals.png": (res is not None, lambda: residuals_plot(res, context)),
+              "skyplot.png": (res is not None, lambda: skyplot_plot(res, context)),
+              "elevation.png": (res is not None, lambda: elevation_plot(res, context)),
+              "skyplot_fix.png": (res is not None and bl is not None, lambda: fix_skyplot_plot(res, bl, context))}
     out: dict[str, bytes] = {}
-    if att is not None and len(read_csv_table(att).get("time_gps", [])):
-        out["euler.png"] = euler_plot(att, reference, context)
-    if att is not None or bl is not None:
-        out["fix_status.png"] = fix_status_plot(att, bl, ev, context)
-    if res is not None:
-        with category_memo():
-            out["dop.png"] = dop_plot(res, att, context)
-            out["residuals.png"] = residuals_plot(res, context)
-            out["skyplot.png"] = skyplot_plot(res, context)
-            from gnssatt.plots.elevation import elevation_plot, fix_skyplot_plot
-
-            out["elevation.png"] = elevation_plot(res, context)
-            if bl is not None:
-                out["skyplot_fix.png"] = fix_skyplot_plot(res, bl, context)
+    with category_memo():
+        for name in PLOT_NAMES:
+            if name in names and makers[name][0]:
+                out[name] = makers[name][1]()
     return out

@@ -71,9 +71,35 @@ def set_title(fig: Figure, what: str, context: "PlotContext | Mapping[str, Any] 
     fig.suptitle(f"{what}\n{sub}", fontsize=9)
 
 
-def new_figure(width_in: float = 10.0, height_in: float = 6.0) -> Figure:
-    """A pyplot-free Figure (thread-safe; rendered by the Agg canvas on savefig)."""
-    return Figure(figsize=(width_in, height_in), dpi=DPI, layout="constrained")
+@dataclass(frozen=True)
+class Margins:
+    """Fixed figure margins and gaps between axes [inches], for `new_figure(..., margins=)`: the constrained
+    layout measures every text of a figure before drawing it (about a third of a plot's CPU time); a plot
+    whose texts are known in advance sets its margins once instead. rows/cols: the grid of axes the gaps
+    separate."""
+
+    left: float = 0.75
+    right: float = 0.2
+    top: float = 0.75
+    bottom: float = 0.55
+    hgap: float = 0.4
+    wgap: float = 0.8
+    rows: int = 1
+    cols: int = 1
+
+
+def new_figure(width_in: float = 10.0, height_in: float = 6.0, margins: Margins | None = None) -> Figure:
+    """A pyplot-free Figure (thread-safe; rendered by the Agg canvas on savefig): constrained layout, or the
+    fixed `margins` when given (set before the axes are added, so fig.subplots / add_subplot use them)."""
+    if margins is None:
+        return Figure(figsize=(width_in, height_in), dpi=DPI, layout="constrained")
+    fig = Figure(figsize=(width_in, height_in), dpi=DPI, layout=None)
+    m = margins
+    axes_h = max(height_in - m.top - m.bottom - (m.rows - 1) * m.hgap, 0.1) / m.rows
+    axes_w = max(width_in - m.left - m.right - (m.cols - 1) * m.wgap, 0.1) / m.cols
+    fig.subplots_adjust(left=m.left / width_in, right=1.0 - m.right / width_in, top=1.0 - m.top / height_in,
+                        bottom=m.bottom / height_in, hspace=m.hgap / axes_h, wspace=m.wgap / axes_w)
+    return fig
 
 
 #: zlib level of the PNGs: 1 encodes ~3x faster than the default 6 for ~10-30 % larger files (plots of long passes

@@ -15,8 +15,8 @@ from typing import Any, Mapping
 import numpy as np
 from matplotlib.figure import Figure
 
-from gnssatt.plots.common import (PlotContext, categories, column, figure_png, first_per_epoch_and_key, gps_time,
-                                  new_figure, no_data, numeric, read_csv_table, set_title, truthy)
+from gnssatt.plots.common import (Margins, PlotContext, categories, column, figure_png, first_per_epoch_and_key,
+                                  gps_time, new_figure, no_data, numeric, read_csv_table, set_title, truthy)
 
 __all__ = ["elevation_figure", "elevation_plot", "fix_skyplot_figure", "fix_skyplot_plot", "binned"]
 
@@ -81,7 +81,8 @@ def elevation_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
     t = column(res, "time_gps")
     base = column(res, "baseline")
     names, code = categories(base) if base is not None and t is not None and len(t) else ([], None)
-    fig = new_figure(11.0, 1.4 + 2.7 * max(len(names), 1))
+    fig = new_figure(11.0, 1.4 + 2.7 * max(len(names), 1),
+                     Margins(left=0.75, top=0.95, hgap=0.85, wgap=0.85, rows=max(len(names), 1), cols=2))
     axes = fig.subplots(max(len(names), 1), 2, squeeze=False)
     title = "Residuals and C/N0 versus elevation in the antenna frame"
     if not names:
@@ -136,7 +137,7 @@ def fix_skyplot_figure(residuals_csv: Any, baselines_csv: Any, context: PlotCont
     base = column(res, "baseline")
     names, code = categories(base) if base is not None and t is not None and len(t) else ([], None)
     n = max(len(names), 1)
-    fig = new_figure(4.4 * n + 0.6, 5.0)
+    fig = new_figure(4.4 * n + 0.6, 5.0, Margins(left=0.55, right=0.55, top=1.25, bottom=0.3, wgap=1.1, cols=n))
     axes = [fig.add_subplot(1, n, i + 1, projection="polar") for i in range(n)]
     title = "Sky plot in the antenna frame by fix status (green fixed, orange float)"
     if not names:

@@ -18,6 +18,7 @@ from gnssatt.attitude.settings import (FLAT_TO_NESTED, GROUPS, PLATFORM_DEFAULTS
 
 from worker.context import JobContext
 from worker.errors import JobInputError
+from worker.forked import cpu_s
 from worker.jobs.calibrated_baselines import CalibratedBaselines
 from worker.jobs.registry import JobType
 
@@ -207,16 +208,17 @@ PRELOAD = ("gnssatt.attitude.process", "gnssatt.attitude.products", "gnssatt.att
 
 
 class StageClock:
-    """Wall and CPU (time.process_time: the whole worker process) seconds per stage of one job, for the job's
-    log: `mark(name)` closes the running stage and opens the next; `line()` is the log line."""
+    """Wall and CPU (worker.forked.cpu_s: the whole worker process and the plot process it forked, counted in
+    the stage that waited for it) seconds per stage of one job, for the job's log: `mark(name)` closes the
+    running stage and opens the next; `line()` is the log line."""
 
     def __init__(self) -> None:
         self.rows: list[tuple[str, float, float]] = []
         self._stage: str | None = None
-        self._t = (time.perf_counter(), time.process_time())
+        self._t = (time.perf_counter(), cpu_s())
 
     def mark(self, stage: str | None) -> None:
-        now = (time.perf_counter(), time.process_time())
+        now = (time.perf_counter(), cpu_s())
         if self._stage is not None:
             self.rows.append((self._stage, now[0] - self._t[0], now[1] - self._t[1]))
         self._stage, self._t = stage, now
@@ -267,39 +269,70 @@ def run(ctx: JobContext, config) -> None:
     sol.summary["observation_set_id"] = obs_set.id
     sol.summary["pcv_map_ids"] = list(config.pcv_map_ids)
     sol.summary["reader_warnings"] = reader_warnings([obs_set])
-    products = all_products(sol)
-    clock.mark("storing products")
-    for name, content in products.items():
-        ctx.write_product(name, content)
-    clock.mark("plots")
-    _write_plots_and_report(ctx, config, obs_set, products, product_tables(sol), sol.summary, clock)
+    tables = product_tables(sol)
+    plots = _PlotJob(ctx, config, obs_set, tables)
+    try:
+        products = all_products(sol)
+        clock.mark("storing products")
+        for name, content in products.items():
+            ctx.write_product(name, content)
+        clock.mark("plots")
+        pngs = plots.draw(products)
+    finally:
+        plots.cancel()
+    clock.mark("report and storing plots")
+    _write_plots_and_report(ctx, config, obs_set, pngs, sol.summary)
     clock.mark(None)
     ctx.log(clock.line())
     log.info("attitude job %s %s", ctx.job_id, clock.line())
     ctx.progress(1.0, "done")
 
 
-def _write_plots_and_report(ctx: JobContext, config, obs_set, products: dict, tables: dict, summary: dict,
-                            clock: StageClock | None = None) -> None:
-    """PNG plots (seed 000 Figs. 5-7 style Euler errors, fix status, DOP, residuals, sky plot) and one
-    self-contained report.html; see docs/pages.md. The plots take the CSV products' column arrays (`tables`,
-    gnssatt.attitude.products.product_tables) where there are some, not the texts parsed back."""
-    from gnssatt.plots import PlotContext
-    from gnssatt.plots.attitude import attitude_plots
+#: plots a forked process draws while the job writes the CSV products (the others are drawn here after them):
+#: the three of residuals.csv that take the longest, about half the plot time
+FORKED_PLOTS = ("residuals.png", "skyplot.png", "elevation.png")
+
+
+class _PlotJob:
+    """The job's PNG plots (seed 000 Figs. 5-7 style Euler errors, fix status, DOP, residuals, sky plots) drawn in
+    two processes: FORKED_PLOTS by a child forked at once (it inherits `tables` without a copy), the others here
+    by `draw` once the CSV products are written. The plots take the CSV products' column arrays (`tables`,
+    gnssatt.attitude.products.product_tables), not the texts parsed back."""
+
+    def __init__(self, ctx: JobContext, config, obs_set, tables: dict):
+        from gnssatt.plots import PlotContext
+        from gnssatt.plots.attitude import attitude_plots
+        from worker.forked import Forked
+
+        ctx.progress(0.93, "plotting")
+        refs = obs_set.of_kind("reference_attitude")
+        self.reference = refs[0].path.read_text() if refs else None
+        self.tables = tables
+        # the plot titles name the few settings that change what a plot shows; the report shows the config once
+        self.context = PlotContext(set_name=obs_set.name or obs_set.id, job_id=ctx.job_id,
+                                   config={"preset": config.preset, "mode": config.mode})
+        self.child = Forked(lambda: attitude_plots(tables, self.reference, self.context, names=FORKED_PLOTS))
+
+    def draw(self, products: dict) -> dict[str, bytes]:
+        """Every PNG by name in report order: the ones drawn here (CSV texts the tables do not hold, e.g.
+        events.csv, from `products`) and the child's."""
+        from gnssatt.plots.attitude import PLOT_NAMES, attitude_plots
+
+        texts = {name: content for name, content in products.items() if name.endswith(".csv")}
+        texts.update({name: table for name, table in self.tables.items() if name in texts})
+        here = attitude_plots(texts, self.reference, self.context,
+                              names=[n for n in PLOT_NAMES if n not in FORKED_PLOTS])
+        pngs = {**here, **self.child.result()}
+        return {name: pngs[name] for name in PLOT_NAMES if name in pngs}
+
+    def cancel(self) -> None:
+        self.child.cancel()
+
+
+def _write_plots_and_report(ctx: JobContext, config, obs_set, pngs: dict, summary: dict) -> None:
+    """The PNG plots and one self-contained report.html; see docs/pages.md."""
     from gnssatt.report import html_report
 
-    ctx.progress(0.95, "plotting")
-    texts = {name: (content.decode() if isinstance(content, bytes) else content)
-             for name, content in products.items() if name.endswith(".csv")}
-    texts.update({name: table for name, table in tables.items() if name in texts})
-    refs = obs_set.of_kind("reference_attitude")
-    reference = refs[0].path.read_text() if refs else None
-    # the plot titles name the few settings that change what a plot shows; the report shows the config once
-    context = PlotContext(set_name=obs_set.name or obs_set.id, job_id=ctx.job_id,
-                          config={"preset": config.preset, "mode": config.mode})
-    pngs = attitude_plots(texts, reference, context)
-    if clock is not None:
-        clock.mark("report and storing plots")
     for name, png in pngs.items():
         ctx.write_product(name, png, media_type="image/png")
     ctx.write_product("report.html", html_report(f"Attitude · {obs_set.name or obs_set.id}", summary, pngs,
