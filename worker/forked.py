@@ -2,67 +2,129 @@
 
 The attitude job draws part of its plots this way while it writes its CSV products (the worker has two cores and
 matplotlib holds the GIL): the child inherits the solution's arrays by fork (nothing pickled on the way in) and
-sends back only its result (PNG bytes). Where fork is not available the function runs in this process, when the
-result is asked for.
+sends back only its result (PNG bytes) through a pipe.
+
+The child is made by `os.fork`, not `multiprocessing.Process`: a job attempt itself runs in a daemonic
+multiprocessing child (worker/isolation.py), and multiprocessing refuses children of a daemonic process. A child
+that dies or sends nothing within `timeout_s` (a lock some other thread held at fork time, say) is killed and the
+function runs in this process instead, so the job never waits on it for ever. Where fork is not available the
+function runs in this process when the result is asked for.
 """
 from __future__ import annotations
 
-import multiprocessing
+import logging
 import os
+import pickle
+import select
+import signal
 import traceback
 from typing import Any, Callable
 
-__all__ = ["Forked", "ForkedError"]
+__all__ = ["Forked", "ForkedError", "cpu_s"]
+
+log = logging.getLogger(__name__)
+
+#: how long result() waits for the child before it kills it and runs the function here (the attitude job's
+#: forked plots take ~1-3 s on a quiet machine, ~10x that on a loaded one)
+DEFAULT_TIMEOUT_S = 300.0
 
 
 class ForkedError(RuntimeError):
     """The forked function raised; the message holds its traceback."""
 
 
-def _child(conn, fn: Callable[[], Any]) -> None:
+def _child(write_fd: int, fn: Callable[[], Any]) -> None:
+    """In the child: run fn, write the pickled ("ok", value) or ("error", traceback) and leave at once."""
+    code = 0
     try:
-        result = ("ok", fn())
-    except BaseException:          # noqa: BLE001 - everything goes back to the parent, which raises it
-        result = ("error", traceback.format_exc())
-    conn.send(result)
-    conn.close()
+        try:
+            payload = pickle.dumps(("ok", fn()), protocol=pickle.HIGHEST_PROTOCOL)
+        except BaseException:          # noqa: BLE001 - everything goes back to the parent, which raises it
+            payload = pickle.dumps(("error", traceback.format_exc()))
+        with os.fdopen(write_fd, "wb") as out:
+            out.write(payload)
+    except BaseException:              # noqa: BLE001 - a broken pipe: the parent sees no result
+        code = 1
+    finally:
+        os._exit(code)                 # no atexit handlers, no flushing of the parent's inherited buffers
 
 
 class Forked:
-    """`Forked(fn)` starts fn() in a forked child; `result()` waits for it and returns its value (ForkedError
-    with the child's traceback if it raised or died); `cancel()` ends the child. CPU of the child counts in
-    os.times() children fields of this process once result() or cancel() has waited for it."""
+    """`Forked(fn)` starts fn() in a forked child; `result()` waits for it and returns its value (ForkedError with
+    the child's traceback if it raised; fn() run here if the child died or timed out); `cancel()` ends the child.
+    CPU of the child counts in os.times() children fields of this process once it has been waited for."""
 
-    def __init__(self, fn: Callable[[], Any]):
+    def __init__(self, fn: Callable[[], Any], *, timeout_s: float = DEFAULT_TIMEOUT_S):
         self._fn = fn
-        self._proc = None
-        if "fork" in multiprocessing.get_all_start_methods():
-            ctx = multiprocessing.get_context("fork")
-            self._conn, child_conn = ctx.Pipe(duplex=False)
-            self._proc = ctx.Process(target=_child, args=(child_conn, fn), daemon=True)
-            self._proc.start()
-            child_conn.close()
+        self._timeout_s = timeout_s
+        self._pid: int | None = None
+        self._read_fd: int | None = None
+        if hasattr(os, "fork"):
+            read_fd, write_fd = os.pipe()
+            pid = os.fork()
+            if pid == 0:               # the child
+                os.close(read_fd)
+                _child(write_fd, fn)
+            os.close(write_fd)
+            self._pid, self._read_fd = pid, read_fd
+
+    def _read_all(self) -> bytes | None:
+        """The child's whole output, or None if it sent nothing complete within the timeout."""
+        chunks = []
+        remaining_s = self._timeout_s
+        while True:
+            ready, _, _ = select.select([self._read_fd], [], [], max(remaining_s, 0.0))
+            if not ready:
+                return None
+            chunk = os.read(self._read_fd, 1 << 20)
+            if not chunk:
+                return b"".join(chunks) or None
+            chunks.append(chunk)
 
     def result(self) -> Any:
-        if self._proc is None:
+        if self._pid is None:
             return self._fn()
         try:
-            status, value = self._conn.recv()
-        except EOFError:
-            self._proc.join()
-            raise ForkedError(f"the forked process ended with exit code {self._proc.exitcode} and no result") \
-                from None
+            data = self._read_all()
         finally:
-            self._conn.close()
-        self._proc.join()
+            os.close(self._read_fd)
+            self._read_fd = None
+        if data is None:
+            self.cancel()
+            log.warning("forked function sent no result (died or timed out after %.0f s); running it here",
+                        self._timeout_s)
+            return self._fn()
+        self._reap()
+        try:
+            status, value = pickle.loads(data)
+        except Exception:              # noqa: BLE001 - cut short: the child died while writing
+            log.warning("forked function's result was cut short; running it here")
+            return self._fn()
         if status != "ok":
             raise ForkedError(value)
         return value
 
+    def _reap(self) -> None:
+        if self._pid is not None:
+            try:
+                os.waitpid(self._pid, 0)
+            except ChildProcessError:
+                pass
+            self._pid = None
+
     def cancel(self) -> None:
-        if self._proc is not None and self._proc.is_alive():
-            self._proc.terminate()
-            self._proc.join()
+        if self._read_fd is not None:
+            try:
+                os.close(self._read_fd)
+            except OSError:
+                pass                   # result() closed it already
+            self._read_fd = None
+        if self._pid is not None:
+            try:
+                os.kill(self._pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            self._reap()
 
 
 def cpu_s() -> float:

@@ -1,0 +1,70 @@
+"""worker.forked.Forked: a function run in a forked child, its result collected later (the attitude job's plots).
+
+It must work where the job runs: inside a job attempt, which is a daemonic multiprocessing child
+(worker/isolation.py) that multiprocessing forbids to have children of its own.
+"""
+from __future__ import annotations
+
+import multiprocessing
+import os
+import time
+
+import pytest
+
+from worker.forked import Forked, ForkedError
+
+
+def _big_result() -> bytes:
+    return bytes(range(256)) * 40_000      # 10 MB: more than a pipe buffer, read in pieces
+
+
+def _in_daemon(queue) -> None:
+    try:
+        queue.put(("ok", len(Forked(_big_result).result())))
+    except BaseException as exc:          # noqa: BLE001 - reported to the test
+        queue.put(("error", repr(exc)))
+
+
+def test_result_comes_back_from_a_child_of_a_daemonic_job_process():
+    ctx = multiprocessing.get_context("fork")
+    queue = ctx.Queue()
+    proc = ctx.Process(target=_in_daemon, args=(queue,), daemon=True)
+    proc.start()
+    status, value = queue.get(timeout=60)
+    proc.join(10)
+    assert (status, value) == ("ok", len(_big_result()))
+
+
+def test_the_child_runs_in_another_process_and_its_exception_comes_back():
+    parent = os.getpid()
+    assert Forked(os.getpid).result() != parent
+
+    def boom():
+        raise ValueError("bad table")
+
+    with pytest.raises(ForkedError, match="ValueError: bad table"):
+        Forked(boom).result()
+
+
+def test_a_child_that_hangs_is_killed_and_the_function_runs_here():
+    parent = os.getpid()
+
+    def hangs_in_the_child():
+        if os.getpid() != parent:
+            time.sleep(3600)               # e.g. a lock another thread held at fork time
+        return "drawn here"
+
+    t0 = time.monotonic()
+    assert Forked(hangs_in_the_child, timeout_s=1.0).result() == "drawn here"
+    assert time.monotonic() - t0 < 30      # the 1 s timeout, not the child's hour
+
+
+def test_a_child_that_dies_is_replaced_by_running_here():
+    parent = os.getpid()
+
+    def dies_in_the_child():
+        if os.getpid() != parent:
+            os._exit(3)
+        return 7
+
+    assert Forked(dies_in_the_child).result() == 7
