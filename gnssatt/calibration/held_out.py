@@ -64,7 +64,8 @@ def map_documents(grid: Grid2D, maps_m: dict) -> dict:
 def filter_errors(inputs, settings) -> dict:
     """Run the attitude filter (gnssatt.attitude.process) and return its errors against the set's reference over
     the fixed epochs: {"fixed_epochs", "epochs", "wrong_fix_epochs", "over_1deg_epochs" (gnssatt.attitude.wrong_fix),
-    per angle {"bias_deg", "std_deg", "rms_deg", "predicted_sigma_deg"}, "cpu_s"}; {"skipped": reason} when the set has no reference or no fixed epoch."""
+    per angle {"bias_deg", "std_deg", "rms_deg", "predicted_sigma_deg"}, "cpu_s"}; {"skipped": reason} when the
+    set has no reference or no fixed epoch."""
     from gnssatt.attitude.process import process
 
     c0 = time.process_time()
