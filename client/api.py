@@ -83,6 +83,9 @@ class GnssattClient:
             params["type"] = job_type
         return self._check(self.http.get("/v1/jobs", params=params)).json()
 
+    def delete_job(self, job_id: str) -> None:
+        self._check(self.http.delete(f"/v1/jobs/{job_id}"))
+
     def cancel_job(self, job_id: str) -> dict:
         return self._check(self.http.post(f"/v1/jobs/{job_id}/cancel")).json()
 

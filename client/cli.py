@@ -167,26 +167,41 @@ def _finish(c: GnssattClient, job: dict, out: str | None) -> None:
     print_quality(out_dir)
 
 
-def resolve_job_id(c: GnssattClient, given: str) -> str:
-    """A full job id, or the one job of the team whose id starts with `given` (the 8-character ids the pages
-    show); exits naming the candidates when the prefix is ambiguous or matches nothing."""
+def resolve_id(c: GnssattClient, given: str, what: str = "job") -> str:
+    """A full job (or set) id, or the one job (set) of the team whose id starts with `given` (the 8-character ids
+    the pages show); exits naming the candidates when the prefix is ambiguous or matches nothing."""
     given = given.strip().lower()
     if len(given) == 32:
         return given
     if len(given) < 4:
-        sys.exit(f"gnssatt: job id prefix {given!r} is too short (give at least 4 characters)")
+        sys.exit(f"gnssatt: {what} id prefix {given!r} is too short (give at least 4 characters)")
+    listing = c.list_jobs if what == "job" else c.list_sets
     matches, offset = [], 0
     while True:
-        page = c.list_jobs(limit=500, offset=offset)
+        page = listing(limit=500, offset=offset)
         matches += [j["id"] for j in page["items"] if j["id"].startswith(given)]
         if page.get("next_offset") is None or len(matches) > 1:
             break
         offset = page["next_offset"]
     if not matches:
-        sys.exit(f"gnssatt: no job of your team has an id starting with {given!r}")
+        sys.exit(f"gnssatt: no {what} of your team has an id starting with {given!r}")
     if len(matches) > 1:
-        sys.exit(f"gnssatt: job id prefix {given!r} is ambiguous: {', '.join(m[:12] for m in matches[:5])} ...")
+        sys.exit(f"gnssatt: {what} id prefix {given!r} is ambiguous: {', '.join(m[:12] for m in matches[:5])} ...")
     return matches[0]
+
+
+def resolve_job_id(c: GnssattClient, given: str) -> str:
+    """resolve_id for a job."""
+    return resolve_id(c, given, "job")
+
+
+def cmd_delete(args) -> None:
+    """Delete a finished job (its products, and their blobs nothing else uses) or an observation set."""
+    what = "job" if args.what == "job" else "observation set"
+    with _client(args) as c:
+        full = resolve_id(c, args.id, "job" if args.what == "job" else "set")
+        (c.delete_job if args.what == "job" else c.delete_set)(full)
+    print(f"deleted {what} {full}")
 
 
 def cmd_status(args) -> None:
@@ -332,6 +347,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--out", default=None)
     s.add_argument("--wait", action="store_true")
     s.set_defaults(func=cmd_fetch)
+
+    s = sub.add_parser("delete", help="delete a finished job (with its products) or an observation set")
+    client_opts(s)
+    s.add_argument("what", choices=("job", "set"))
+    s.add_argument("id", help="a job or set id, or a unique prefix of one (at least 4 characters)")
+    s.set_defaults(func=cmd_delete)
 
     s = sub.add_parser("simulate", help="write a simulated observation set (truth simulator)")
     s.add_argument("--scenario", default="earth-pointing")

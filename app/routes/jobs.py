@@ -84,10 +84,10 @@ def submit_job(body: JobCreate, request: Request, response: Response, team: Team
                 raise ProblemError(422, "unknown-pcv-map", "Unknown PCV map",
                                    f"No PCV map {map_id!r} is visible to your team; GET /v1/pcv-maps lists them.",
                                    field=f"config.pcv_map_ids.{i}")
-    if ids:   # refuse now what a worker could not run: platform, orbits, antennas' files, common epochs
-        from app.preflight import check_sets
+    # refuse now what a worker could not run: platform, orbits, antennas' files, sensor logs, common epochs
+    from app.preflight import check_job
 
-        check_sets(spec.name, [session.get(ObservationSet, i) for i in ids])
+    check_job(spec.name, config, [session.get(ObservationSet, i) for i in ids])
     from app.webhooks import check_webhook, register   # optional webhook of the job's end (issue 24)
 
     check_webhook(body.webhook_url, body.webhook_secret)

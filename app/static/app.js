@@ -157,6 +157,24 @@
     });
   }
 
+  /* --- delete (job page, set page): confirm, DELETE, then the page in data-next ---------------------------- */
+  function wireDelete() {
+    for (const button of document.querySelectorAll("button.js-delete[data-url]")) {
+      button.addEventListener("click", async () => {
+        if (!window.confirm(`Delete this ${button.dataset.what}? This cannot be undone.`)) return;
+        button.disabled = true;
+        const box = document.getElementById("delete-problem");
+        try {
+          await api("DELETE", button.dataset.url);
+          window.location.assign(button.dataset.next || "/ui");
+        } catch (e) {
+          showProblem(box, e.problem || {title: String(e)});
+          button.disabled = false;
+        }
+      });
+    }
+  }
+
   /* --- upload and job forms ------------------------------------------------------------------------ */
   function defaultsOf(schema) {
     const out = {};
@@ -449,6 +467,7 @@
   wirePlatformWriter();
   startLiveProgress();
   wireCancel();
+  wireDelete();
   wireNewPage();
   wirePcvMap();
 })();

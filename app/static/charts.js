@@ -6,6 +6,7 @@
  *   baselines.csv  azimuth, elevation, length per baseline; fixed + satellites per baseline
  *   residuals.csv  RMS per epoch of the used phase [mm] and code [m] residuals per baseline and signal
  *   tracking.csv   (inspect) satellites tracked and mean C/N0 per receiver
+ *   gps_attitude.csv, bias.csv, faults.csv (gyro-fusion); yaw.csv (satellite-yaw); plan.csv (plan)
  *
  * Interaction: drag to zoom (x), Shift+drag to pan, mouse wheel to zoom around the cursor, double-click to
  * reset all charts to the full span; the legend shows the values under the cursor; all charts share one time
@@ -20,7 +21,7 @@
   const COLOURS = ["#d62728", "#2ca02c", "#1f77b4", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#17becf",
                    "#7f7f7f", "#bcbd22"];
   const EULER = {yaw: "#d62728", pitch: "#2ca02c", roll: "#1f77b4"};
-  const registry = {instances: [], mount, parseCSV};
+  const registry = {instances: [], mount, parseCSV, chartsFor: (name, text) => chartsFor(name, parseCSV(text))};
   window.GnssattCharts = registry;
 
   /* --- CSV ------------------------------------------------------------------------------------------ */
@@ -201,6 +202,7 @@
                   series: p.names.map((n, i) => ({label: n, values: p.series[i]}))});
       }
     }
+    out.push(...laterTypeCharts(lower, t, times));
     if (lower === "tracking.csv" && t.has("receiver")) {
       const keys = t.col("receiver");
       const n = pivot(times, keys, t.num("n_sats"));
@@ -210,6 +212,48 @@
         const c = pivot(times, keys, t.num("mean_cn0_dbhz"));
         out.push({title: "Mean C/N0 per receiver [dB-Hz]", y: "dB-Hz", x: c.x,
                   series: c.names.map((r, i) => ({label: r, values: c.series[i]}))});
+      }
+    }
+    return out;
+  }
+
+  /* Main series of the job types added after attitude: gyro-fusion (gps_attitude.csv, bias.csv, faults.csv),
+   * satellite-yaw (yaw.csv), plan (plan.csv). Their attitude.csv (gyro-fusion, single-antenna) is charted above. */
+  function laterTypeCharts(lower, t, times) {
+    const out = [], AX = ["x", "y", "z"];
+    if (lower === "gps_attitude.csv" && t.has("yaw_deg")) {
+      out.push({title: "GPS snapshot Euler angles (3-2-1) [deg]", y: "deg", x: times,
+                series: ["yaw", "pitch", "roll"].map((a) => ({label: `${a} GPS`, values: t.num(`${a}_deg`), stroke: EULER[a], points: true}))});
+    }
+    if (lower === "bias.csv" && t.has("bias_x_rad_s")) {
+      const degH = (v) => (v === null ? null : v * 180 / Math.PI * 3600);
+      out.push({title: "Gyro bias estimate [deg/h]", y: "deg/h", x: times,
+                series: AX.map((a, i) => ({label: `bias ${a}`, values: t.num(`bias_${a}_rad_s`).map(degH), stroke: COLOURS[i]}))});
+    }
+    if (lower === "faults.csv" && t.has("J") && t.has("threshold")) {
+      out.push({title: "GPS fault test: cost J and its threshold", y: "J", x: times,
+                series: [{label: "J", values: t.num("J"), stroke: COLOURS[2], points: true},
+                         {label: "threshold", values: t.num("threshold"), stroke: COLOURS[0]}]});
+    }
+    if (lower === "yaw.csv" && t.has("satellite") && t.has("yaw_deg")) {
+      const keys = t.col("satellite"), est = pivot(times, keys, t.num("yaw_deg"));
+      const series = est.names.map((n, i) => ({label: `${n} estimate`, values: est.series[i], stroke: COLOURS[(2 * i) % COLOURS.length], points: true}));
+      if (t.has("model_yaw_deg")) {
+        const mod = pivot(times, keys, t.num("model_yaw_deg"));
+        mod.names.forEach((n, i) => series.push({label: `${n} model`, values: mod.series[i], stroke: COLOURS[(2 * i + 1) % COLOURS.length], role: "reference"}));
+      }
+      out.push({title: "Satellite yaw: estimate and attitude model [deg]", y: "deg", x: est.x, series});
+    }
+    if (lower === "plan.csv" && t.has("n_sats")) {
+      out.push({title: "Satellites in common view", y: "satellites", x: times,
+                series: [{label: "satellites", values: t.num("n_sats"), stroke: COLOURS[2], step: true}]});
+      const dops = ["hdop", "vdop", "pdop", "adop"].filter((c) => t.has(c));
+      if (dops.length) out.push({title: "Dilution of precision", y: "DOP", x: times,
+                                 series: dops.map((c, i) => ({label: c.toUpperCase(), values: t.num(c), stroke: COLOURS[i]}))});
+      for (const [pre, title] of [["sigma", "Expected 1σ, snapshot (all baselines) [deg]"], ["filter_sigma", "Expected 1σ, filter steady state [deg]"]]) {
+        const axes = ["yaw", "pitch", "roll"].filter((a) => t.has(`${pre}_${a}_deg`));
+        if (axes.length) out.push({title, y: "deg", x: times,
+                                   series: axes.map((a) => ({label: `σ ${a}`, values: t.num(`${pre}_${a}_deg`), stroke: EULER[a]}))});
       }
     }
     return out;

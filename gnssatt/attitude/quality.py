@@ -4,9 +4,8 @@ Items (each `{"label", "value", "unit", "text", "verdict", "threshold"}`, verdic
 fix rate [%], time to first fix per baseline [s], per-axis bias / std / max against the reference [deg] with the
 product's own predicted 1-sigma beside them, wrong fixes, residual RMS per signal [mm], satellites used.
 
-Wrong fix (issue 24): a fixed epoch whose error on some axis is beyond 6 times its own predicted sigma on that
-axis and over 1 deg. Fixed epochs merely over 1 deg on an axis are listed apart (`over_1deg`), labelled
-"noise" where the error is within 6 sigma (the sigma says such an error is expected).
+Wrong fixes and the epochs merely over 1 deg: gnssatt.attitude.wrong_fix (the one definition, also behind
+summary.json's `reference.wrong_fix_epochs`).
 
 Implements: the error of an estimate against the reference as in gnssatt.attitude.statistics (3-2-1 Euler angles
 in the orbital / NED frame, CONVENTIONS.md "Euler angles"); sigma = the filter's formal 1-sigma per epoch.
@@ -17,14 +16,13 @@ from typing import NamedTuple
 
 import numpy as np
 
+from gnssatt.attitude.wrong_fix import (DEFINITIONS, WRONG_FIX_MIN_DEG, WRONG_FIX_SIGMAS, classify_fixed_errors,
+                                        over_1deg_label)
+
 __all__ = ["ReferenceSeries", "reference_series", "quality_block", "THRESHOLDS", "WRONG_FIX_SIGMAS",
            "WRONG_FIX_MIN_DEG"]
 
 AXES = ("yaw", "pitch", "roll")
-#: a fixed epoch is a wrong fix when its error exceeds this many of its own sigmas ...
-WRONG_FIX_SIGMAS = 6.0
-#: ... and this many degrees
-WRONG_FIX_MIN_DEG = 1.0
 #: listed epochs per list (the counts are always complete)
 MAX_LISTED = 50
 #: verdict thresholds: (pass when better than, check when better than; else fail), with the direction
@@ -125,10 +123,8 @@ def _reference_items(sol, ref: ReferenceSeries) -> tuple[list[dict], dict]:
                            verdict, f"std/σ: {t1}; |bias|/σ: {t2}", key=f"{ax}_vs_reference",
                            epochs=int(fx.sum())))
     rows = np.flatnonzero(fx)
-    big = np.abs(err) > WRONG_FIX_MIN_DEG
-    wrong_ax = big & (np.abs(err) > WRONG_FIX_SIGMAS * sig)
-    wrong = wrong_ax.any(axis=1)
-    over = big.any(axis=1) & ~wrong
+    cls = classify_fixed_errors(err, sig)
+    wrong, over = cls.wrong, cls.over_1deg
     pct = 100.0 * wrong.sum() / max(fx.sum(), 1)
     v, t = _verdict(pct, "wrong_fix_pct")
     times_w = _fmt_time(sol, rows[wrong][:MAX_LISTED])
@@ -137,15 +133,14 @@ def _reference_items(sol, ref: ReferenceSeries) -> tuple[list[dict], dict]:
     def listing(mask, times, label_of):
         out = []
         for k, r in enumerate(np.flatnonzero(mask)[:MAX_LISTED]):
-            ax = int(np.argmax(np.abs(err[r]) / np.maximum(sig[r], 1e-12)))
+            ax = int(cls.worst_axis[r])
             out.append({"time_gps": times[k], "axis": AXES[ax], "error_deg": float(err[r, ax]),
                         "sigma_deg": float(sig[r, ax]), "label": label_of(r, ax)})
         return out
 
     lists = {
         "wrong_fixes": listing(wrong, times_w, lambda r, ax: "wrong fix"),
-        "over_1deg": listing(over, times_o, lambda r, ax: "noise" if abs(err[r, ax]) <= WRONG_FIX_SIGMAS * sig[r, ax]
-                             else "large"),
+        "over_1deg": listing(over, times_o, lambda r, ax: over_1deg_label(err[r, ax], sig[r, ax])),
     }
     items.append(_item("wrong fixes", int(wrong.sum()), "epochs",
                        f"{int(wrong.sum())} of {int(fx.sum())} fixed epochs ({pct:.2f} %) beyond "
@@ -210,7 +205,4 @@ def quality_block(sol, ref: ReferenceSeries | None = None) -> dict:
                            key="satellites_used", min=int(ns.min()), max=int(ns.max())))
     overall = max((it["verdict"] for it in items), key=_RANK.get, default="fail")
     return {"verdict": overall, "items": items, **lists,
-            "definitions": {"wrong_fix": f"fixed epoch with an axis error beyond {WRONG_FIX_SIGMAS:g} x its own "
-                                         f"predicted sigma and over {WRONG_FIX_MIN_DEG:g} deg",
-                            "over_1deg": f"fixed epochs over {WRONG_FIX_MIN_DEG:g} deg that are not wrong fixes; "
-                                         "label noise = within the sigma bound"}}
+            "definitions": dict(DEFINITIONS)}

@@ -4,12 +4,13 @@ expected accuracy of seed 000 eq. 3-4 (Table 4) and the errors against a referen
 Implements: seed 000 sec. 4.1, eq. 3 (sigma_H = HDOP sigma_Phi, sigma_V = VDOP sigma_Phi) and eq. 4
 (sigma_yaw = asin(sigma_H / b), sigma_pitch,roll = asin(sigma_V / b)); DOP of a baseline with its differential
 clock from the satellites whose phase was used, horizontal/vertical in the orbital frame (spacecraft) or the
-local level frame (terrestrial).
+local level frame (terrestrial). Wrong fixes against the reference: gnssatt.attitude.wrong_fix.
 """
 from __future__ import annotations
 
 import numpy as np
 
+from gnssatt.attitude.wrong_fix import DEFINITIONS, classify_fixed_errors
 from gnssatt.gnss import rotations as rot
 from gnssatt.gnss.frames import R_gcrf_from_ecef
 
@@ -151,11 +152,13 @@ def summarize(sol, R_ref_from_ecef: np.ndarray, orbit_source: str) -> dict:
             err[~valid] = np.nan
             ang = rot.attitude_error_deg(sol.q_body_from_ecef, rot.dcm_to_quat(R_b_f))
             fx = sol.att_fixed & valid
+            cls = classify_fixed_errors(err[fx], sol.sigma_euler_deg[fx])
             summary["reference"] = {
                 "frame": frame, "epochs_compared": int(valid.sum()), "fixed_epochs_compared": int(fx.sum()),
                 "fixed": _angle_stats(err[fx], sol.sigma_euler_deg[fx]),
                 "float": _angle_stats(err[~sol.att_fixed & valid], sol.sigma_euler_deg[~sol.att_fixed & valid]),
-                "wrong_fix_epochs": int(np.sum(fx & (ang > 1.0))),
+                "wrong_fix_epochs": int(cls.wrong.sum()), "over_1deg_epochs": int(cls.over_1deg.sum()),
+                "definitions": dict(DEFINITIONS),
                 "max_error_fixed_deg": float(np.max(ang[fx])) if fx.any() else None,
             }
     return summary

@@ -63,8 +63,9 @@ def map_documents(grid: Grid2D, maps_m: dict) -> dict:
 
 def filter_errors(inputs, settings) -> dict:
     """Run the attitude filter (gnssatt.attitude.process) and return its errors against the set's reference over
-    the fixed epochs: {"fixed_epochs", "epochs", "fix_rate", per angle {"bias_deg", "std_deg", "rms_deg",
-    "predicted_sigma_deg"}, "cpu_s"}; {"skipped": reason} when the set has no reference or no fixed epoch."""
+    the fixed epochs: {"fixed_epochs", "epochs", "wrong_fix_epochs", "over_1deg_epochs" (gnssatt.attitude.wrong_fix),
+    per angle {"bias_deg", "std_deg", "rms_deg", "predicted_sigma_deg"}, "cpu_s"}; {"skipped": reason} when the
+    set has no reference or no fixed epoch."""
     from gnssatt.attitude.process import process
 
     c0 = time.process_time()
@@ -73,7 +74,8 @@ def filter_errors(inputs, settings) -> dict:
     if not ref or not ref.get("fixed_epochs_compared"):
         return {"skipped": "no fixed epoch compared with the reference attitude"}
     out = {"fixed_epochs": int(ref["fixed_epochs_compared"]), "epochs": int(ref["epochs_compared"]),
-           "wrong_fix_epochs": int(ref.get("wrong_fix_epochs", 0))}
+           "wrong_fix_epochs": int(ref.get("wrong_fix_epochs", 0)),
+           "over_1deg_epochs": int(ref.get("over_1deg_epochs", 0))}
     for name in ANGLES:
         s = ref["fixed"].get(name)
         if s:

@@ -7,18 +7,9 @@ import json
 import subprocess
 import sys
 
-import pytest
-from fastapi.testclient import TestClient
-
-import client.cli as cli
-from app.keys import create_key
-from app.main import create_app
-from client.api import GnssattClient
 from core.models import ApiKey, Job
-from core.settings import Settings
+from tests.client.conftest import run_cli
 from tests.conftest import REPO_ROOT
-from worker import runner
-from worker.main import build_runtime
 
 
 def test_unreachable_server_is_one_line():
@@ -27,36 +18,6 @@ def test_unreachable_server_is_one_line():
     assert out.returncode == 1
     lines = out.stderr.strip().splitlines()
     assert len(lines) == 1 and "cannot connect to the service at http://127.0.0.1:9" in lines[0], out.stderr
-
-
-@pytest.fixture
-def service(tmp_path, monkeypatch):
-    settings = Settings(data_dir=tmp_path / "var")
-    rt = build_runtime(settings, immediate=True, name="cli-test-worker")
-    app = create_app(settings)
-    with TestClient(app, raise_server_exceptions=False) as tc:
-        app.state.huey = rt.huey
-        with rt.Session.begin() as s:
-            key, _ = create_key(s, "team-cli")
-        monkeypatch.setattr(cli, "_client", lambda args: GnssattClient("http://testserver", args.key,
-                                                                         transport=tc._transport))
-        tc.rt, tc.key = rt, key
-        tc.headers["Authorization"] = f"Bearer {key}"
-        yield tc
-    runner.set_runtime(None)
-    rt.engine.dispose()
-
-
-def run_cli(capsys, *argv) -> tuple[int, str, str]:
-    code = 0
-    try:
-        cli.main(list(argv))
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else 1
-        if isinstance(exc.code, str):
-            print(exc.code, file=sys.stderr)
-    out = capsys.readouterr()
-    return code, out.out, out.err
 
 
 def test_refused_key_is_one_line(service, capsys):

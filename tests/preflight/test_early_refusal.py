@@ -4,55 +4,11 @@ service in-process; the queue and the jobs table are checked to be empty afterwa
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 import pytest
 
-from core.models import Job, SetFile
-from core.settings import Settings
-from tests._service_client import service_client
-
-
-@pytest.fixture(scope="module")
-def sim(tmp_path_factory) -> Path:
-    from gnssatt.sim import simulate_scenario
-
-    out = tmp_path_factory.mktemp("sim")
-    simulate_scenario("earth-pointing", out, overrides={"duration_s": 120})
-    return out
-
-
-@pytest.fixture
-def api(tmp_path):
-    settings = Settings(data_dir=tmp_path / "var")
-    with service_client(settings, immediate=False, team="team-p", name="preflight-test") as client:
-        yield client
-
-
-def files_of(d: Path, drop=(), replace=None) -> list[tuple[str, bytes]]:
-    out = []
-    for p in sorted(d.rglob("*")):
-        rel = str(p.relative_to(d))
-        if not p.is_file() or rel.startswith("truth") or rel in drop:
-            continue
-        out.append((rel, (replace or {}).get(rel, p.read_bytes())))
-    return out
-
-
-def upload(api, files) -> str:
-    resp = api.post("/v1/observation-sets", files=[("files", (n, b, "application/octet-stream")) for n, b in files])
-    assert resp.status_code == 201, resp.text
-    return resp.json()["id"]
-
-
-def refused(api, set_id: str, job_type: str = "attitude") -> dict:
-    resp = api.post("/v1/jobs", json={"type": job_type, "observation_set_ids": [set_id]})
-    assert resp.status_code == 422, resp.text
-    assert resp.headers["content-type"].startswith("application/problem+json")
-    with api.rt.Session() as s:
-        assert s.query(Job).count() == 0, "a refused job must not be stored"
-    assert len(api.rt.huey) == 0, "a refused job must not be queued"
-    return resp.json()
+from core.models import SetFile
+from tests.preflight.conftest import files_of, refused, upload
 
 
 def test_complete_set_is_queued(api, sim):
