@@ -1,6 +1,7 @@
 """Dynamic-mode baseline lengths (issue 21 item 2): the length error against the body length over the four
 106-minute passes, without and with the soft length constraint (settings.length_constraint_sigma_m,
-gnssatt/attitude/length_constraint.py), forward filter and smoother_adaptive_noise, with the attitude errors of
+gnssatt/attitude/length_constraint.py) and with the rigid update (settings.baseline_update "rigid",
+gnssatt/attitude/rigid_update.py), forward filter and smoother_adaptive_noise, with the attitude errors of
 the same runs (so a change of the length handling shows what it costs or gives the attitude).
 
 Passes (simulator seed 0, 106 min at 1 Hz, three antennas, L1 C/A + L2 P(Y)): `clean` (preset `earth-pointing`
@@ -36,13 +37,17 @@ CLEAN = {"pcv": False, "pco": False, "multipath": False, "noise_grows_with_cn0":
 PASSES = {"clean": ("earth-pointing", CLEAN), "realistic": ("earth-pointing", {}), "hard": ("hard", {}),
           "slew": ("slew", CLEAN)}
 SIGMA_M = 5e-4
-RUNS = {"forward, no constraint": {"length_constraint_sigma_m": 0.0},
-        f"forward, constraint {SIGMA_M * 1e3:.1f} mm": {"length_constraint_sigma_m": SIGMA_M},
-        "smoother_adaptive_noise, no constraint": {"length_constraint_sigma_m": 0.0, "smoother": True,
+ADD = {"baseline_update": "additive"}
+RUNS = {"forward, no constraint": {**ADD, "length_constraint_sigma_m": 0.0},
+        f"forward, constraint {SIGMA_M * 1e3:.1f} mm": {**ADD, "length_constraint_sigma_m": SIGMA_M},
+        "smoother_adaptive_noise, no constraint": {**ADD, "length_constraint_sigma_m": 0.0, "smoother": True,
                                                    "smoother_adaptive_noise": True},
-        f"smoother_adaptive_noise, constraint {SIGMA_M * 1e3:.1f} mm": {"length_constraint_sigma_m": SIGMA_M,
+        f"smoother_adaptive_noise, constraint {SIGMA_M * 1e3:.1f} mm": {**ADD, "length_constraint_sigma_m": SIGMA_M,
                                                                         "smoother": True,
-                                                                        "smoother_adaptive_noise": True}}
+                                                                        "smoother_adaptive_noise": True},
+        "forward, rigid update": {"baseline_update": "rigid"},
+        "smoother_adaptive_noise, rigid update": {"baseline_update": "rigid", "smoother": True,
+                                                  "smoother_adaptive_noise": True}}
 
 
 def run(d: Path, cfg: dict) -> list[dict]:

@@ -85,8 +85,9 @@ def smooth_filter_result(fr, settings=None) -> int:
     fr.omega_ecef_rad_s[ep] = xs[ep, 0:3]
     r0 = xs.shape[1] - 3 * n_bl                      # omega (3) [+ alpha (3)] ahead of the baselines
     b_s = xs[ep, r0:].reshape(ep.size, n_bl, 3)
-    if settings is not None and settings.length_constraint_sigma_m > 0:
-        # the forward filter's lengths (held to the body length, gnssatt.attitude.length_constraint)
+    if settings is not None and (settings.length_constraint_sigma_m > 0 or settings.baseline_update == "rigid"):
+        # the forward filter's lengths (held to the body length, gnssatt.attitude.length_constraint, or updated along
+        # b only, gnssatt.attitude.rigid_update)
         b_s = rescale_lengths(b_s, np.linalg.norm(fr.b_ecef_m[ep], axis=-1))
     fr.b_ecef_m[ep] = b_s
     f = np.clip(sd.get("corr_share", np.zeros(n_ep)), 0.0, 1.0)[ep, None, None]

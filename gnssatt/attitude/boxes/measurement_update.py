@@ -13,6 +13,7 @@ import numpy as np
 
 from gnssatt.attitude.filter_state import JOSEPH_RATIO, MP_SCALE_MAX, MP_SCALE_MIN, NOISE_EPOCHS, EpochData, FilterRun
 from gnssatt.attitude.length_constraint import project_lengths
+from gnssatt.attitude.rigid_update import rigid_retract
 from gnssatt.attitude.update_kernels import update_epoch
 from gnssatt.attitude.update_records import FixState, UpdateObs, UpdateOutputs
 
@@ -52,8 +53,12 @@ def _update(run: FilterRun, ep: EpochData) -> UpdateOutputs:
     obs = UpdateObs.plain(u=ep.u, clock_factor=ep.cfac, wavelength_m=run.lam, sdc_c_m=ep.sdc_c, sdp_c_m=ep.sdp_c,
                           pcv_m=ep.pcv_m, cn0_dbhz=np.ascontiguousarray(ep.cn0), el_e_rad=el_e, el_w_rad=el_wc)
     fix = FixState.plain(amb_fixed=st.amb_fixed, amb_key=st.amb_key)       # (arrays replaced with the states)
+    rigid = run.dynamic and s.baseline_update == "rigid"
+    b_prior = st.x[run.b_idx] if rigid else None
     ep.vc_f, ep.vp_f, res = update_epoch(st.x, st.P, ep.rows, run.update_layout, obs, run.noise_model, mp_mult, fix,
                                          st.amb_last_t, ep.t, JOSEPH_RATIO)
+    if rigid:                                # the rigid baseline's update (gnssatt.attitude.rigid_update)
+        rigid_retract(st.x, st.P, b_prior, run.b_idx, run.ever_fixed)
     if run.dynamic and s.length_constraint_sigma_m > 0:     # the rigid length (gnssatt.attitude.length_constraint)
         project_lengths(st.x, st.P, run.b_idx, run.lengths, s.length_constraint_sigma_m,
                         run.ever_fixed)
