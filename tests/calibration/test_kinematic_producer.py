@@ -8,11 +8,10 @@ import numpy as np
 import pytest
 
 from bench.local_jobs import input_set, job_context, product_bytes
-from gnssatt.calibration.simulated import compare_maps_mm, simulate_campaign, truth_of, truth_split
+from gnssatt.calibration.simulated import compare_maps_mm, truth_of, truth_split
 from gnssatt.gnss.io.pcv_map import parse_pcv_map
 from worker.jobs.calibration import CalibrationConfig, run
 
-BENIGN = {"noise": False, "multipath": False, "cn0_jitter_db": 0.0}
 CFG = {"azimuth_step_deg": 10.0, "elevation_step_deg": 5.0, "min_count": 10}
 #: Done-when of issue 21 item 8 (docs/BENCHMARKS.md "Calibration"): per baseline component, and map RMS
 BASELINE_TOL_MM = 0.3
@@ -20,9 +19,9 @@ MAP_TOL_MM = 1.0
 
 
 @pytest.fixture(scope="module")
-def campaign(tmp_path_factory):
+def campaign(benign_campaign_4x600):
     """Four 10-minute benign passes (no noise, no multipath) with the preset's offsets, PCO and 35 mm PCV."""
-    return simulate_campaign(tmp_path_factory.mktemp("cal_kin"), 4, 600.0, seed=11, overrides=BENIGN)
+    return benign_campaign_4x600
 
 
 def _run(tmp_path, dirs, skip=(), **cfg):

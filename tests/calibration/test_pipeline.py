@@ -20,10 +20,9 @@ FAST_CFG = {"azimuth_step_deg": 10.0, "elevation_step_deg": 5.0, "min_count": 10
 
 
 @pytest.fixture(scope="module")
-def pcv_campaign(tmp_path_factory):
+def pcv_campaign(benign_campaign_4x600):
     """Four 10-minute benign passes (no noise, no multipath) with the preset's offsets, PCO and 35 mm PCV."""
-    root = tmp_path_factory.mktemp("cal_pcv")
-    return simulate_campaign(root, 4, 600.0, seed=11, overrides=BENIGN)
+    return benign_campaign_4x600
 
 
 def test_campaign_recovers_offsets_without_pcv(tmp_path):
