@@ -134,11 +134,11 @@ def run_fusion(gps: GpsData, gyro: GyroLog, s: FusionSettings, progress=None) ->
             bank_g.remember(k, state.q, state.bias, state.P, i_k)
             i_prev = i_k
             continue
-        event = bank_g.test(k, q_gps, R_white, rates, dts, i_k)
-        if event is not None:
-            a = 3 + event.axis
-            state.P[a, a] += s.gyro_fdi.fault_drift_sigma_rad_s ** 2
+        if s.gyro_fdi.reference == "gps":
+            _gyro_test(bank_g, state, k, q_gps, R_white, rates, dts, i_k, s)
         state, z, S = update(state, q_gps, R_white)
+        if s.gyro_fdi.reference != "gps":
+            _gyro_test(bank_g, state, k, state.q, state.P, rates, dts, i_k, s)
         run.innovation[k] = z / np.sqrt(np.diag(S))
         run.bias[k], run.bias_P[k] = state.bias, state.P[3:6, 3:6]
         bank_g.remember(k, state.q, state.bias, state.P, i_k)
@@ -156,6 +156,14 @@ def run_fusion(gps: GpsData, gyro: GyroLog, s: FusionSettings, progress=None) ->
     run.gyro_events = bank_g.finish()
     run.gyro_tests = bank_g.rows
     return run
+
+
+def _gyro_test(bank_g, state, k, q_ref, P_ref, rates, dts, i_k, s: FusionSettings) -> None:
+    """The propagator bank's test of epoch k; a new gyro fault event opens the drift's uncertainty on its axis."""
+    event = bank_g.test(k, q_ref, P_ref, rates, dts, i_k)
+    if event is not None:
+        a = 3 + event.axis
+        state.P[a, a] += s.gyro_fdi.fault_drift_sigma_rad_s ** 2
 
 
 def _record_gps(run: FusionRun, k: int, bank, ep, gps: GpsData) -> None:

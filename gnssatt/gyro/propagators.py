@@ -1,13 +1,22 @@
 """Gyro fault detection by a bank of delayed attitude propagators (seed 002 sec. 3.2, Fig. 1 part a).
 
 Propagator j (j = 1..N) starts from the filter's posterior of D_j = j * delay_step_s earlier and propagates the
-attitude with the gyro alone (eq. 9, drift estimate of that time removed) up to the current GPS epoch. Its
-residual r_j = rotvec(q_gps (x) q_j^-1) has the theoretical covariance S_j = H P_j H' + R, with P_j the delayed
-posterior carried through the filter's transition matrices and process noise over the delay, and R the snapshot's
-white covariance. The gyro is flagged when |r_j| exceeds `threshold_sigma` sqrt(diag S_j) on some axis in
+attitude with the gyro alone (eq. 9, drift estimate of that time removed) up to the current GPS epoch, with P_j the
+delayed posterior carried through the filter's transition matrices and process noise over the delay.
+
+What its residual is compared with (`GyroFdi.reference`):
+- "filter" (default): the filter's posterior attitude q_k|k of the same epoch, as seed 002 Fig. 5 shows the
+  filtered quaternion increment of each filter-propagator pair against its 1-sigma bound. r_j = rotvec(q_k|k (x)
+  q_j^-1) is the difference of two estimates of one state from nested data (the posterior of k - D_j carried to
+  k, and the posterior of k), so without a fault its covariance is S_j = P_j - P_k|k (attitude block). The GPS
+  snapshot's white noise, which the filter averages over the delay, is not in it.
+- "gps": the snapshot attitude q_gps, r_j = rotvec(q_gps (x) q_j^-1), S_j = H P_j H' + R with R the snapshot's
+  white covariance (one epoch's GPS noise in every test).
+
+The gyro is flagged when |r_j| exceeds `threshold_sigma` sqrt(diag S_j) on some axis in
 `persistence` consecutive epochs (the residues "grow above a tolerance level proportional to its theoretical
-standard deviation"); the axis is the one of the largest normalised residual. A longer delay accumulates more of
-a drift error against the same GPS noise, so it detects sooner (seed 002 Table 2).
+standard deviation"); the axis is the one of the largest normalised residual. In seed 002 Table 2 a longer
+delay detects sooner; docs/BENCHMARKS.md ("GPS + gyro fusion") gives this bank's delays next to the paper's.
 """
 from __future__ import annotations
 
@@ -60,8 +69,9 @@ class PropagatorBank:
             self.post.pop(old, None)
             self.trans.pop(old, None)
 
-    def test(self, k: int, q_gps, R_white, rates, dts, i_gyro: int):
-        """Test epoch k (before its update): returns (new event or None, max normalised residual per propagator)."""
+    def test(self, k: int, q_ref, P_ref, rates, dts, i_gyro: int):
+        """Test epoch k against q_ref: the filter's posterior (P_ref its 9x9 covariance) or the GPS snapshot (P_ref
+        the snapshot's white 3x3 covariance), after `reference`; returns the new event or None."""
         z_max = np.full(len(self.delays), np.nan)
         flagged_axes = []
         for j, d in enumerate(self.delays):
@@ -74,9 +84,8 @@ class PropagatorBank:
             Phis = np.array([self.trans[e][0] for e in range(k0 + 1, k + 1)])
             Qs = np.array([self.trans[e][1] for e in range(k0 + 1, k + 1)])
             Pj = propagate_covariance(P0, Phis, Qs)
-            S = H_GPS @ Pj @ H_GPS.T + R_white
-            r = rotvec_of(q_gps, qj)
-            zn = np.abs(r) / np.sqrt(np.diag(S))
+            r = rotvec_of(q_ref, qj)
+            zn = np.abs(r) / np.sqrt(self._variance(Pj, P_ref))
             self.rows.append((k, j + 1, *zn))
             z_max[j] = zn.max()
             if zn.max() > self.s.threshold_sigma:
@@ -85,6 +94,12 @@ class PropagatorBank:
             else:
                 self.counts[j] = 0
         return self._events(k, z_max, flagged_axes)
+
+    def _variance(self, Pj, P_ref):
+        """Per-axis variance of the residual without a fault (module docstring); floored at (1 urad)^2."""
+        if self.s.reference == "gps":
+            return np.diag(H_GPS @ Pj @ H_GPS.T + P_ref)
+        return np.maximum(np.diag(Pj)[:3] - np.diag(P_ref)[:3], 1e-12)
 
     def _events(self, k, z_max, flagged_axes):
         detecting = [j for j in range(len(self.delays)) if self.counts[j] >= self.s.persistence]

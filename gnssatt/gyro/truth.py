@@ -14,7 +14,7 @@ from gnssatt.gnss.frames import R_ecef_from_gcrf
 from gnssatt.gnss.time import GpsTime
 from gnssatt.gyro.ekf import propagate_attitude
 
-__all__ = ["attitude_scores", "fdi_scores", "integer_failures", "gyro_delays"]
+__all__ = ["attitude_scores", "fdi_scores", "integer_failures", "gyro_delays", "ratio_sampling_sd"]
 
 
 def _truth_q(set_dir: Path):
@@ -78,6 +78,25 @@ def attitude_scores(set_dir: Path, run, gps, until_s: float = float("inf")) -> d
     out["fused_sigma_rad"] = s_f
     out["fused_time_s"] = (run.gyro_time - t_true[0])[m]
     return out
+
+
+def ratio_sampling_sd(z: np.ndarray, t_s: np.ndarray, step_s: float = 1.0) -> tuple[float, float]:
+    """(rms of z, its 1-sigma sampling uncertainty) for a normalised error z(t) correlated in time.
+
+    For a stationary Gaussian z of unit variance and autocorrelation rho, var(z^2) = 2 and cov(z^2(t), z^2(t +
+    u)) = 2 rho(u)^2, so the rms over a span T has sd ~ sqrt(integral_0^inf rho(u)^2 du / T). rho is estimated
+    from the series resampled to step_s and integrated up to its first zero (at most T / 5)."""
+    t = np.arange(t_s[0], t_s[-1], step_s)
+    x = np.interp(t, t_s, z)
+    rms = float(np.sqrt(np.mean(z ** 2)))
+    y = x - x.mean()
+    n = len(y)
+    f = np.fft.rfft(y, 2 * n)
+    acf = np.fft.irfft(f * np.conj(f))[:n] / (y @ y)
+    acf = acf / (1.0 - np.arange(n) / n)                 # unbiased lag weights
+    stop = min(int(np.argmax(acf <= 0)) if (acf <= 0).any() else n, n // 5)
+    integral = float(np.sum(acf[:stop] ** 2) * step_s - 0.5 * step_s)   # trapezoid start at rho(0) = 1
+    return rms, rms * float(np.sqrt(max(integral, step_s) / (n * step_s)))
 
 
 def _read_csv(path: Path) -> list[dict]:

@@ -68,6 +68,21 @@ def test_gyro_drift_fault_detected_no_false_alarm(gyro_set, fused):
     assert all(t_e[e.start] >= GYRO_FAULT_START_S for e in fused.run.gyro_events)
 
 
+def test_propagator_residuals_within_their_theoretical_sigma(gyro_set, fused):
+    """Before the gyro fault, each propagator's residual against the filter's posterior, over its sigma
+    sqrt(P_j - P_k|k), has an rms of at most about 1 on every axis and stays below the threshold: the sigma is not
+    too small, so a clean gyro is not flagged. The one-orbit runs, past the filter's start, give 0.92-1.11
+    (docs/BENCHMARKS.md); in these first 400 s the filter's start keeps it lower."""
+    rows = np.array(fused.run.gyro_tests)
+    t_e = np.asarray(fused.gps.time - gyro_set.t0, float)
+    z = rows[t_e[rows[:, 0].astype(int)] < GYRO_FAULT_START_S, 2:5]
+    assert len(z) >= 100
+    rms = np.sqrt((z ** 2).mean(axis=0))
+    # 100-300 tests pooled over the five propagators, correlated over ~1 min: a unit normal's rms stays below 1.4
+    assert np.all(rms < 1.4), rms
+    assert np.all(z.max(axis=0) < fused.settings.gyro_fdi.threshold_sigma), z.max(axis=0)
+
+
 def test_products(fused, tmp_path):
     written = fused.write_products(tmp_path)
     assert {"attitude.csv", "gps_attitude.csv", "bias.csv", "faults.csv", "costs.csv", "gyro_tests.csv",

@@ -1,5 +1,5 @@
-"""The gyro CSV reader (docs/formats/gyro_csv.md): round trip, and every malformed line refused with its line,
-column and what was expected."""
+"""The gyro CSV reader (docs/formats/gyro_csv.md; the one sensor-log reader, kind "gyro"): round trip, and every
+malformed line refused with its line, column, what was expected and what was found."""
 from __future__ import annotations
 
 import numpy as np
@@ -34,27 +34,44 @@ def test_week_sow_columns_and_optional_temperature():
 
 
 @pytest.mark.parametrize("line, column, words", [
-    ("2018-06-06T12:20:00.300,1.0e-3,abc,3.1e-6,20.5", 32, "wy_rad_s"),
-    ("2018-06-06 12:20:00.300,1.0e-3,0,3.1e-6,20.5", 1, "time_gps"),
+    ("2018-06-06T12:20:00.300,1.0e-3,abc,3.1e-6,20.5", 32, "'wy_rad_s'"),
+    ("2018-06-06T25:20:00.300,1.0e-3,0,3.1e-6,20.5", 1, "time_gps as ISO 8601"),
+    ("12:20:00.300,1.0e-3,0,3.1e-6,20.5", 1, "time_gps as ISO 8601"),
     ("2018-06-06T12:20:00.300,1.0e-3,0,3.1e-6", 40, "5 comma-separated"),
-    ("2018-06-06T12:20:00.300,1.0e-3,0,nan,20.5", 34, "wz_rad_s"),
-    ("2018-06-06T12:20:00.300,99,0,0,20.5", 25, "|value| <= 20"),
-    ("2018-06-06T12:20:00.150,1.0e-3,0,0,20.5", 1, "increasing time"),
-    ("2018-06-06T12:20:00.300,1.0e-3,0,0,hot", 36, "temperature_c"),
-], ids=["bad-rate", "bad-time", "short-row", "nan-rate", "huge-rate", "time-order", "bad-temperature"])
-def test_malformed_line_names_line_column_and_expectation(line, column, words):
+    ("2018-06-06T12:20:00.300,1.0e-3,0,3.1e-6,20.5,7", 46, "5 comma-separated"),
+    ("2018-06-06T12:20:00.300,1.0e-3,0,nan,20.5", 34, "'wz_rad_s'"),
+    ("2018-06-06T12:20:00.300,,0,0,20.5", 25, "'wx_rad_s'"),
+    ("2018-06-06T12:20:00.300,57.3,0,0,20.5", 25, "deg/s"),
+    ("2018-06-06T12:20:00.150,1.0e-3,0,0,20.5", 1, "increasing order"),
+    ("2018-06-06T12:20:00.200,1.0e-3,0,0,20.5", 1, "duplicate time"),
+    ("2018-06-06T12:20:00.300,1.0e-3,0,0,hot", 36, "'temperature_c'"),
+], ids=["bad-rate", "hour-25", "no-date", "short-row", "long-row", "nan-rate", "empty-rate", "deg-per-s",
+        "time-order", "duplicate-time", "bad-temperature"])
+def test_malformed_line_names_line_column_expected_and_found(line, column, words):
     with pytest.raises(ParseError) as e:
         read_gyro_csv("\n".join([HEAD, ROW1, ROW2, line]) + "\n", "gyro.csv")
     err = e.value
     assert (err.path, err.line_no, err.column) == ("gyro.csv", 4, column)
     assert words in err.expected
-    assert "line 4, column" in str(err)
+    assert err.found == line
+    assert "gyro.csv, line 4, column" in str(err)
+
+
+def test_week_sow_malformed():
+    head = "gps_week,gps_sow,wx_rad_s,wy_rad_s,wz_rad_s\n2000,100.0,0,0,1e-3\n"
+    for row, words in [("-1,100.5,0,0,0", "non-negative"), ("2000,604800,0,0,0", "[0, 604800)")]:
+        with pytest.raises(ParseError) as e:
+            read_gyro_csv(head + row + "\n")
+        assert e.value.line_no == 3 and words in e.value.expected, row
 
 
 def test_bad_header_and_empty_file():
     with pytest.raises(ParseError) as e:
         read_gyro_csv("time_gps,wx,wy,wz\n" + ROW1)
-    assert e.value.line_no == 1 and "wx_rad_s" in e.value.expected
+    assert (e.value.line_no, e.value.column) == (1, 10) and "'wx_rad_s'" in e.value.expected
+    with pytest.raises(ParseError) as e:
+        read_gyro_csv("time_gps,wx_rad_s,wy_rad_s,wz_rad_s,humidity\n" + ROW1)
+    assert (e.value.line_no, e.value.column) == (1, 37) and "temperature_c" in e.value.expected
     with pytest.raises(ParseError):
         read_gyro_csv("")
     with pytest.raises(ParseError) as e:

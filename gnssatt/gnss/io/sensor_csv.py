@@ -109,13 +109,18 @@ def _time_fields(fields: list[str], n_time: int, name: str, ln: int, line: str) 
     """(year, month, day, hour, minute, second) of an ISO time, or (week, sow) of gps_week,gps_sow."""
     if n_time == 1:
         m = _ISO.match(fields[0].strip())
-        if not m:
-            raise ParseError(name, ln, "time_gps as ISO 8601 GPS time, e.g. 2018-06-06T12:20:00.000", line, column=1)
-        return (*(int(m.group(i)) for i in range(1, 6)), float(m.group(6)))
+        t = (*(int(m.group(i)) for i in range(1, 6)), float(m.group(6))) if m else None
+        if t is None or not (1 <= t[1] <= 12 and 1 <= t[2] <= 31 and t[3] < 24 and t[4] < 60 and t[5] < 61):
+            raise ParseError(name, ln, "time_gps as ISO 8601 GPS time, e.g. 2018-06-06T12:20:00.000 (month 1-12, "
+                             "day 1-31, hour 0-23, minute 0-59, second below 61)", line, column=1)
+        return t
     try:
         week, sow = int(fields[0]), float(fields[1])
+        if week < 0:
+            raise ValueError(fields[0])
     except ValueError as exc:
-        raise ParseError(name, ln, "gps_week (integer) and gps_sow (seconds) numbers", line, column=1) from exc
+        raise ParseError(name, ln, "gps_week (non-negative integer) and gps_sow (seconds) numbers", line,
+                         column=1) from exc
     if not (0 <= sow < 604800.0 and np.isfinite(sow)):
         raise ParseError(name, ln, "gps_sow in [0, 604800)", line, column=_char_col(line, 1))
     return week, sow
