@@ -1,29 +1,36 @@
-"""One job attempt in a child process under a memory and a time budget, so a runaway job fails with a clear
-error, never takes the worker down, and is always cancellable.
+"""One job attempt (or one fan-out task) in a child process under a memory and a time budget, so a runaway job
+fails with a clear error, never takes the worker down, and is always cancellable.
 
-The worker forks a child per attempt (Linux `fork`: the child starts with the worker's imported modules and
-compiled kernels, no re-import). The child gets its own database connections and queue handle, limits its
-data segment (RLIMIT_DATA: what it inherited plus twice the budget, a hard stop against an allocation burst)
-and runs the pipeline; its products, log and records come back through a pipe. The parent keeps the lease and
-heartbeat and watches the child every 0.2 s: memory the child owns (USS: private pages, /proc/<pid>/smaps_rollup)
-above GNSSATT_JOB_MEMORY_MB, or wall time above GNSSATT_JOB_TIME_S, stops it (SIGKILL) and fails the job with
-`JobBudgetExceeded` (not retried); a cancel request or a lost lease stops it the same way within a second,
-whether or not the pipeline ever reports progress.
+Children come from a fork server (multiprocessing's 'forkserver' start method): a fresh interpreter the worker
+starts before any of its threads, which imports the pipelines and loads the compiled kernels once (worker.zygote)
+and then forks one child per attempt from its single thread. No child can inherit a lock another thread held at
+fork time (an import in progress once deadlocked a child forked from the threaded worker), and every child still
+starts with the modules and kernels loaded. The child builds its own database connections and queue handle from
+the settings, limits its data segment (RLIMIT_DATA: what it inherited plus twice the budget, a hard stop against
+an allocation burst) and runs its target; the result, log and records come back through a pipe. The parent
+keeps the lease and heartbeat and watches the child every 0.2 s: memory the child owns (USS: private pages,
+/proc/<pid>/smaps_rollup) above GNSSATT_JOB_MEMORY_MB, or wall time above GNSSATT_JOB_TIME_S, stops it (SIGKILL)
+and fails the work with `JobBudgetExceeded` (not retried); a cancel request or a lost lease stops it the same way
+within a second, whether or not the pipeline ever reports progress. A child dies with the fork server, which
+exits with the worker, so a killed worker leaves no job running.
 """
 from __future__ import annotations
 
-import dataclasses
+import ctypes
 import logging
 import multiprocessing
 import os
 import resource
 import signal
+import threading
 import time
 from typing import Any, Callable
 
-from worker.context import JobContext
-from worker.errors import (JobBudgetExceeded, JobCancelled, LeaseLost, is_permanent, log_text_for_exception,
-                           problem_for_exception)
+from core.blobs import BlobStore
+from core.db import make_engine, make_sessionmaker
+from core.settings import Settings
+from worker.errors import JobBudgetExceeded, JobCancelled, LeaseLost, is_permanent, log_text_for_exception, \
+    problem_for_exception
 from worker.queue import make_huey
 from worker.runtime import Runtime, set_runtime
 
@@ -31,6 +38,12 @@ log = logging.getLogger("gnssatt.worker")
 
 POLL_S = 0.2
 START_TIMEOUT_S = 30.0
+#: what the fork server imports before its first fork (the pipelines and the warmed kernels)
+FORK_SERVER_PRELOAD = ("worker.zygote",)
+_PR_SET_PDEATHSIG = 1
+
+_fork_server_lock = threading.Lock()
+_fork_server_ready = False
 
 
 class ChildFailed(Exception):
@@ -67,11 +80,68 @@ def owned_memory_bytes(pid: int) -> int | None:
         return rss_kb * 1024 if rss_kb is not None else None
 
 
-def _child_main(rt: Runtime, target: Callable[[Runtime], dict], conn, budget_bytes: int, job_id: str,
-                attempt: int) -> None:
-    """In the child: fresh connections, a data limit, the pipeline; one message back, then exit."""
+def isolation_available() -> bool:
+    return os.name == "posix" and "forkserver" in multiprocessing.get_all_start_methods()
+
+
+def isolated(rt: Runtime) -> bool:
+    """Whether work runs in a budgeted child (GNSSATT_JOB_ISOLATION=process; not with Huey's immediate mode, in
+    which tests run jobs inline)."""
+    return (rt.settings.job_isolation == "process" and isolation_available()
+            and not getattr(rt.huey, "immediate", False))
+
+
+def _ready() -> None:
+    """A child that does nothing: it starts once the fork server has finished its imports."""
+
+
+def start_fork_server(preload: tuple[str, ...] = FORK_SERVER_PRELOAD) -> None:
+    """Start the fork server (once per process) and wait until it has imported `preload` and can fork: the
+    worker calls it first, before any thread; run_budgeted calls it too, so a child's start watchdog never
+    counts the fork server's own start (~20 s: the science imports and kernels)."""
+    global _fork_server_ready
+    with _fork_server_lock:
+        if _fork_server_ready:
+            return
+        mp = multiprocessing.get_context("forkserver")
+        mp.set_forkserver_preload(list(preload))  # no effect once a fork server runs in this process
+        proc = mp.Process(target=_ready, name="fork-server-ready", daemon=True)
+        proc.start()
+        proc.join()
+        _fork_server_ready = True
+
+
+def _die_with_parent() -> None:
+    """SIGKILL this child when its parent (the fork server, which exits with the worker) dies (Linux prctl)."""
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    except (OSError, AttributeError):
+        pass
+
+
+def _child_runtime(settings: Settings, worker_name: str) -> Runtime:
+    """The child's own database engine, blob store and queue handle (nothing is shared with the worker)."""
+    engine = make_engine(settings)
+    rt = Runtime(settings=settings, engine=engine, Session=make_sessionmaker(engine),
+                 blobs=BlobStore(settings.blobs_dir), huey=make_huey(settings), worker_name=worker_name)
+    set_runtime(rt)
+    return rt
+
+
+def _memory_detail(what: str, used_mb: float | None, budget_mb: int) -> str:
+    used = f"used {used_mb:.0f} MB, more than" if used_mb is not None else "needed more memory than"
+    return (f"The {what} {used} the {budget_mb} MB one job or fan-out task may use (GNSSATT_JOB_MEMORY_MB) and "
+            "was stopped; try a shorter span or fewer sets, or ask the operator to raise GNSSATT_JOB_MEMORY_MB.")
+
+
+def _child_main(settings: Settings, worker_name: str, target: Callable[[Runtime, dict], dict], conn,
+                job_id: str, attempt: int, what: str) -> None:
+    """In the child: a data limit, fresh connections, the target; one message back, then exit."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)   # the worker's Ctrl-C is the parent's to handle
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _die_with_parent()
+    logging.basicConfig(level=settings.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    budget_bytes = settings.job_memory_mb * 2**20
     data_kb = _status_kb("self", "VmData")
     if data_kb is not None:
         limit = data_kb * 1024 + 2 * budget_bytes
@@ -79,19 +149,15 @@ def _child_main(rt: Runtime, target: Callable[[Runtime], dict], conn, budget_byt
             resource.setrlimit(resource.RLIMIT_DATA, (limit, limit))
         except (ValueError, OSError):
             pass
-    rt.engine.dispose(close=False)  # the parent's pooled connections stay the parent's
-    child = dataclasses.replace(rt, huey=make_huey(rt.settings))
-    set_runtime(child)
-    conn.send(("started",))
     names: dict[str, str] = {}
     try:
+        child = _child_runtime(settings, worker_name)
+        conn.send(("started",))
         out = target(child, names)
         conn.send(("ok", out))
     except MemoryError as exc:
-        mb = budget_bytes // 2**20
         problem = problem_for_exception(JobBudgetExceeded(
-            "Memory budget exceeded", f"The job needed more memory than the {mb} MB one job may use "
-            "(GNSSATT_JOB_MEMORY_MB) and was stopped; try a shorter span or fewer sets."), job_id, attempt)
+            "Memory budget exceeded", _memory_detail(what, None, settings.job_memory_mb)), job_id, attempt)
         conn.send(("error", problem, True, log_text_for_exception(exc)))
     except BaseException as exc:  # noqa: BLE001 - every failure goes back to the parent as a problem
         conn.send(("error", problem_for_exception(exc, job_id, attempt, names), is_permanent(exc),
@@ -100,15 +166,19 @@ def _child_main(rt: Runtime, target: Callable[[Runtime], dict], conn, budget_byt
         conn.close()
 
 
-def run_budgeted(rt: Runtime, ctx: JobContext, target: Callable[[Runtime, dict], dict]) -> dict[str, Any]:
+def run_budgeted(rt: Runtime, ctx, target: Callable[[Runtime, dict], dict], what: str = "job") -> dict[str, Any]:
     """Run target(child_runtime, names) in a child process under the budget; its returned dict, or raise
-    JobCancelled / LeaseLost / JobBudgetExceeded / ChildFailed (the pipeline's own error) / RuntimeError."""
+    JobCancelled / LeaseLost / JobBudgetExceeded / ChildFailed (the target's own error) / RuntimeError.
+
+    `target` is pickled to the child (a module-level function, or a functools.partial of one, with plain
+    arguments). `ctx` is what the parent watches: job_id, attempt, the cancel_requested and lease_lost events
+    and log(text) (a JobContext, or a fan-out task's watch); `what` names the work in a budget error."""
     settings = rt.settings
-    budget_bytes = settings.job_memory_mb * 2**20
-    mp = multiprocessing.get_context("fork")
+    start_fork_server()
+    mp = multiprocessing.get_context("forkserver")
     recv, send = mp.Pipe(duplex=False)
-    proc = mp.Process(target=_child_main, args=(rt, target, send, budget_bytes, ctx.job_id, ctx.attempt),
-                      name=f"job-{ctx.job_id[:8]}", daemon=True)
+    proc = mp.Process(target=_child_main, args=(settings, rt.worker_name, target, send, ctx.job_id, ctx.attempt,
+                                                what), name=f"job-{ctx.job_id[:8]}", daemon=True)
     start = time.monotonic()
     proc.start()
     send.close()
@@ -135,34 +205,29 @@ def run_budgeted(rt: Runtime, ctx: JobContext, target: Callable[[Runtime, dict],
             if not proc.is_alive():
                 break
             if not started and time.monotonic() - start > START_TIMEOUT_S:
-                # a lock another thread held at fork time (an import in progress): another attempt will do
-                raise RuntimeError(f"the job's process did not start within {START_TIMEOUT_S:g} s")
+                raise RuntimeError(f"the {what}'s process did not start within {START_TIMEOUT_S:g} s")
             if ctx.cancel_requested.is_set():
                 raise JobCancelled(ctx.job_id)
             if ctx.lease_lost.is_set():
                 raise LeaseLost(ctx.job_id)
             used = owned_memory_bytes(proc.pid) or 0
             peak = max(peak, used)
-            if used > budget_bytes:
-                raise JobBudgetExceeded(
-                    "Memory budget exceeded", f"The job used {used / 2**20:.0f} MB, more than the "
-                    f"{settings.job_memory_mb} MB one job may use (GNSSATT_JOB_MEMORY_MB), and was stopped; "
-                    "try a shorter span or fewer sets, or ask the operator for a larger budget.")
+            if used > settings.job_memory_mb * 2**20:
+                raise JobBudgetExceeded("Memory budget exceeded",
+                                        _memory_detail(what, used / 2**20, settings.job_memory_mb))
             if time.monotonic() - start > settings.job_time_s:
                 raise JobBudgetExceeded(
-                    "Time budget exceeded", f"The job ran longer than the {settings.job_time_s:g} s one job may "
-                    "take (GNSSATT_JOB_TIME_S) and was stopped; try a shorter span or fewer sets.")
+                    "Time budget exceeded", f"The {what} ran longer than the {settings.job_time_s:g} s one job or "
+                    "fan-out task may take (GNSSATT_JOB_TIME_S) and was stopped; try a shorter span or fewer "
+                    "sets, or ask the operator to raise GNSSATT_JOB_TIME_S.")
         code = proc.exitcode
         how = f"signal {-code}" if code is not None and code < 0 else f"exit status {code}"
-        raise RuntimeError(f"the job's process ended without a result ({how}); the machine may be short of memory")
+        raise RuntimeError(f"the {what}'s process ended without a result ({how}); the machine may be short of "
+                           "memory")
     finally:
         if proc.is_alive():
             proc.kill()
             proc.join(timeout=10)
         recv.close()
-        log.info("job %s attempt %d: child process peak private memory %.0f MB", ctx.job_id, ctx.attempt,
-                 peak / 2**20)
-
-
-def isolation_available() -> bool:
-    return os.name == "posix" and "fork" in multiprocessing.get_all_start_methods()
+        log.info("%s of job %s attempt %d: child process peak private memory %.0f MB", what, ctx.job_id,
+                 ctx.attempt, peak / 2**20)

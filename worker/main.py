@@ -1,4 +1,5 @@
-"""The worker process: migrate, start the reaper, consume the queue until told to stop."""
+"""The worker process: start the fork server of job children, migrate, start the reaper, consume the queue until
+told to stop."""
 from __future__ import annotations
 
 import logging
@@ -10,7 +11,8 @@ from core.blobs import BlobStore
 from core.db import make_engine, make_sessionmaker
 from core.migrate import migrate
 from core.settings import Settings
-from worker import fanout, runner
+from worker import fanout, isolation, runner
+from worker.isolation import isolation_available
 from worker.queue import make_huey
 
 log = logging.getLogger("gnssatt.worker")
@@ -57,7 +59,8 @@ class Reaper(threading.Thread):
 def preload_pipelines() -> None:
     """Import every job type's pipeline and the modules it names in its PRELOAD tuple (science, plots), so the
     first job a worker runs does not pay ~1 s of imports (numpy/scipy/matplotlib and the science modules) on top
-    of its own work. Run in a background thread at start: a job arriving meanwhile waits on the import lock."""
+    of its own work. Run by the fork server of job children (worker.zygote), or, when jobs run in threads, in a
+    background thread at start: a job arriving meanwhile waits on the import lock."""
     import importlib
 
     from worker.jobs.registry import job_types
@@ -95,15 +98,17 @@ def _warm_up_kernels() -> None:
 def run_worker(settings: Settings, concurrency: int | None = None) -> None:
     """Run a worker until SIGINT/SIGTERM (the Huey consumer handles both)."""
     logging.basicConfig(level=settings.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    process_mode = settings.job_isolation == "process" and isolation_available()
+    if process_mode:
+        # first, before any thread: job children fork from this server, which loads the pipelines and kernels
+        isolation.start_fork_server()
     rt = build_runtime(settings)
     runner.cleanup_stale_workdirs(settings)
-    _warm_up_kernels()
+    if not process_mode:
+        _warm_up_kernels()
+        threading.Thread(target=preload_pipelines, name="preload", daemon=True).start()
     reaper = Reaper(rt)
     reaper.start()
-    if settings.job_isolation == "process":
-        preload_pipelines()  # before any job child is forked: no import may be half done in another thread
-    else:
-        threading.Thread(target=preload_pipelines, name="preload", daemon=True).start()
     workers = concurrency or settings.worker_concurrency
     log.info("worker %s: %d job slot(s), database %s, queue %s", rt.worker_name, workers,
              rt.engine.url.render_as_string(hide_password=True), settings.queue_url or "huey-sqlite")

@@ -17,6 +17,7 @@ import time
 import traceback
 import uuid
 from datetime import datetime, timedelta
+from functools import partial
 
 from sqlalchemy import func, select, update
 from sqlalchemy.orm import aliased
@@ -27,7 +28,7 @@ from core.settings import Settings
 from worker.context import JobContext
 from worker.errors import JobCancelled, LeaseLost, is_permanent, log_text_for_exception, problem_for_exception
 from worker.fanout import gather, reap_tasks
-from worker.isolation import ChildFailed, isolation_available, run_budgeted
+from worker.isolation import ChildFailed, isolated, run_budgeted
 from worker.jobs.registry import get_job_type
 from worker.queue import enqueue
 from worker.runtime import Runtime, get_runtime, load_inputs, load_pcv_map, set_runtime
@@ -186,34 +187,31 @@ def _input_names(ctx: JobContext) -> dict[str, str]:
     return {str(f.path): f.name for s in ctx.sets for f in s.files}
 
 
-def _isolated(rt: Runtime) -> bool:
-    """Whether attempts run in a budgeted child (not with Huey's immediate mode: tests run jobs inline)."""
-    return rt.settings.job_isolation == "process" and isolation_available() and not getattr(rt.huey, "immediate",
-                                                                                                 False)
-
-
 def _run_pipeline(rt: Runtime, ctx: JobContext, spec, config, token: str) -> None:
     """The pipeline, in a child process under the job budget (GNSSATT_JOB_ISOLATION=process) or in this thread."""
-    if not _isolated(rt):
+    if not isolated(rt):
         ctx.sets.extend(load_inputs(rt, ctx.job_id))
         ctx.progress(0.0, "running")
         spec.load_pipeline()(ctx, config)
         return
-
-    def in_child(child_rt: Runtime, names: dict) -> dict:
-        cctx = _make_context(child_rt, ctx.job_id, ctx.attempt, token, ctx.workdir)
-        cctx.sets.extend(load_inputs(child_rt, ctx.job_id))
-        names.update(_input_names(cctx))
-        cctx.progress(0.0, "running")
-        spec.load_pipeline()(cctx, config)
-        return {"products": cctx.products, "pcv_maps": cctx.pcv_maps, "log_lines": cctx.log_lines,
-                "task_records": cctx.task_records}
-
-    out = run_budgeted(rt, ctx, in_child)
+    out = run_budgeted(rt, ctx, partial(_pipeline_in_child, ctx.job_id, ctx.attempt, token, ctx.workdir,
+                                        spec.name, config))
     ctx.products.update(out["products"])
     ctx.pcv_maps.extend(out["pcv_maps"])
     ctx.log_lines.extend(out["log_lines"])
     ctx.task_records.extend(out["task_records"])
+
+
+def _pipeline_in_child(job_id: str, attempt: int, token: str, workdir, job_type: str, config,
+                       child_rt: Runtime, names: dict) -> dict:
+    """In the job's child (worker.isolation): the pipeline on the child's own runtime; what the parent publishes."""
+    cctx = _make_context(child_rt, job_id, attempt, token, workdir)
+    cctx.sets.extend(load_inputs(child_rt, job_id))
+    names.update(_input_names(cctx))
+    cctx.progress(0.0, "running")
+    get_job_type(job_type).load_pipeline()(cctx, config)
+    return {"products": cctx.products, "pcv_maps": cctx.pcv_maps, "log_lines": cctx.log_lines,
+            "task_records": cctx.task_records}
 
 
 def execute_job(rt: Runtime, job_id: str) -> str | None:
@@ -239,7 +237,7 @@ def _execute_job(rt: Runtime, job_id: str) -> str | None:
     shutil.rmtree(workdir, ignore_errors=True)
     workdir.mkdir(parents=True)
     ctx = _make_context(rt, job_id, attempt, token, workdir)
-    beat = Heartbeat(rt, job_id, token, ctx, write_progress=not _isolated(rt))
+    beat = Heartbeat(rt, job_id, token, ctx, write_progress=not isolated(rt))
     beat.start()
     log.info("job %s (%s) attempt %d claimed by %s", job_id, job_type, attempt, token)
     try:

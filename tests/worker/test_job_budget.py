@@ -17,7 +17,7 @@ from worker.main import build_runtime
 
 
 @pytest.fixture
-def rt(tmp_path):
+def rt(tmp_path, fork_server):
     settings = Settings(data_dir=tmp_path / "var", lease_seconds=5, heartbeat_seconds=0.5,
                         job_memory_mb=200, job_time_s=3.0, job_isolation="process")
     rt = build_runtime(settings, name="budget-test")
