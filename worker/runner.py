@@ -194,22 +194,26 @@ def _run_pipeline(rt: Runtime, ctx: JobContext, spec, config, token: str) -> Non
         ctx.progress(0.0, "running")
         spec.load_pipeline()(ctx, config)
         return
+    # the config goes as JSON: the fork server pickles what it hands the child, and some job types' config
+    # models are classes made at import (not picklable by name); the child validates it again
     out = run_budgeted(rt, ctx, partial(_pipeline_in_child, ctx.job_id, ctx.attempt, token, ctx.workdir,
-                                        spec.name, config))
+                                        spec.name, config.model_dump(mode="json")))
     ctx.products.update(out["products"])
     ctx.pcv_maps.extend(out["pcv_maps"])
     ctx.log_lines.extend(out["log_lines"])
     ctx.task_records.extend(out["task_records"])
 
 
-def _pipeline_in_child(job_id: str, attempt: int, token: str, workdir, job_type: str, config,
+def _pipeline_in_child(job_id: str, attempt: int, token: str, workdir, job_type: str, config_json: dict,
                        child_rt: Runtime, names: dict) -> dict:
     """In the job's child (worker.isolation): the pipeline on the child's own runtime; what the parent publishes."""
+    spec = get_job_type(job_type)
+    config = spec.config_model.model_validate(config_json)
     cctx = _make_context(child_rt, job_id, attempt, token, workdir)
     cctx.sets.extend(load_inputs(child_rt, job_id))
     names.update(_input_names(cctx))
     cctx.progress(0.0, "running")
-    get_job_type(job_type).load_pipeline()(cctx, config)
+    spec.load_pipeline()(cctx, config)
     return {"products": cctx.products, "pcv_maps": cctx.pcv_maps, "log_lines": cctx.log_lines,
             "task_records": cctx.task_records}
 
