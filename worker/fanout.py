@@ -239,6 +239,13 @@ def run_task_budgeted(rt, task_id: str, token: str) -> bool:
         log.warning("task %s of job %s lost its lease; stopping without writing", task_id[:8], job_id[:8])
         return False
     except (ChildFailed, RuntimeError) as exc:  # the child died or could not start: another attempt may do
+        if isinstance(exc, ChildFailed) and exc.problem.get("type", "").endswith("/job-budget-exceeded"):
+            # the child hit its data limit (MemoryError) before the parent's poll saw it over the budget: the
+            # same budget error, so the parent job fails with it (not as an internal error)
+            title, detail = exc.problem["title"], exc.problem["detail"]
+            _settle(rt, task_id, token, state="failed", error=f"{BUDGET_MARK}{title}: {detail}")
+            log.warning("task %s of job %s: %s", task_id[:8], job_id[:8], detail)
+            return False
         permanent = isinstance(exc, ChildFailed) and exc.permanent
         trace = "\n".join(watch.log_lines)[-3000:]
         _settle(rt, task_id, token, state="failed" if permanent else retry_or_fail,
