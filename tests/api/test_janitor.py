@@ -1,19 +1,30 @@
 """The janitor (core/janitor.py) removes dead uploads' staging, dead attempts' work directories and blobs no row
 points to after their grace period, and never a blob a row points to, also while uploads re-use blobs
-concurrently (issue 22, defect 11). About 6 s."""
+concurrently (issue 22, defect 11); each test on SQLite and on PostgreSQL (a scratch database). About 6 s a backend."""
 from __future__ import annotations
 
 import os
 import threading
 import time
 
+import pytest
 from sqlalchemy import select
 
 from core import janitor
 from core.models import SetFile
+from core.settings import Settings
+from tests._backends import scratch_backend
 from tests.api.test_observation_sets import _files, sample_items
 
 HOUR = 3600.0
+
+
+@pytest.fixture(params=["sqlite", "pg"])
+def settings(request, tmp_path):
+    """The API tests' settings (tests/api/conftest.py) on the backend of the parameter."""
+    with scratch_backend(request.param, prefix="gnssatt_janitor") as overrides:
+        yield Settings(data_dir=tmp_path / "var", lease_seconds=5, heartbeat_seconds=0.5,
+                       max_upload_bytes=5 * 1024 * 1024, **overrides)
 
 
 def _age(path, seconds: float) -> None:

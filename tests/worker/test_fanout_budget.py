@@ -2,7 +2,7 @@
 budget (worker.isolation), as the job's own attempt does: a task that allocates beyond the budget fails for good
 with the budget's error and fails its job with it, the worker itself never holds the memory and goes on serving;
 a cancelled parent stops a task that never returns; and a calibration whose every task went through that path
-gives the products of the same calibration run in one process (2 two-minute sets; 74 s measured with load
+gives the products of the same calibration run in one process; each on SQLite + Huey and on PostgreSQL + Redis (2 two-minute sets; 74 s measured with load
 average 20 on 2 cores, most of it simulating the sets and drawing the plots twice)."""
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ from sqlalchemy import select, update
 
 from core.models import Job, JobSet, JobTask, ObservationSet, SetFile, Team, utcnow
 from core.settings import Settings
+from tests._backends import scratch_backend
 from worker import fanout, runner
 from worker.errors import JobBudgetExceeded, problem_for_exception
 from worker.isolation import owned_memory_bytes
@@ -39,14 +40,16 @@ def spin_task(payload: dict, sets) -> dict:
     return {}
 
 
-@pytest.fixture
-def rt(tmp_path, fork_server):
-    settings = Settings(data_dir=tmp_path / "var", lease_seconds=5, heartbeat_seconds=0.5,
-                        job_memory_mb=BUDGET_MB, job_time_s=120.0, job_isolation="process")
-    rt = build_runtime(settings, name="fanout-budget-test")
-    yield rt
-    runner.set_runtime(None)
-    rt.engine.dispose()
+@pytest.fixture(params=["sqlite", "pg"])
+def rt(request, tmp_path, fork_server):
+    """A worker runtime on the embedded default, or on PostgreSQL + Redis (scratch database, own queue name)."""
+    with scratch_backend(request.param, queue=True, prefix="gnssatt_fanout") as overrides:
+        settings = Settings(data_dir=tmp_path / "var", lease_seconds=5, heartbeat_seconds=0.5,
+                            job_memory_mb=BUDGET_MB, job_time_s=120.0, job_isolation="process", **overrides)
+        rt = build_runtime(settings, name="fanout-budget-test")
+        yield rt
+        runner.set_runtime(None)
+        rt.engine.dispose()
 
 
 def _running_job(rt, job_type: str = "selftest", config: dict | None = None, set_ids: tuple = ()) -> str:
