@@ -4,6 +4,7 @@ bench/ (service load, attitude speed, TTFF and calibration jobs); `make demo` (c
 long-lived pair instead."""
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import socket
@@ -17,7 +18,28 @@ import httpx
 
 REPO = Path(__file__).resolve().parents[1]
 
-__all__ = ["LocalService"]
+__all__ = ["LocalService", "scratch_database"]
+
+PG_DEFAULT = "postgresql+psycopg://postgres@127.0.0.1:5432/test"
+REDIS_DEFAULT = "redis://127.0.0.1:6379/0"
+
+
+@contextlib.contextmanager
+def scratch_database(base_url: str, prefix: str = "gnssatt_scratch"):
+    """A fresh PostgreSQL database made on the server of `base_url` (a database we may create others from);
+    yields its URL and drops it (WITH FORCE) afterwards."""
+    from sqlalchemy import create_engine, text
+    from sqlalchemy.engine import make_url
+    name = f"{prefix}_{uuid.uuid4().hex[:12]}"
+    admin = create_engine(base_url, isolation_level="AUTOCOMMIT")
+    try:
+        with admin.connect() as conn:
+            conn.execute(text(f'CREATE DATABASE "{name}"'))
+        yield make_url(base_url).set(database=name).render_as_string(hide_password=False)
+    finally:
+        with admin.connect() as conn:
+            conn.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
+        admin.dispose()
 
 
 def _free_port() -> int:

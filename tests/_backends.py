@@ -7,11 +7,11 @@ from __future__ import annotations
 
 import contextlib
 import os
-import uuid
 from collections.abc import Iterator
 
 import pytest
 
+from client.local_service import scratch_database
 from tests.conftest import missing
 
 
@@ -42,21 +42,15 @@ def scratch_backend(kind: str, queue: bool = False, prefix: str = "gnssatt_t") -
     base = os.environ.get("GNSSATT_TEST_DATABASE_URL")
     if not base:
         _require_pg("GNSSATT_TEST_DATABASE_URL is not set")
-    from sqlalchemy import create_engine, text
-    from sqlalchemy.engine import make_url
-    name = f"{prefix}_{uuid.uuid4().hex[:12]}"
     try:
-        admin = create_engine(base, isolation_level="AUTOCOMMIT")
-        with admin.connect() as conn:
-            conn.execute(text(f'CREATE DATABASE "{name}"'))
+        scratch = scratch_database(base, prefix)
+        url = scratch.__enter__()
     except Exception as exc:  # noqa: BLE001 - reported as the reason
         _require_pg(f"cannot create a scratch database from GNSSATT_TEST_DATABASE_URL ({exc.__class__.__name__})")
-    overrides = {"database_url": make_url(base).set(database=name).render_as_string(hide_password=False)}
-    if queue:
-        overrides |= {"queue_url": _redis_url(), "queue_name": name}
+    overrides = {"database_url": url}
     try:
+        if queue:
+            overrides |= {"queue_url": _redis_url(), "queue_name": url.rsplit("/", 1)[-1]}
         yield overrides
     finally:
-        with admin.connect() as conn:
-            conn.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
-        admin.dispose()
+        scratch.__exit__(None, None, None)

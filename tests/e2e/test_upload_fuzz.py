@@ -2,7 +2,8 @@
 Hatanaka, SP3, ANTEX, reference attitude CSV and platform.json from ../shared/data, with bytes flipped, lines
 cut, repeated or stretched, numbers replaced by extremes, NUL bytes, compression layers added. Every answer is
 201 or a 4xx problem document (never a 5xx), each within 10 s, and the API's resident memory stays under 250 MB
-throughout. The run is seeded and bounded: 15 s of uploads (about 30 s in all)."""
+throughout. On both backends (SQLite + Huey, PostgreSQL + Redis). The run is seeded and bounded: 15 s of
+uploads (about 30 s in all per backend)."""
 from __future__ import annotations
 
 import bz2
@@ -18,7 +19,6 @@ import psutil
 import pytest
 
 from bench.real_sets import REAL_DATA_DIR
-from client.local_service import LocalService
 from gnssatt.sim.sample_set import platform_doc
 from tests.conftest import missing
 
@@ -148,44 +148,41 @@ class _RssSampler(threading.Thread):
                 return
 
 
-def test_mutated_real_files_get_201_or_4xx_in_bounded_time_and_memory(tmp_path):
+def test_mutated_real_files_get_201_or_4xx_in_bounded_time_and_memory(service, tmp_path):
     absent = [p for p in SEEDS if not p.is_file()]
     if absent:
         missing(f"fuzz seed files not found: {[str(p) for p in absent]}")
     seeds = [(p.name.removesuffix(".gz"), _plain(p)) for p in SEEDS]
-    svc = LocalService(tmp_path, "sqlite", None, None)
+    svc = service
     rng = random.Random(20261202)
     statuses: dict[int, int] = {}
-    try:
-        svc.start_api()
-        key = svc.create_key("fuzz")
-        sampler = _RssSampler(svc.api.pid)
-        sampler.start()
-        start = time.monotonic()
-        slowest = 0.0
-        with svc.client(key) as c:
-            while time.monotonic() - start < BUDGET_S:
-                name, data = _case(rng, seeds)
-                t0 = time.monotonic()
-                resp = c.post("/v1/observation-sets", files=[("files", (name, data, "application/octet-stream"))],
-                              timeout=MAX_REQUEST_S + 20)
-                took = time.monotonic() - t0
-                slowest = max(slowest, took)
-                statuses[resp.status_code] = statuses.get(resp.status_code, 0) + 1
-                assert resp.status_code == 201 or 400 <= resp.status_code < 500, (name, resp.status_code,
-                                                                                   resp.text[:400])
-                if resp.status_code != 201:
-                    assert resp.headers["content-type"].startswith("application/problem+json")
-                    assert "Traceback" not in resp.text
-                assert took < MAX_REQUEST_S, f"{name}: {took:.1f} s"
-        sampler.stop.set()
-        sampler.join(timeout=2)
-        n = sum(statuses.values())
-        print(f"fuzz: {n} uploads in {BUDGET_S:g} s, statuses {statuses}, slowest {slowest:.2f} s, "
-              f"API peak RSS {sampler.peak_mb:.0f} MB")
-        assert n >= 30, statuses
-        assert sampler.peak_mb < MAX_RSS_MB
-        staging = [p for p in (tmp_path / "var" / "staging").rglob("*")]
-        assert not staging, f"a rejected upload left {staging[:3]} in staging"
-    finally:
-        svc.shutdown()
+    svc.start_api()
+    key = svc.create_key("fuzz")
+    sampler = _RssSampler(svc.api.pid)
+    sampler.start()
+    start = time.monotonic()
+    slowest = 0.0
+    with svc.client(key) as c:
+        while time.monotonic() - start < BUDGET_S:
+            name, data = _case(rng, seeds)
+            t0 = time.monotonic()
+            resp = c.post("/v1/observation-sets", files=[("files", (name, data, "application/octet-stream"))],
+                          timeout=MAX_REQUEST_S + 20)
+            took = time.monotonic() - t0
+            slowest = max(slowest, took)
+            statuses[resp.status_code] = statuses.get(resp.status_code, 0) + 1
+            assert resp.status_code == 201 or 400 <= resp.status_code < 500, (name, resp.status_code,
+                                                                               resp.text[:400])
+            if resp.status_code != 201:
+                assert resp.headers["content-type"].startswith("application/problem+json")
+                assert "Traceback" not in resp.text
+            assert took < MAX_REQUEST_S, f"{name}: {took:.1f} s"
+    sampler.stop.set()
+    sampler.join(timeout=2)
+    n = sum(statuses.values())
+    print(f"fuzz: {n} uploads in {BUDGET_S:g} s, statuses {statuses}, slowest {slowest:.2f} s, "
+          f"API peak RSS {sampler.peak_mb:.0f} MB")
+    assert n >= 30, statuses
+    assert sampler.peak_mb < MAX_RSS_MB
+    staging = [p for p in (tmp_path / "var" / "staging").rglob("*")]
+    assert not staging, f"a rejected upload left {staging[:3]} in staging"
