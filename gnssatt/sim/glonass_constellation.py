@@ -151,7 +151,7 @@ class GlonassConstellation:
             for j, sat in enumerate(self.sats):
                 out.append(GlonassRecord(
                     sat=sat, epoch_utc=utc, tau_n_s=-float(self.clk_a0_s[j] + self.clk_a1_s_s[j] * tb),
-                    gamma_n=float(self.clk_a1_s_s[j]), message_frame_time_s=sow_utc - 900.0,
+                    gamma_n=float(self.clk_a1_s_s[j]), message_frame_time_s=(sow_utc - 900.0) % SECONDS_PER_WEEK,
                     position_m=y[j, :3].copy(), velocity_m_s=y[j, 3:].copy(),
                     acceleration_m_s2=self.acc_ls_m_s2[j].copy(), frequency_number=int(self.channels[j])))
         return out

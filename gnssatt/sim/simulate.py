@@ -805,7 +805,12 @@ def _glonass_model(p: SimParams, antennas: dict, const, sigs: list) -> dict:
     return {"glonass": {"channels": {const.sats[j]: int(const.channels[j]) for j in glo},
                         "wavelength_m": {f: {const.sats[j]: float(const.wavelength_m(f)[j]) for j in glo}
                                          for f in sigs},
-                        "time_offset_to_gps_s": 0.0, "receivers": icb}}
+                        "time_offset_to_gps_s": 0.0, "receivers": icb,
+                        "model": {"signals": "L1 = G1, L2 = G2 of channel k: f = 1602 + 0.5625 k, 1246 + 0.4375 k MHz",
+                                  "ionosphere": "I_f = (f_GPS_L1 / f_k)^2 I_L1 per satellite", "tgd": "none",
+                                  "icb": "receiver model's code / phase bias (m) added to its GLONASS observations",
+                                  "orbit": "GLONASS ICD 5.1 A.3.1.2 (J2, constant lunisolar acceleration), RK4 5 s; "
+                                           "records every 30 min are truth states"}}}
 
 
 __all__ = ["simulate_scenario", "list_scenarios", "SimResult"]
