@@ -42,6 +42,7 @@ class ObsHeader:
     systems: str = "G"               # "G", "R" or "GR": which SYS / # / OBS TYPES lines (and the file type)
     glonass_obs_types: tuple = ()    # SYS / # / OBS TYPES of R (as many as obs_types, same columns)
     glonass_slots: tuple = ()        # ((slot, k), ...) for GLONASS SLOT / FRQ #
+    marker_type: str = ""            # MARKER TYPE; "" -> SPACEBORNE for a spaceborne receiver, else GEODETIC
 
 
 def write_obs(path: Path, header: ObsHeader, *, epochs: GpsTime, sats: list[str], values: np.ndarray,
@@ -69,8 +70,8 @@ def _header_text(hd: ObsHeader, epochs: GpsTime, idx: np.ndarray, n_obs: int) ->
     head = [_h(f"{'3.04':>9s}{'':11s}{'OBSERVATION DATA':<20s}{system:<20s}", "RINEX VERSION / TYPE"),
             _h(f"{'gnssatt-sim':<20s}{'gnssatt':<20s}{hd.date_text:<20s}", "PGM / RUN BY / DATE")]
     head += [_h(c, "COMMENT") for c in hd.comments]
-    head += [_h(marker, "MARKER NAME"), _h("SPACEBORNE" if "space" in receiver.lower() else "GEODETIC",
-                                           "MARKER TYPE"),
+    marker_type = hd.marker_type or ("SPACEBORNE" if "space" in receiver.lower() else "GEODETIC")
+    head += [_h(marker, "MARKER NAME"), _h(marker_type, "MARKER TYPE"),
              _h(f"{'simulator':<20s}{'gnssatt':<40s}", "OBSERVER / AGENCY"),
              _h(f"{'SIM-' + marker:<20.20s}{receiver:<20.20s}{'sim':<20s}", "REC # / TYPE / VERS"),
              _h(f"{'SIM-' + marker:<20.20s}{hd.antenna_type:<20.20s}", "ANT # / TYPE"),
