@@ -139,6 +139,32 @@ def test_clock_jumps_keep_the_fdma_phase_continuous(which, gr_set, gr_solution, 
     assert score_fixes(sol, d / "truth")["wrong_constraints"] == 0
 
 
+def test_a_jump_of_the_code_not_of_whole_ms_keeps_the_integers(r_set):
+    """A receiver clock step of 0.37 ms on one receiver from minute 5, applied to its code only (on top of the
+    simulated 1 ms jumps): the range is sampled 0.37 ms earlier, so code + c dt - rdot dt and phase - rdot dt
+    (rdot from the Doppler). Applied to the FDMA phase as measured, no wrong integer."""
+    from gnssatt.gnss.constants import C_M_S
+    from gnssatt.gnss.signals import glonass_wavelength_m
+    from worker.jobs.attitude import AttitudeConfig
+
+    dt = 0.37e-3
+    inputs = load_inputs(set_files(r_set, with_sp3=False, with_reference=False))
+    o = next(v for k, v in inputs.obs.items() if "ANT2" in str(k))
+    k0 = int(np.searchsorted(np.asarray(o.time - o.time[0], float), 300.0))
+    for band, (c, l, d) in ((1, ("C1C", "L1C", "D1C")), (2, ("C2P", "L2P", "D2P"))):
+        lam = np.array([glonass_wavelength_m(band, o.header.glonass_slots[s]) for s in o.sats])
+        ic, il, idp = (o.code_index(x, "R") for x in (c, l, d))
+        rdot = -o.values[k0:, :, idp] * lam                                  # m/s
+        o.values[k0:, :, ic] += C_M_S * dt - rdot * dt
+        o.values[k0:, :, il] -= rdot * dt / lam
+    sol = process(inputs, AttitudeConfig.model_validate({"systems": ["R"]}).to_settings())
+    ev = [e for e in sol.fr.events if e["event"] == "phase_clock_jump" and "not whole ms" in e.get("detail", "")]
+    assert ev and all(abs(e["epoch"] - k0) <= 1 for e in ev)
+    sc = score_fixes(sol, r_set / "truth")
+    assert sc["constraints"] >= 10 and sc["wrong_constraints"] == 0, sc["details"]
+    assert sol.att_fixed.mean() >= 0.95
+
+
 def test_clock_jumps_applied_to_the_phase_too(tmp_path_factory):
     d = _simulate(tmp_path_factory, "glo_jump_phase", "R", clock_mode="free", clock_free_drift_ppm=5.0,
                   clock_jump_in_phase=True)

@@ -130,32 +130,30 @@ def edit_epoch(run: FilterRun, ep: EpochData) -> None:
 
 #: a receiver clock jump is a whole number of milliseconds (receiver clock steering)
 CLOCK_JUMP_UNIT_M = C_M_S * 1e-3
-#: the common phase-minus-code jump must be this close to whole milliseconds to be repaired (code noise of the
-#: median is decimetres; farther off is not a clock jump of whole ms: the FDMA ambiguities restart instead)
+#: a common phase-minus-code jump this close to whole milliseconds is taken as exactly that (the median's code
+#: noise is decimetres); farther off, the measured jump is used as it is
 CLOCK_JUMP_TOL_M = 5.0
 
 
 def _fdma_phase_clock_jump(run: FilterRun, ep: EpochData, j: int, f: int, common_m: float) -> None:
     """A receiver clock jump applied to the code but not the phase on an FDMA signal (GLONASS): repaired in the
-    observations, not the integers. The jump is d = n ms of phase (m), the same for every satellite, which is
-    f_k x n ms cycles per satellite: half-integer for odd GLONASS channels k (f_k = 1602 + 0.5625 k MHz, GLONASS
-    ICD 5.1 sec. 3.3.1.4), so no integer shift of the ambiguities can absorb it (the GPS repair above). d is
-    subtracted from this and every later SD phase of the baseline and signal (run.phase_jump_m), the ambiguities
-    are kept. Not a whole number of ms: the signal's ambiguities of the baseline restart (slip)."""
+    observations, not the integers. The jump is d metres of phase, the same for every satellite, which is f_k d / c
+    cycles per satellite: for d = 1 ms half-integer on odd GLONASS channels k (f_k = 1602 + 0.5625 k MHz, GLONASS
+    ICD 5.1 sec. 3.3.1.4), so no integer shift of the ambiguities absorbs it (the GPS repair above). d (whole ms
+    when within CLOCK_JUMP_TOL_M of it, else as measured) is subtracted from this and every later SD phase of the
+    baseline and signal (run.phase_jump_m) and the ambiguities are kept; an error e in d moves a double difference
+    by e (1/lambda_s - 1/lambda_r), 0.0019 cycles per m and channel of difference on G1."""
     n_ms = np.round(common_m / CLOCK_JUMP_UNIT_M)
-    d = n_ms * CLOCK_JUMP_UNIT_M
-    if abs(common_m - d) > CLOCK_JUMP_TOL_M:
-        ep.slip[j, :, f] |= ep.use_p[j, :, f]
-        run.events.add(ep.k, "phase_clock_jump", j, sig=run.pobs.signals[f],
-                       detail=f"{common_m:.1f} m common to all satellites, not whole ms: ambiguities restart")
-        return
+    whole = abs(common_m - n_ms * CLOCK_JUMP_UNIT_M) <= CLOCK_JUMP_TOL_M
+    d = n_ms * CLOCK_JUMP_UNIT_M if whole else float(common_m)
     run.phase_jump_m[j, f] += d
     run.blk.sdp[ep.i + 1:, j, :, f] -= d
     ep.sdp_c[j, :, f] -= d
     ep.td_p[j, :, f] -= d
     ep.mp[j, f] -= d
+    what = f"{n_ms:.0f} ms" if whole else f"{common_m:.3f} m (not whole ms, as measured)"
     run.events.add(ep.k, "phase_clock_jump", j, sig=run.pobs.signals[f],
-                   detail=f"{n_ms:.0f} ms common to all satellites (FDMA: repaired in the phase, integers kept)")
+                   detail=f"{what} common to all satellites (FDMA: repaired in the phase, integers kept)")
 
 
 def noise_weights(run: FilterRun, ep: EpochData):
