@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from gnssatt.gnss.orbits.glonass import AE_GLONASS_M, GM_GLONASS_M3_S2, J2_GLONASS, OMEGA_EARTH_GLONASS_RAD_S
 from gnssatt.gnss.time import SECONDS_PER_WEEK, GpsTime
 
 __all__ = ["NOMINAL_CHANNELS", "GlonassConstellation", "GlonassRecord", "MixedConstellation", "synthetic_glonass",
@@ -35,11 +36,8 @@ RECORD_INTERVAL_S = 1800            # t_b every 30 min, at hh:15 and hh:45 UTC (
 _TB_PHASE_S = 900
 _GRID_S = 30.0
 _STEP_S = 5.0
-# GLONASS ICD 5.1 Table 3.2
-_GM = 398600.4418e9
-_AE = 6378136.0
-_J2 = 1082.62575e-6
-_WE = 7.292115e-5
+# GLONASS ICD 5.1 Table 3.2: definitions, so the project's one copy (the equations are the simulator's own)
+_GM, _AE, _J2, _WE = GM_GLONASS_M3_S2, AE_GLONASS_M, J2_GLONASS, OMEGA_EARTH_GLONASS_RAD_S
 
 
 @dataclass
