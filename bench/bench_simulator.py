@@ -60,7 +60,8 @@ def main() -> None:
         return
     rows = []
     for label, ov in (("full (with per-observation truth components)", {}),
-                      ("without truth/observations_*.csv", {"truth_components": False})):
+                      ("without truth/observations_*.csv", {"truth_components": False}),
+                      ("GPS + GLONASS (systems G+R, 24 more satellites)", {"systems": "G+R"})):
         with tempfile.TemporaryDirectory() as tmp:
             one_run(Path(tmp) / "warm", ov)                       # warm-up
             runs = [one_run(Path(tmp) / f"r{k}", ov) for k in range(args.runs)]

@@ -188,7 +188,9 @@ def _platform_state(inputs: AttitudeInputs, pobs: PlatformObs, master: str):
     eph = PreciseEphemeris(inputs.gnss_sp3, nav=inputs.nav) if inputs.gnss_sp3 is not None \
         else BroadcastEphemeris(inputs.nav)
     obs = inputs.obs[master]
-    sol = spp(obs, eph, SppOptions(systems=("G",), velocity=True))
+    # GPS when the master's file has it (as always); a GLONASS-only file is positioned by GLONASS (issue 21)
+    systems = ("G",) if any(s[0] == "G" for s in obs.sats) or not any(s[0] == "R" for s in obs.sats) else ("R",)
+    sol = spp(obs, eph, SppOptions(systems=systems, velocity=True))
     tags = sol.time_tag.s * 1000 + np.round(sol.time_tag.frac * 1000).astype(np.int64)
     want = pobs.time.s * 1000 + np.round(pobs.time.frac * 1000).astype(np.int64)
     r = np.full((len(want), 3), np.nan)

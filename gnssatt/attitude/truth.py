@@ -7,6 +7,9 @@ truth double difference at an epoch is (N_b,sat - N_a,sat) - (N_b,ref - N_a,ref)
 (the simulator's receiver and satellite phase biases cancel in it). A constraint is wrong at an epoch when the two
 differ; an undetected slip after the fix shows the same way.
 
+Signals: truth/arcs.csv names GPS "L1"/"L2" and GLONASS "R:G1"/"R:G2"; a solution's "G:L1"/"G:L2" are the GPS ones
+(gnssatt.gnss.signals.SIGNAL_ALIASES), so a G+R or R-only solution is scored by the same arcs.
+
 Attitude error: the rotation angle of R(q_est) R(q_true)^T (CONVENTIONS.md), and the yaw/pitch/roll differences
 wrapped to [-180, 180) deg.
 """
@@ -20,8 +23,24 @@ import numpy as np
 from gnssatt.gnss import rotations as rot
 from gnssatt.gnss.time import GpsTime
 
-__all__ = ["load_arcs", "ambiguity_at", "score_fixes", "truth_at", "attitude_errors_deg", "lag_deg",
+__all__ = ["truth_signal", "load_arcs", "ambiguity_at", "score_fixes", "truth_at", "attitude_errors_deg", "lag_deg",
            "slips_seen_by_single_differences", "clock_jump_match"]
+
+
+_TRUTH_NAME = {"G:L1": "L1", "G:L2": "L2"}
+
+
+def truth_signal(signal: str) -> str:
+    """The name truth/arcs.csv gives a solution's signal ("G:L1" -> "L1"; "L1", "R:G1", "R:G2" as they are)."""
+    return _TRUTH_NAME.get(signal, signal)
+
+
+def _solution_signal(pobs, truth_name: str) -> int | None:
+    """Index in pobs.signals of the signal truth/arcs.csv calls truth_name (None when the solution lacks it)."""
+    for i, s in enumerate(pobs.signals):
+        if truth_signal(s) == truth_name:
+            return i
+    return None
 
 
 def load_arcs(truth_dir: Path, t0: GpsTime) -> dict:
@@ -44,7 +63,8 @@ def ambiguity_at(arcs: dict, key, t_s: np.ndarray) -> np.ndarray:
 
 
 def score_fixes(sol, truth_dir: Path) -> dict:
-    """{"constraints", "wrong_constraints", "wrong_epochs" (n_ep, n_bl) bool, "details" [str]} of a solution.
+    """{"constraints", "wrong_constraints", "wrong_epochs" (n_ep, n_bl) bool, "details" [str],
+    "unscored_constraints" (no truth arc covers them: a signal or satellite the truth does not name)} of a solution.
 
     wrong_epochs[k, j]: at epoch k baseline j held at least one wrong integer constraint.
     """
@@ -55,15 +75,16 @@ def score_fixes(sol, truth_dir: Path) -> dict:
     n_ep, n_bl = fr.ok.shape
     wrong_ep = np.zeros((n_ep, n_bl), bool)
     details = []
-    n_wrong = 0
+    n_wrong = n_unscored = 0
     for i in range(log["epoch"].size):
         j, f = int(log["bl"][i]), int(log["sig"][i])
         a, b = sol.baselines[j]
-        sig, s1, s0 = pobs.signals[f], pobs.sats[log["sat"][i]], pobs.sats[log["ref_sat"][i]]
+        sig, s1, s0 = truth_signal(pobs.signals[f]), pobs.sats[log["sat"][i]], pobs.sats[log["ref_sat"][i]]
         ks = np.arange(log["epoch"][i], log["last_epoch"][i] + 1)
         tt = t_s[ks]
         truth = (ambiguity_at(arcs, (b, s1, sig), tt) - ambiguity_at(arcs, (a, s1, sig), tt)) \
             - (ambiguity_at(arcs, (b, s0, sig), tt) - ambiguity_at(arcs, (a, s0, sig), tt))
+        n_unscored += int(not np.isfinite(truth).any())
         bad = np.isfinite(truth) & (np.round(truth) != np.round(log["dd_cyc"][i]))
         if bad.any():
             n_wrong += 1
@@ -73,7 +94,7 @@ def score_fixes(sol, truth_dir: Path) -> dict:
                                f"truth {np.unique(truth[bad])} at {bad.sum()} of {ks.size} epochs "
                                f"(first {ks[bad][0]})")
     return {"constraints": int(log["epoch"].size), "wrong_constraints": n_wrong, "wrong_epochs": wrong_ep,
-            "details": details}
+            "details": details, "unscored_constraints": n_unscored}
 
 
 def truth_at(set_dir: Path, sol) -> tuple[np.ndarray, np.ndarray]:
@@ -122,11 +143,14 @@ def slips_seen_by_single_differences(sol, truth_dir: Path) -> list[tuple[str, st
         k = int(np.argmin(np.abs(t - ts)))
         if k == 0 or abs(t[k] - ts) > 0.5 or t[k] - t[k - 1] > 1.5:
             continue
-        si, fi, a = po.sats.index(r["sat"]), po.signals.index(r["signal"]), ants.index(r["antenna"])
+        fi = _solution_signal(po, r["signal"])
+        if fi is None or r["sat"] not in po.sats:
+            continue
+        si, a = po.sats.index(r["sat"]), ants.index(r["antenna"])
         ok = np.isfinite(po.phase_m[:, k - 1:k + 1, si, fi]).all(axis=1)
         if any(ok[ants.index(x)] and ok[ants.index(y)] and a in (ants.index(x), ants.index(y))
                for x, y in sol.baselines):
-            out.append((r["sat"], r["signal"], ts))
+            out.append((r["sat"], po.signals[fi], ts))
     return out
 
 

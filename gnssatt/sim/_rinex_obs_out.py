@@ -1,8 +1,9 @@
-"""Fast RINEX 3.04 observation writer for simulated GPS data (private; the shared writer is
+"""Fast RINEX 3.04 observation writer for simulated GPS / GLONASS data (private; the shared writer is
 gnssatt/gnss/io/rinex_obs_write.py once it lands).
 
 Implements: RINEX 3.04 sec. 5 and Tables A1-A3: header labels, EPOCH record
-`A1,1X,I4,4(1X,I2.2),F11.7,2X,I1,I3,6X,F15.12`, observation records `A1,I2.2,m(F14.3,I1,I1)`.
+`A1,1X,I4,4(1X,I2.2),F11.7,2X,I1,I3,6X,F15.12`, observation records `A1,I2.2,m(F14.3,I1,I1)`; GLONASS SLOT /
+FRQ # `I3,1X,8(A1,I2.2,1X,I2,1X)` and GLONASS COD/PHS/BIS `4(1X,A3,1X,F8.3)` (RINEX 3.04 Table A2).
 """
 from __future__ import annotations
 
@@ -38,11 +39,15 @@ class ObsHeader:
     leap_s: int                      # LEAP SECONDS
     comments: list[str]              # COMMENT lines
     date_text: str                   # PGM / RUN BY / DATE
+    systems: str = "G"               # "G", "R" or "GR": which SYS / # / OBS TYPES lines (and the file type)
+    glonass_obs_types: tuple = ()    # SYS / # / OBS TYPES of R (as many as obs_types, same columns)
+    glonass_slots: tuple = ()        # ((slot, k), ...) for GLONASS SLOT / FRQ #
+    marker_type: str = ""            # MARKER TYPE; "" -> SPACEBORNE for a spaceborne receiver, else GEODETIC
 
 
 def write_obs(path: Path, header: ObsHeader, *, epochs: GpsTime, sats: list[str], values: np.ndarray,
               lli: np.ndarray, ssi: np.ndarray) -> Path:
-    """Write one RINEX 3.04 GPS observation file.
+    """Write one RINEX 3.04 observation file (GPS, GLONASS or mixed: header.systems).
 
     Args:
         header: the header fields (ObsHeader).
@@ -61,11 +66,12 @@ def write_obs(path: Path, header: ObsHeader, *, epochs: GpsTime, sats: list[str]
 def _header_text(hd: ObsHeader, epochs: GpsTime, idx: np.ndarray, n_obs: int) -> str:
     """The header of the file, RINEX 3.04 Table A2; ``idx`` are the epochs written (first/last obs)."""
     marker, obs_types, receiver = hd.marker, hd.obs_types, hd.receiver
-    head = [_h(f"{'3.04':>9s}{'':11s}{'OBSERVATION DATA':<20s}{'G: GPS':<20s}", "RINEX VERSION / TYPE"),
+    system = {"G": "G: GPS", "R": "R: GLONASS"}.get(hd.systems, "M: MIXED")
+    head = [_h(f"{'3.04':>9s}{'':11s}{'OBSERVATION DATA':<20s}{system:<20s}", "RINEX VERSION / TYPE"),
             _h(f"{'gnssatt-sim':<20s}{'gnssatt':<20s}{hd.date_text:<20s}", "PGM / RUN BY / DATE")]
     head += [_h(c, "COMMENT") for c in hd.comments]
-    head += [_h(marker, "MARKER NAME"), _h("SPACEBORNE" if "space" in receiver.lower() else "GEODETIC",
-                                           "MARKER TYPE"),
+    marker_type = hd.marker_type or ("SPACEBORNE" if "space" in receiver.lower() else "GEODETIC")
+    head += [_h(marker, "MARKER NAME"), _h(marker_type, "MARKER TYPE"),
              _h(f"{'simulator':<20s}{'gnssatt':<40s}", "OBSERVER / AGENCY"),
              _h(f"{'SIM-' + marker:<20.20s}{receiver:<20.20s}{'sim':<20s}", "REC # / TYPE / VERS"),
              _h(f"{'SIM-' + marker:<20.20s}{hd.antenna_type:<20.20s}", "ANT # / TYPE"),
@@ -73,24 +79,39 @@ def _header_text(hd: ObsHeader, epochs: GpsTime, idx: np.ndarray, n_obs: int) ->
              _h("".join(f"{v:14.4f}" for v in (0.0, 0.0, 0.0)), "ANTENNA: DELTA H/E/N"),
              _h("".join(f"{v:14.4f}" for v in hd.antenna_delta_xyz_m), "ANTENNA: DELTA X/Y/Z"),
              _h("".join(f"{v:14.4f}" for v in hd.boresight), "ANTENNA: B.SIGHT XYZ")]
-    types = "".join(f" {t}" for t in obs_types)
-    head.append(_h(f"G{n_obs:5d}{types[:52]}", "SYS / # / OBS TYPES"))
-    rest = obs_types[13:]
-    while rest:
-        head.append(_h(f"{'':6s}" + "".join(f" {t}" for t in rest[:13]), "SYS / # / OBS TYPES"))
-        rest = rest[13:]
+    by_sys = [(x, obs_types if x == "G" else list(hd.glonass_obs_types)) for x in "GR" if x in hd.systems]
+    for sys_char, sys_types in by_sys:
+        types = "".join(f" {t}" for t in sys_types)
+        head.append(_h(f"{sys_char}{n_obs:5d}{types[:52]}", "SYS / # / OBS TYPES"))
+        rest = sys_types[13:]
+        while rest:
+            head.append(_h(f"{'':6s}" + "".join(f" {t}" for t in rest[:13]), "SYS / # / OBS TYPES"))
+            rest = rest[13:]
     head.append(_h("DBHZ", "SIGNAL STRENGTH UNIT"))
     head.append(_h(f"{hd.interval_s:10.3f}", "INTERVAL"))
     if len(idx):
         for k, label in ((idx[0], "TIME OF FIRST OBS"), (idx[-1], "TIME OF LAST OBS")):
             y, mo, d, hh, mi, ss = _t(epochs[int(k)])
             head.append(_h(f"{y:6d}{mo:6d}{d:6d}{hh:6d}{mi:6d}{ss:13.7f}     GPS", label))
-    for t in obs_types:
-        if t.startswith("L"):
-            head.append(_h(f"G {t} {0.0:8.5f}", "SYS / PHASE SHIFT"))
+    for sys_char, sys_types in by_sys:
+        for t in sys_types:
+            if t.startswith("L"):
+                head.append(_h(f"{sys_char} {t} {0.0:8.5f}", "SYS / PHASE SHIFT"))
+    if "R" in hd.systems:
+        head += _glonass_header_lines(hd.glonass_slots)
     head.append(_h(f"{hd.leap_s:6d}", "LEAP SECONDS"))
     head.append(_h("", "END OF HEADER"))
     return "".join(head)
+
+
+def _glonass_header_lines(slots) -> list[str]:
+    """GLONASS SLOT / FRQ # (8 per line) and GLONASS COD/PHS/BIS (zero: no code-phase bias correction)."""
+    out = []
+    for i in range(0, max(len(slots), 1), 8):
+        body = "".join(f"R{s:02d} {k:2d} " for s, k in slots[i:i + 8])
+        out.append(_h((f"{len(slots):3d} " if i == 0 else "    ") + body, "GLONASS SLOT / FRQ #"))
+    out.append(_h("".join(f" {c} {0.0:8.3f}" for c in ("C1C", "C1P", "C2C", "C2P")), "GLONASS COD/PHS/BIS"))
+    return out
 
 
 def _epoch_records(epochs: GpsTime, sats: list[str], values: np.ndarray, lli: np.ndarray, ssi: np.ndarray,

@@ -63,7 +63,8 @@ class SimParams:
     slew_back_hold_s: float = 60.0
     # --- constellation ---
     constellation_seed: int = 2018
-    nav_file: str = ""                           # a real RINEX nav file: its GPS records drive the orbits
+    nav_file: str = ""                           # a real RINEX nav file: its GPS (GLONASS) records drive the orbits
+    systems: str = "G"                           # G | R | G+R: GPS, GLONASS FDMA (24 slots or the nav file), both
     # --- receivers / tracking ---
     signals: list = field(default_factory=lambda: ["L1", "L2"])
     clock_mode: str = "steered"                  # steered | free
@@ -71,6 +72,10 @@ class SimParams:
     clock_free_drift_ppm: float = 1.0
     clock_jump_in_phase: bool = True
     code_bias_sigma_m: float = 0.5
+    receiver_types: dict = field(default_factory=dict)   # antenna -> receiver model (REC # / TYPE); unset: SIM RX
+    # receiver model -> GLONASS inter-channel biases {"code_m_per_k", "phase_m_per_k", "code_m_by_k",
+    # "phase_m_by_k": {"k": m}}, optionally per signal {"L1": {...}, "L2": {...}}; models not named have none
+    glonass_icb_by_model: dict = field(default_factory=dict)
     n_channels: int = 12
     acquisition_delays: bool = True
     acq_delay_l1_s: list = field(default_factory=lambda: [2.0, 20.0])

@@ -25,7 +25,8 @@ from gnssatt.sim._constants import (C_M_S, F_L1_HZ, F_L2_HZ, GAMMA_L2, LEAP_TABL
                                    leap_expiry_warning)
 from gnssatt.sim._frames import EarthRotation
 from gnssatt.sim._rinex_obs_out import ObsHeader, write_obs
-from gnssatt.sim.constellation import gps_from_nav, synthetic_gps
+from gnssatt.sim.constellation import RECORD_INTERVAL_S as GPS_RECORD_S, gps_from_nav, synthetic_gps
+from gnssatt.sim.glonass_constellation import MixedConstellation, glonass_from_nav, synthetic_glonass
 from gnssatt.sim.scenarios import SimParams, list_scenarios, make_params
 from gnssatt.sim.trajectory import (AttitudeProfile, Platform, orbit_from_sp3_file, orbit_kepler_j2, orbit_tle,
                                    read_quaternion_csv, terrestrial_from_csv, terrestrial_static)
@@ -95,6 +96,11 @@ def _validate(p: SimParams):
     for a in p.antenna_offsets_mm:
         if a not in p.antennas:
             raise ValueError(f"antenna_offsets_mm names unknown antenna {a!r}")
+    if p.systems not in ("G", "R", "G+R"):
+        raise ValueError(f"systems must be G, R or G+R, not {p.systems!r}")
+    for a in p.receiver_types:
+        if a not in p.antennas:
+            raise ValueError(f"receiver_types names unknown antenna {a!r}")
 
 
 # ----------------------------------------------------------------------------------------------- one set
@@ -160,7 +166,7 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
     progress(0.02, "orbit and attitude")
     attitude = _attitude_profile(p, _rng(seed, pidx, 0, "att"), int(t0.s))
     platform = Platform(p.kind, _centre_of_mass(p, earth, span, t0, pidx), attitude, earth)
-    const = gps_from_nav(p.nav_file, t0) if p.nav_file else synthetic_gps(t0, seed=p.constellation_seed)
+    const = _constellation(p, t0, span, earth.leap_s)
     ctx = _SetContext(p, scenario, seed, pidx, set_dir, t0, dt_tag, t0 + dt_tag, earth, platform, const,
                       float(t0 - const.t_ref), [s for s in ("L1", "L2") if s in p.signals])
     n_sv = ctx.n_sv
@@ -218,6 +224,44 @@ def _simulate_one(p: SimParams, scenario: str, set_dir: Path, seed: int, pidx: i
     return {"dir": str(set_dir), "files": files, "summary": summary}
 
 
+def _constellation(p: SimParams, t0: GpsTime, span: tuple, leap_s: int):
+    """GPS (Constellation, as before GLONASS existed), or a MixedConstellation when `systems` includes R."""
+    gps = None
+    if "G" in p.systems:
+        gps = gps_from_nav(p.nav_file, t0) if p.nav_file else synthetic_gps(t0, seed=p.constellation_seed)
+        if p.systems == "G":
+            return gps
+    t_ref = gps.t_ref if gps is not None else GpsTime(int(t0.s) - int(t0.s) % GPS_RECORD_S)
+    off = float(t0 - t_ref)
+    span_ref = (off + span[0] - 1.0, off + span[1] + 2.0)
+    glo = (glonass_from_nav(p.nav_file, t0, t_ref, span_ref, leap_s) if p.nav_file
+           else synthetic_glonass(t_ref, span_ref, leap_s, seed=p.constellation_seed))
+    return MixedConstellation(gps, glo)
+
+
+def _lambda_m(const, f: str):
+    """Wavelength of signal f: one number (GPS-only sets), else (n_sv,) per satellite (GLONASS channels)."""
+    return const.wavelength_m(f) if isinstance(const, MixedConstellation) else _LAMBDA_M[f]
+
+
+def _receiver_type(p: SimParams, aid: str) -> str:
+    return p.receiver_types.get(aid) or ("SPACEBORNE SIM OEM4" if p.kind == "spacecraft" else "SIM RX")
+
+
+def _glonass_icb_m(p: SimParams, aid: str, const, f: str) -> tuple[np.ndarray, np.ndarray]:
+    """(code, phase) inter-channel biases (n_sv,) in m of antenna aid's receiver model on signal f: a per-k slope
+    plus an optional per-channel table (non-linear part); zero for GPS and for models without an entry."""
+    spec = p.glonass_icb_by_model.get(_receiver_type(p, aid), {})
+    spec = spec.get(f, spec)
+    k = const.channels
+    out = []
+    for kind in ("code", "phase"):
+        table = spec.get(f"{kind}_m_by_k", {})
+        extra = np.array([float(table.get(str(int(x)), table.get(int(x), 0.0))) for x in k])
+        out.append(np.where(const.is_glonass, float(spec.get(f"{kind}_m_per_k", 0.0)) * k + extra, 0.0))
+    return out[0], out[1]
+
+
 def _centre_of_mass(p: SimParams, earth: EarthRotation, span: tuple, t0: GpsTime, pidx: int):
     """The platform's centre-of-mass trajectory: Kepler + J2, TLE (SGP4) or SP3 orbit, or a terrestrial track."""
     if p.kind != "spacecraft":
@@ -261,7 +305,7 @@ def _antenna_truth(p: SimParams, seed: int, pidx: int, ai: int, aid: str) -> dic
         clock = ob.ClockModel("free", bias_s=clk_rng.uniform(-4e-4, 4e-4),
                               drift_s_s=p.clock_free_drift_ppm * 1e-6 * clk_rng.choice([-1, 1])
                               * clk_rng.uniform(0.6, 1.0), jump_in_phase=p.clock_jump_in_phase)
-    return dict(index=ai, pos=pos, offset=offset, arp=pos + offset, bore=bore, R_a_b=R_a_b,
+    return dict(id=aid, index=ai, pos=pos, offset=offset, arp=pos + offset, bore=bore, R_a_b=R_a_b,
                 pcv=pcv, pco=pco, clock=clock,
                 code_bias={f: float(brng.normal(0, p.code_bias_sigma_m)) for f in ("L1", "L2")},
                 phase_bias={f: float(brng.uniform(0, 1)) for f in ("L1", "L2")})
@@ -316,7 +360,10 @@ def _atmosphere(ctx: _SetContext, r_com_nom: np.ndarray, e_master: np.ndarray) -
         iono_l1 = np.zeros_like(iono_l1)
     trop = (ob.troposphere_m(sin_el_local, 2.4) if (p.kind == "terrestrial" and p.troposphere)
             else np.zeros_like(iono_l1))
-    iono = {"L1": iono_l1, "L2": iono_l1 * GAMMA_L2}
+    if isinstance(ctx.const, MixedConstellation):     # 1/f^2 of each satellite's carrier
+        iono = {f: iono_l1 * ctx.const.iono_factor(f)[None, :] for f in ("L1", "L2")}
+    else:
+        iono = {"L1": iono_l1, "L2": iono_l1 * GAMMA_L2}
     atm_rate = {f: np.gradient(trop - iono[f], p.interval_s, axis=0) if ctx.n_ep > 1 else np.zeros_like(trop)
                 for f in ctx.sigs}
     return _Atmosphere(iono, trop, atm_rate, sin_el_local)
@@ -345,7 +392,8 @@ def _tracking(ctx: _SetContext, ai: int, aid: str, G: dict, atm: _Atmosphere) ->
             outage |= (dt_tag - dt_tag[0] >= s0) & (dt_tag - dt_tag[0] < s0 + dur)
     gap = ob.poisson_windows(ctx.rng(ai, "gap"), n_ep, p.interval_s, p.gap_rate_per_hour,
                              tuple(p.gap_length_s))
-    cfg = ob.TrackingConfig(n_channels=p.n_channels, acq_l1_dbhz=p.acq_l1_dbhz, trk_l1_dbhz=p.trk_l1_dbhz,
+    n_sys = len(p.systems.split("+"))             # n_channels per system (separate GPS and GLONASS channels)
+    cfg = ob.TrackingConfig(n_channels=p.n_channels * n_sys, acq_l1_dbhz=p.acq_l1_dbhz, trk_l1_dbhz=p.trk_l1_dbhz,
                             acq_l2_dbhz=p.acq_l2_dbhz, trk_l2_dbhz=p.trk_l2_dbhz,
                             acq_delay_l1_s=tuple(p.acq_delay_l1_s) if p.acquisition_delays else (0.0, 0.0),
                             acq_delay_l2_s=tuple(p.acq_delay_l2_s) if p.acquisition_delays else (0.0, 0.0))
@@ -371,7 +419,7 @@ def _antenna_observables(ctx: _SetContext, ai: int, aid: str, A: dict, G: dict, 
     p = ctx.p
     cn0, outage, gap, tracked = _tracking(ctx, ai, aid, G, atm)
     streams = _AntennaStreams(ctx.rng(ai, "slip"), ctx.rng(ai, "mp"), ctx.rng(ai, "noise"), ctx.rng(ai, "amb"))
-    values, llis, ssis, types = [], [], [], []
+    values, llis, ssis, types, types_r = [], [], [], [], []
     comp = {}
     ant_sum = {}
     for f in ctx.sigs:
@@ -384,8 +432,10 @@ def _antenna_observables(ctx: _SetContext, ai: int, aid: str, A: dict, G: dict, 
             llis.append(np.where(trk, l_, 0))
             ssis.append(np.where(trk, s_, 0))
             types.append(typ + sig)
+            types_r.append(typ + ("1C" if f == "L1" else "2P"))
         for j in range(len(arcs.sat)):
-            arc_rows.append((aid, ctx.const.sats[arcs.sat[j]], f, arcs.start[j], arcs.end[j], arcs.cause[j],
+            sat = ctx.const.sats[arcs.sat[j]]
+            arc_rows.append((aid, sat, _truth_signal(sat, f), arcs.start[j], arcs.end[j], arcs.cause[j],
                              int(arcs.lli[j]), int(n_arc[j])))
         ant_sum[f] = {"n_obs": int(trk[~gap].sum()), "n_arcs": len(arcs.sat),
                       "n_slips": int(sum(c == "slip" for c in arcs.cause))}
@@ -393,14 +443,28 @@ def _antenna_observables(ctx: _SetContext, ai: int, aid: str, A: dict, G: dict, 
     vals[gap] = np.nan
     header = ObsHeader(marker=aid, obs_types=types, interval_s=p.interval_s, approx_xyz_m=approx_xyz_m,
                        antenna_delta_xyz_m=A["pos"], boresight=A["bore"],
-                       receiver="SPACEBORNE SIM OEM4" if p.kind == "spacecraft" else "SIM RX",
+                       receiver=_receiver_type(p, aid),
+                       marker_type="SPACEBORNE" if p.kind == "spacecraft" else "GEODETIC",
                        antenna_type="SIM PATCH", leap_s=ctx.earth.leap_s,
                        comments=[f"gnssatt simulator scenario {ctx.scenario} seed {ctx.seed} pass {ctx.pidx}",
                                  "time tags in receiver time; see truth/receivers.csv"],
-                       date_text=_date_text(ctx.t0))
+                       date_text=_date_text(ctx.t0), **_glonass_header(ctx.const, p.systems, types_r))
     write_obs(ctx.set_dir / "obs" / f"{aid}.rnx", header, epochs=ctx.tags, sats=ctx.const.sats, values=vals,
               lli=np.stack(llis, axis=-1), ssi=np.stack(ssis, axis=-1))
     return ant_sum, gap, outage, comp, tracked
+
+
+def _truth_signal(sat: str, f: str) -> str:
+    """Signal name in truth/arcs.csv: "L1"/"L2" for GPS (as always), "R:G1"/"R:G2" for GLONASS."""
+    return f if sat[0] == "G" else {"L1": "R:G1", "L2": "R:G2"}[f]
+
+
+def _glonass_header(const, systems: str, types_r: list) -> dict:
+    """ObsHeader fields of the GLONASS part: systems, R observation types, GLONASS SLOT / FRQ # pairs."""
+    if not isinstance(const, MixedConstellation):
+        return {}
+    slots = tuple((int(s[1:]), int(k)) for s, k, r in zip(const.sats, const.channels, const.is_glonass) if r)
+    return {"systems": systems.replace("+", ""), "glonass_obs_types": tuple(types_r), "glonass_slots": slots}
 
 
 def _signal_observables(ctx: _SetContext, f: str, A: dict, G: dict, atm: _Atmosphere, cn0_f: np.ndarray,
@@ -416,7 +480,7 @@ def _signal_observables(ctx: _SetContext, f: str, A: dict, G: dict, atm: _Atmosp
     p, const, n_ep, n_sv = ctx.p, ctx.const, ctx.n_ep, ctx.n_sv
     trop, iono = atm.trop, atm.iono
     mrng, nrng, srng, arng = streams.mp, streams.noise, streams.slip, streams.amb
-    lam_f = _LAMBDA_M[f]
+    lam_f = _lambda_m(const, f)
     pco_term = -G["e_ant"] @ A["pco"][f]                            # -e . pco  (m)
     pcv_term = ob.bilinear_pcv_mm(A["pcv"][f], G["az"], G["el"]) / 1e3
     clock_code = G["dtr"]
@@ -425,6 +489,10 @@ def _signal_observables(ctx: _SetContext, f: str, A: dict, G: dict, atm: _Atmosp
     code = common + C_M_S * (clock_code[:, None] + _TGD_FACTOR[f] * const.tgd[None, :]) + iono[f] \
         + A["code_bias"][f]
     phase_m = common + pcv_term + C_M_S * clock_phase[:, None] - iono[f] + lam_f * G["windup"]
+    if isinstance(const, MixedConstellation) and p.glonass_icb_by_model:
+        icb_code, icb_phase = _glonass_icb_m(p, A["id"], const, f)
+        code = code + icb_code[None, :]
+        phase_m = phase_m + icb_phase[None, :]
     # stochastic parts
     if p.multipath:
         sc = ob.horizon_growth(G["el"], *p.mp_code_m)
@@ -462,6 +530,7 @@ def _arcs_and_integers(p: SimParams, trk: np.ndarray, cn0_f: np.ndarray, gap: np
     """Cycle slips (rate growing as C/N0 falls), continuous arcs, one integer ambiguity per arc (near the code at
     the arc's start; a slip jumps it by 1-39 cycles) and the LLI flags: returns (arcs, n_arc, lli)."""
     n_ep, n_sv = trk.shape
+    lam_sat = np.broadcast_to(lam_f, (n_sv,))
     if p.slip_rate_per_hour > 0:
         pr = np.clip(p.slip_rate_per_hour / 3600.0 * p.interval_s
                      * 10.0 ** ((40.0 - np.nan_to_num(cn0_f, nan=40.0)) / 10.0), 0, 0.5)
@@ -478,7 +547,7 @@ def _arcs_and_integers(p: SimParams, trk: np.ndarray, cn0_f: np.ndarray, gap: np
             jump = int(arng.integers(1, 40)) * int(arng.choice([-1, 1]))
             n_arc[j] = last_n[s] + jump
         else:
-            n_arc[j] = int(np.round((code_obs[a, s] - phase_wo_n[a, s]) / lam_f)) + int(arng.integers(-5, 6))
+            n_arc[j] = int(np.round((code_obs[a, s] - phase_wo_n[a, s]) / lam_sat[s])) + int(arng.integers(-5, 6))
         last_n[s] = n_arc[j]
     arcs.n_cyc = n_arc.tolist()
     lli = np.zeros((n_ep, n_sv), np.int64)
@@ -495,12 +564,15 @@ def _arcs_and_integers(p: SimParams, trk: np.ndarray, cn0_f: np.ndarray, gap: np
 def _write_platform_files(ctx: _SetContext, antennas: dict, obs_files: dict) -> None:
     """nav/brdc.rnx (the constellation as broadcast), platform.json and platform.sp3 (CoM truth orbit)."""
     p, set_dir, t0, tags, dt_tag = ctx.p, ctx.set_dir, ctx.t0, ctx.tags, ctx.dt_tag
-    recs = ctx.const.records(tags[0], tags[-1])
-    write_rinex_nav_gps(set_dir / "nav" / "brdc.rnx", recs, date_text=_date_text(t0),
+    const = ctx.const
+    mixed = isinstance(const, MixedConstellation)
+    gps = const.gps if mixed else const
+    recs = gps.records(tags[0], tags[-1]) if gps is not None else []
+    glo_recs = const.glonass.records(tags[0], tags[-1], ctx.earth.leap_s) if mixed else []
+    write_rinex_nav_gps(set_dir / "nav" / "brdc.rnx", recs, date_text=_date_text(t0), glonass_records=glo_recs,
                         iono_alpha=[1.1176e-08, 7.4506e-09, -5.9605e-08, -5.9605e-08],
                         iono_beta=[9.0112e+04, 1.6384e+04, -1.9661e+05, -6.5536e+04], leap_seconds=ctx.earth.leap_s,
-                        comments=[f"GPS constellation from {Path(p.nav_file).name}, gnssatt simulator" if p.nav_file
-                                  else "synthetic GPS constellation, gnssatt simulator"])
+                        comments=[_nav_comment(p)])
     ant_ids = list(p.antennas)
     pj = {"name": p.platform_name, "kind": p.kind,
           "antennas": {a: {"position_m": [float(v) for v in antennas[a]["pos"]],
@@ -516,6 +588,12 @@ def _write_platform_files(ctx: _SetContext, antennas: dict, obs_files: dict) -> 
                   comments=[f"{p.platform_name} centre of mass, gnssatt simulator",
                             f"scenario {ctx.scenario} seed {ctx.seed} pass {ctx.pidx}", "ECEF, EOP zero",
                             "truth orbit"])
+
+
+def _nav_comment(p: SimParams) -> str:
+    what = {"G": "GPS", "R": "GLONASS", "G+R": "GPS+GLONASS"}[p.systems]
+    return (f"{what} constellation from {Path(p.nav_file).name}, gnssatt simulator" if p.nav_file
+            else f"synthetic {what} constellation, gnssatt simulator")
 
 
 def _date_text(t0: GpsTime) -> str:
@@ -695,8 +773,45 @@ def _model_json(p, scenario, seed, pidx, t0, antennas, const, sat_phase_bias, si
                       " at the nominal epoch; receiver x/y = antenna frame axes; unwrapped over all epochs",
             "ionosphere": "common to all antennas, once per epoch at the CoM; L2 = gamma x L1",
             "clock_jump_in_phase": p.clock_jump_in_phase},
-        "parameters": dataclasses.asdict(p),
+        "parameters": _parameters_json(p),
+        **_glonass_model(p, antennas, const, sigs),
     }
+
+
+_GLONASS_PARAMS = {"systems": "G", "receiver_types": {}, "glonass_icb_by_model": {}}
+
+
+def _parameters_json(p: SimParams) -> dict:
+    """The parameters as model.json lists them; the GLONASS ones only when set (GPS-only files unchanged)."""
+    d = dataclasses.asdict(p)
+    for k, default in _GLONASS_PARAMS.items():
+        if d[k] == default:
+            del d[k]
+    return d
+
+
+def _glonass_model(p: SimParams, antennas: dict, const, sigs: list) -> dict:
+    """model.json "glonass": channel k per satellite, receiver model and inter-channel biases per antenna (m)."""
+    if not isinstance(const, MixedConstellation):
+        return {}
+    glo = [j for j in range(const.n) if const.is_glonass[j]]
+    icb = {}
+    for aid in antennas:
+        per = {}
+        for f in sigs:
+            c, ph = _glonass_icb_m(p, aid, const, f)
+            per[f] = {"code_m": {const.sats[j]: float(c[j]) for j in glo},
+                      "phase_m": {const.sats[j]: float(ph[j]) for j in glo}}
+        icb[aid] = {"receiver": _receiver_type(p, aid), "icb": per}
+    return {"glonass": {"channels": {const.sats[j]: int(const.channels[j]) for j in glo},
+                        "wavelength_m": {f: {const.sats[j]: float(const.wavelength_m(f)[j]) for j in glo}
+                                         for f in sigs},
+                        "time_offset_to_gps_s": 0.0, "receivers": icb,
+                        "model": {"signals": "L1 = G1, L2 = G2 of channel k: f = 1602 + 0.5625 k, 1246 + 0.4375 k MHz",
+                                  "ionosphere": "I_f = (f_GPS_L1 / f_k)^2 I_L1 per satellite", "tgd": "none",
+                                  "icb": "receiver model's code / phase bias (m) added to its GLONASS observations",
+                                  "orbit": "GLONASS ICD 5.1 A.3.1.2 (J2, constant lunisolar acceleration), RK4 5 s; "
+                                           "records every 30 min are truth states"}}}
 
 
 __all__ = ["simulate_scenario", "list_scenarios", "SimResult"]

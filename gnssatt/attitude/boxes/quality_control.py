@@ -49,6 +49,8 @@ def load_epoch(run: FilterRun, ep: EpochData) -> None:
             res_i1, res_f1 = np.empty((6, cap), np.int64), np.empty((4, cap))
             res_i1[:, :run.res_n], res_f1[:, :run.res_n] = run.res_i[:, :run.res_n], run.res_f[:, :run.res_n]
             run.set_residual_buffers(res_i1, res_f1)
+        if run.fdma_sig.any():                                  # FDMA phase clock jumps so far (edit_epoch)
+            blk.sdp -= run.phase_jump_m[None, :, None, :]
         run.sd_qc = tuple(SdBlockQc(sdc_m=blk.sdc, sdp_m=blk.sdp, low_cn0=blk.low_cn0, reason0=blk.reason,
                                     clock_factor=blk.cfac, baseline_ok=blk.pa))
         run.sd_flags = tuple(SdBlockFlags(avail_c=blk.avail_c, avail_p=blk.avail_p, lli=blk.lli))
@@ -113,6 +115,9 @@ def edit_epoch(run: FilterRun, ep: EpochData) -> None:
         # a common phase jump without a code jump: a receiver clock jump not applied to phase -> integer shift
         common = _nz(ep.mp - ep.mc)
         for j, f in zip(*np.nonzero(np.abs(common) > 1000.0)):
+            if run.fdma_sig[f]:
+                _fdma_phase_clock_jump(run, ep, j, f, common[j, f])
+                continue
             n_cyc_sat = np.round(common[j, f] / lam[:, f])         # per satellite (FDMA: per-channel wavelength)
             n_cyc = np.round(common[j, f] / run.lam_sig[f])
             sel = np.flatnonzero((st.amb_key[:, 0] == j) & (st.amb_key[:, 2] == f))
@@ -121,6 +126,34 @@ def edit_epoch(run: FilterRun, ep: EpochData) -> None:
             ep.td_p[j, :, f] -= n_cyc_sat * lam[:, f]
             run.events.add(k, "phase_clock_jump", j, sig=run.pobs.signals[f],
                            detail=f"{n_cyc:.0f} cycles common to all satellites")
+
+
+#: a receiver clock jump is a whole number of milliseconds (receiver clock steering)
+CLOCK_JUMP_UNIT_M = C_M_S * 1e-3
+#: a common phase-minus-code jump this close to whole milliseconds is taken as exactly that (the median's code
+#: noise is decimetres); farther off, the measured jump is used as it is
+CLOCK_JUMP_TOL_M = 5.0
+
+
+def _fdma_phase_clock_jump(run: FilterRun, ep: EpochData, j: int, f: int, common_m: float) -> None:
+    """A receiver clock jump applied to the code but not the phase on an FDMA signal (GLONASS): repaired in the
+    observations, not the integers. The jump is d metres of phase, the same for every satellite, which is f_k d / c
+    cycles per satellite: for d = 1 ms half-integer on odd GLONASS channels k (f_k = 1602 + 0.5625 k MHz, GLONASS
+    ICD 5.1 sec. 3.3.1.4), so no integer shift of the ambiguities absorbs it (the GPS repair above). d (whole ms
+    when within CLOCK_JUMP_TOL_M of it, else as measured) is subtracted from this and every later SD phase of the
+    baseline and signal (run.phase_jump_m) and the ambiguities are kept; an error e in d moves a double difference
+    by e (1/lambda_s - 1/lambda_r), 0.0019 cycles per m and channel of difference on G1."""
+    n_ms = np.round(common_m / CLOCK_JUMP_UNIT_M)
+    whole = abs(common_m - n_ms * CLOCK_JUMP_UNIT_M) <= CLOCK_JUMP_TOL_M
+    d = n_ms * CLOCK_JUMP_UNIT_M if whole else float(common_m)
+    run.phase_jump_m[j, f] += d
+    run.blk.sdp[ep.i + 1:, j, :, f] -= d
+    ep.sdp_c[j, :, f] -= d
+    ep.td_p[j, :, f] -= d
+    ep.mp[j, f] -= d
+    what = f"{n_ms:.0f} ms" if whole else f"{common_m:.3f} m (not whole ms, as measured)"
+    run.events.add(ep.k, "phase_clock_jump", j, sig=run.pobs.signals[f],
+                   detail=f"{what} common to all satellites (FDMA: repaired in the phase, integers kept)")
 
 
 def noise_weights(run: FilterRun, ep: EpochData):
