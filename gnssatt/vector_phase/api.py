@@ -132,7 +132,8 @@ def _summary(sol, euler, mount, opt: VectorPhaseOptions) -> dict:
                                  for i, a in enumerate(("yaw", "pitch", "roll"))},
             "rms_residual_cyc": float(np.sqrt(np.mean(res ** 2))) if res.size else None,
             "frames": "ECEF with zero EOP; Euler angles 3-2-1 of body relative to NED (terrestrial) or the "
-                      "orbital frame (spacecraft)", "warnings": list(sol.warnings)}
+                      "orbital frame (spacecraft)", "warnings": list(sol.warnings),
+            "start_hypotheses": sol.start_hypotheses}
 
 
 def _initial(inputs, opt: VectorPhaseOptions, position, R_ref0):

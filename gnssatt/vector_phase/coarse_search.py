@@ -44,7 +44,7 @@ class CoarseResult:
 
 def _score(obs, mount, position, R0, n_epochs: int, min_sats: int, step_deg: float) -> float:
     sol = ekf_solve(_head(obs, n_epochs), mount, ReceiverState(position, 0.0, R0),
-                    EkfOptions(sigma_attitude0_deg=step_deg, min_sats=min_sats))
+                    EkfOptions(sigma_attitude0_deg=step_deg, min_sats=min_sats, rate_hypotheses_step_deg_s=0.0))
     r = sol.residuals_cyc[1:] / obs.sigma_phase_cyc
     if not np.isfinite(r).any():
         return np.inf
