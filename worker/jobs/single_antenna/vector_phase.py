@@ -53,6 +53,12 @@ class Settings(BaseModel):
                                            "starts from zero rate). With exactly 7 satellites a value near the "
                                            "platform's true rate avoids an early wrong solution "
                                            "(docs/vector_phase.md).")
+    start_rate_hypotheses_deg_s: float = Field(
+        1.0, ge=0.0, le=50.0, description="EKF: spacing of the bank of start hypotheses, initial angular rates "
+                                          "{-s, 0, s}^3 deg/s per body axis (27 filters until the phases single "
+                                          "one out; summary.json start_hypotheses). With exactly 7 satellites one "
+                                          "filter from zero rate can settle on a wrong attitude in the first "
+                                          "seconds (docs/vector_phase.md); 0: one filter from zero rate.")
     rate_random_walk_deg_s_per_sqrt_s: float = Field(
         0.18, gt=0.0, le=100.0, description="EKF: angular-rate random walk (white angular acceleration), "
                                             "deg/s per sqrt(s).")
@@ -82,6 +88,7 @@ class Settings(BaseModel):
         sigma_cyc = self.sigma_phase_mm / L1_WAVELENGTH_MM
         ekf = EkfOptions(sigma_attitude0_deg=self.sigma_initial_attitude_deg, min_sats=self.min_sats,
                          sigma_rate0_deg_s=self.sigma_initial_rate_deg_s,
+                         rate_hypotheses_step_deg_s=self.start_rate_hypotheses_deg_s,
                          q_rate_rad2_s3=math.radians(self.rate_random_walk_deg_s_per_sqrt_s) ** 2,
                          q_position_m2_s=self.position_random_walk_m_per_sqrt_s ** 2,
                          sigma_position0_m=1e-3 if self.initial_position_ecef_m is not None else 10.0)
