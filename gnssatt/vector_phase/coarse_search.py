@@ -55,7 +55,8 @@ def _head(obs, n_epochs: int):
     from dataclasses import replace
     s = slice(0, n_epochs)
     return replace(obs, t_gps_s=obs.t_gps_s[s], phase_cyc=obs.phase_cyc[s], r_sat_ecef_m=obs.r_sat_ecef_m[s],
-                   x_sat_ecef=obs.x_sat_ecef[s], y_sat_ecef=obs.y_sat_ecef[s], arc_start=obs.arc_start[s])
+                   x_sat_ecef=obs.x_sat_ecef[s], y_sat_ecef=obs.y_sat_ecef[s], arc_start=obs.arc_start[s],
+                   velocity_ecef_m_s=None if obs.velocity_ecef_m_s is None else obs.velocity_ecef_m_s[s])
 
 
 def coarse_search(obs, mount, position_ecef_m, R_ref_from_ecef, *, step_deg: float = 30.0,

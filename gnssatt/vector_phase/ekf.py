@@ -1,7 +1,8 @@
 """Extended Kalman filter of position, clock and three-axis attitude from one antenna's carrier phase (seed 003
 eq. 35, 44-45), from a known initial state.
 
-State (error state, 10 + n_sv): position_ecef_m (3, random walk q_position), clock_cyc (1, white: re-estimated
+State (error state, 10 + n_sv): position_ecef_m (3, moved by the set's velocity where one is given, plus a random
+walk q_position), clock_cyc (1, white: re-estimated
 every epoch, the datum b(t0) = 0 of eq. 41), body rotation eps (3) and body angular rate omega (3, rad/s, a
 random walk q_rate: white angular acceleration), and one float phase offset N_s per satellite column (constant
 over an arc; reset at a new arc). The nominal attitude is propagated by omega dt and corrected by eps after each
@@ -70,10 +71,13 @@ class _Filter:
         self.opt = opt
         self.cost = 0.0            # -2 log likelihood of the phases so far (innovations), for rate_bank
 
-    def predict(self, dt: float, new_arcs: np.ndarray) -> None:
-        """x(t + dt): attitude turned by omega dt; clock re-initialised; new arcs' offsets unknown."""
+    def predict(self, dt: float, new_arcs: np.ndarray, velocity_ecef_m_s=None) -> None:
+        """x(t + dt): attitude turned by omega dt; position moved by the known velocity (if any); clock
+        re-initialised; new arcs' offsets unknown."""
         o = self.opt
         self.R = perturb_body(self.R, self.w * dt)
+        if velocity_ecef_m_s is not None and np.all(np.isfinite(velocity_ecef_m_s)):
+            self.r = self.r + np.asarray(velocity_ecef_m_s, float) * dt
         F = np.eye(self.n)
         F[4:7, 4:7] = rotation_matrix(self.w * dt).T              # body-frame error turns with the body
         F[4:7, 7:10] = np.eye(3) * dt
@@ -143,7 +147,9 @@ class _Run:
         obs, f, opt, tracked = self.obs, self.f, self.opt, self.tracked
         new = tracked[k] & (obs.arc_start[k] | ~self.established) if k else tracked[k]
         if k:
-            f.predict(obs.t_gps_s[k] - obs.t_gps_s[k - 1], np.flatnonzero(new))
+            vel = obs.velocity_ecef_m_s
+            v = None if vel is None else 0.5 * (vel[k - 1] + vel[k])          # trapezoid over the interval
+            f.predict(obs.t_gps_s[k] - obs.t_gps_s[k - 1], np.flatnonzero(new), v)
         cols, newc = np.flatnonzero(tracked[k]), np.flatnonzero(new)
         if len(newc):
             self.refs.start(obs, k, newc, f.state(), self.mount)
