@@ -134,7 +134,7 @@ class _Run:
 
     def __init__(self, obs, mount: AntennaMount, initial: ReceiverState, opt: EkfOptions, sol: Solution,
                  rate0_rad_s=None):
-        self.obs, self.mount, self.opt, self.sol, self.row0 = obs, mount, opt, sol, 0
+        self.obs, self.mount, self.opt, self.sol, self.row0, self.label = obs, mount, opt, sol, 0, ""
         self.f = _Filter(obs.phase_cyc.shape[1], initial, opt)
         if rate0_rad_s is not None:
             self.f.w = np.asarray(rate0_rad_s, float).copy()

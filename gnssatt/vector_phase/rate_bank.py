@@ -6,14 +6,18 @@ seconds has a second minimum reached from the same known start by a different ea
 off): over 30 / 60 / 120 s its cost is 3.6 / 13.7 / 38.7 above the truth's minimum (docs/vector_phase.md
 "Consistency with seven satellites"). One filter from zero rate falls into it in one run of four to six and
 cannot leave it; the data resolve it only later, so the choice is deferred to them.
-Members: initial rates {-step, 0, +step}^3 (body axes), each with sigma step / 2 and prior weight
-w_i ~ N(omega_i; 0, sigma0^2 - (step / 2)^2) (the sum approximates the single filter's N(0, sigma0^2) prior).
+Members: the single filter itself (zero rate, sigma0 = sigma_rate0_deg_s: the null hypothesis) and 27 filters
+from the initial rates {-step, 0, +step}^3 (body axes), each with sigma step / 2 and prior weight
+w_i ~ N(omega_i; 0, sigma0^2 - (step / 2)^2) (the 27 approximate the single filter's N(0, sigma0^2) prior).
 Cost of a member: -2 ln w_i + sum_k (nu_k^T S_k^-1 nu_k + ln det S_k), its innovations nu_k and their covariance
-S_k (the iterated update's, ekf._Filter.update): -2 ln of its posterior weight up to a common constant.
-Each epoch a member is dropped when its cost exceeds the best's by more than hypothesis_prune_cost (default
-13.8 = 2 ln 1000: 1000 to 1 against it), or when it is within hypothesis_merge_sigma (Mahalanobis, attitude and
-rate, the better member's covariance) of a better member (the same minimum). After hypothesis_max_epochs the best
-is kept and the start reported ambiguous (Solution.warnings, Solution.start_hypotheses).
+S_k (the iterated update's, ekf._Filter.update): -2 ln of its posterior weight up to a common constant. The
+single filter counts as the zero-rate member (w = 1, unnormalised like the others: normalised, the members'
+share of the prior mass, 1/8 here, held the single filter in a wrong minimum in 2 of 16 runs at 3 mm). Each epoch a member is dropped when its cost exceeds the best's by more
+than hypothesis_prune_cost (default 13.8 = 2 ln 1000: 1000 to 1 against it), or when it is within
+hypothesis_merge_sigma (Mahalanobis, attitude and rate) of a better member or of the single filter (the same
+minimum). The single filter is only ever dropped by cost, so where it is right (8 or more satellites: one minimum)
+the result is the single filter's. After hypothesis_max_epochs the best is kept and the start reported ambiguous
+(Solution.warnings, Solution.start_hypotheses).
 """
 from __future__ import annotations
 
@@ -36,10 +40,11 @@ def initial_rates_deg_s(step_deg_s: float) -> np.ndarray:
     return grid * step_deg_s
 
 
-def _prior_cost(rate_deg_s: np.ndarray, opt: EkfOptions) -> float:
-    """-2 ln w_i of a member centred on rate_deg_s (Gaussian-sum weight of the broad rate prior)."""
+def _prior_costs(rates_deg_s: np.ndarray, opt: EkfOptions) -> np.ndarray:
+    """-2 ln w_i of the members centred on rates_deg_s (n, 3): Gaussian-sum weights of the rate prior (w = 1 at
+    zero rate)."""
     var = max(opt.sigma_rate0_deg_s ** 2 - (opt.rate_hypotheses_step_deg_s / 2) ** 2, 1e-6)
-    return float(rate_deg_s @ rate_deg_s / var)
+    return np.sum(rates_deg_s ** 2, axis=1) / var
 
 
 def _distance2(a: _Run, b: _Run) -> float:
@@ -48,15 +53,15 @@ def _distance2(a: _Run, b: _Run) -> float:
     return float(d @ np.linalg.solve(b.f.P[4:10, 4:10], d))
 
 
-def _prune(members: list, costs: dict, opt: EkfOptions) -> list:
-    """Members kept: within the prune cost of the best, and not inside a better member's merge distance."""
-    members = sorted(members, key=lambda m: costs[id(m)])
-    best = costs[id(members[0])]
-    kept = []
-    for m in members:
-        if costs[id(m)] - best > opt.hypothesis_prune_cost:
-            continue
-        if any(_distance2(m, k) < opt.hypothesis_merge_sigma ** 2 for k in kept):
+def _prune(members: list, costs: dict, opt: EkfOptions, single) -> list:
+    """Members kept: within the prune cost of the best, and not inside a better member's or the single filter's
+    merge distance (the single filter is dropped only by cost)."""
+    best = min(costs[id(m)] for m in members)
+    alive = [m for m in members if costs[id(m)] - best <= opt.hypothesis_prune_cost]
+    anchor = [single] if single in alive else []
+    kept = list(anchor)
+    for m in sorted(alive, key=lambda m: costs[id(m)]):
+        if m is single or any(_distance2(m, k) < opt.hypothesis_merge_sigma ** 2 for k in kept):
             continue
         kept.append(m)
     return kept
@@ -86,26 +91,33 @@ def bank_solve(obs, mount: AntennaMount, initial: ReceiverState, opt: EkfOptions
     window = min(n_ep, max(opt.hypothesis_max_epochs, 1))
     member_opt = replace(opt, sigma_rate0_deg_s=opt.rate_hypotheses_step_deg_s / 2, rate_hypotheses_step_deg_s=0.0)
     rates = initial_rates_deg_s(opt.rate_hypotheses_step_deg_s)
-    members = [_Run(obs, mount, initial, member_opt, Solution.empty(obs.t_gps_s[:window], obs.sats, "ekf"),
-                    np.radians(r)) for r in rates]
-    prior = {id(m): _prior_cost(r, opt) for m, r in zip(members, rates)}
+
+    def rows():
+        return Solution.empty(obs.t_gps_s[:window], obs.sats, "ekf")
+    single = _Run(obs, mount, initial, replace(opt, rate_hypotheses_step_deg_s=0.0), rows())
+    members = [single] + [_Run(obs, mount, initial, member_opt, rows(), np.radians(r)) for r in rates]
+    single.label = "single filter (zero rate)"
+    for m, r in zip(members[1:], rates):
+        m.label = f"initial rate ({r[0]:g}, {r[1]:g}, {r[2]:g}) deg/s"
+    prior = dict(zip(map(id, members), np.r_[0.0, _prior_costs(rates, opt)]))
+    n_total = len(members)
     full = Solution.empty(obs.t_gps_s, obs.sats, "ekf")
     record = None
     for k in range(n_ep):
         if record is None and k == window:
-            record = _decide(members, prior, len(rates), k - 1, full)
+            record = _decide(members, prior, n_total, k - 1, full)
             members = members[:1]
         for m in members:
             m.step(k)
         if record is None:
             costs = {id(m): m.f.cost + prior[id(m)] for m in members}
-            members = _prune(members, costs, opt)
+            members = _prune(members, costs, opt, single)
             if len(members) == 1:
-                record = _decide(members, prior, len(rates), k, full)
+                record = _decide(members, prior, n_total, k, full)
         if progress is not None and k % 50 == 0:
             progress(k / n_ep)
     if record is None:
-        record = _decide(members, prior, len(rates), n_ep - 1, full)
+        record = _decide(members, prior, n_total, n_ep - 1, full)
     full.start_hypotheses = record
     if record["ambiguous"]:
         full.warnings.append(
@@ -120,6 +132,7 @@ def _decide(members: list, prior: dict, n_members: int, epoch: int, full: Soluti
     costs = {id(m): m.f.cost + prior[id(m)] for m in members}
     members.sort(key=lambda m: costs[id(m)])
     record = _record(members, costs, n_members, epoch)
+    record["kept"] = members[0].label
     best = members[0]
     _copy_rows(best.sol, full, epoch + 1)
     best.sol, best.row0 = full, 0
