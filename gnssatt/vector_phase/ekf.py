@@ -37,10 +37,11 @@ class EkfOptions:
     (white); q_rate_rad2_s3: angular-rate random walk (white angular acceleration); iterations: Gauss-Newton
     steps per update; min_sats: fewer satellites with an established offset skip the update.
     Start hypotheses (gnssatt.vector_phase.rate_bank): rate_hypotheses_step_deg_s > 0 runs a bank of filters from
-    the initial rates {-step, 0, +step}^3 (body axes, each with sigma step / 2) instead of one from zero rate;
+    the initial rates {-step, 0, +step}^3 (body axes, each with sigma step / 2) beside the one from zero rate;
     hypothesis_prune_cost: a member whose accumulated cost (-2 log likelihood) exceeds the best's by more is
     dropped; hypothesis_merge_sigma: a member within this Mahalanobis distance (attitude and rate) of a better one
-    is dropped; hypothesis_max_epochs: the bank's longest run before the best member is kept (ambiguous)."""
+    or of the single filter is dropped; hypothesis_max_epochs: the bank's longest run before the best member is kept
+    (ambiguous)."""
 
     sigma_position0_m: float = 1e-3
     sigma_attitude0_deg: float = 0.01

@@ -35,7 +35,8 @@ __all__ = ["bank_solve", "initial_rates_deg_s"]
 
 
 def initial_rates_deg_s(step_deg_s: float) -> np.ndarray:
-    """(27, 3) initial body rates of the members, deg/s: {-step, 0, +step}^3, zero first."""
+    """(27, 3) initial body rates of the members besides the single filter, deg/s: {-step, 0, +step}^3, zero
+    first."""
     grid = np.array(sorted(product((0.0, -1.0, 1.0), repeat=3), key=lambda v: np.count_nonzero(v)))
     return grid * step_deg_s
 

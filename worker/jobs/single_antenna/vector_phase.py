@@ -57,8 +57,9 @@ class Settings(BaseModel):
                                            "(docs/vector_phase.md).")
     start_rate_hypotheses_deg_s: float = Field(
         1.0, ge=0.0, le=50.0, description="EKF: spacing of the bank of start hypotheses, initial angular rates "
-                                          "{-s, 0, s}^3 deg/s per body axis (27 filters until the phases single "
-                                          "one out; summary.json start_hypotheses). With exactly 7 satellites one "
+                                          "{-s, 0, s}^3 deg/s per body axis beside the single filter (28 "
+                                          "filters until the phases single one out; summary.json "
+                                          "start_hypotheses). With exactly 7 satellites one "
                                           "filter from zero rate can settle on a wrong attitude in the first "
                                           "seconds (docs/vector_phase.md); 0: one filter from zero rate.")
     rate_random_walk_deg_s_per_sqrt_s: float = Field(
