@@ -9,7 +9,8 @@ re-checked on simulated data that include a real antenna's wind-up.
 1. Grid: the non-symmetric patch (asymmetry 0.5, harmonic 2) on the ground platform of
    gnssatt.vector_phase.scenario (yaw 0.5 deg/s, pitch +-10 deg, roll +-8 deg), phase noise 0.5-3 mm, 7-10
    satellites (all the scenario has above 10 deg), EKF from the known initial state (with its default bank of
-   start hypotheses over the initial rate, gnssatt.vector_phase.rate_bank, unless --rate-step); per cell the RMS error of yaw, pitch, roll over the epochs
+   start hypotheses over the initial rate, gnssatt.vector_phase.rate_bank, unless --rate-step); per cell the RMS
+   error of yaw, pitch, roll over the epochs
    after the first 30 s and all seeds, and the RMS of error / sigma. Figure: docs/figures/vector_phase_accuracy.png.
 2. The batch (epoch-wise) estimator at 0.1 mm, 8 satellites, the same statistics.
 3. The attitude job (gnssatt.attitude.api.solve, preset seed000) on the earth-pointing pass (clean: no PCV, PCO,

@@ -1,23 +1,23 @@
 """Multi-hypothesis start of the vector-phase EKF (issue 20): a bank of filters from several initial angular
-rates, kept as a Gaussian sum (Alspach and Sorenson 1972, eq. 17-19) until one member is clearly the best.
+rates, kept as a Gaussian sum (Alspach and Sorenson 1972) until one member is clearly the best.
 
 Why: with exactly seven satellites and 1-3 mm of phase noise the batch (smoother) cost of the first tens of
 seconds has a second minimum reached from the same known start by a different early rate (a pitch about 50 deg
 off): over 30 / 60 / 120 s its cost is 3.6 / 13.7 / 38.7 above the truth's minimum (docs/vector_phase.md
-"Consistency with seven satellites"). One filter from zero rate falls into it in one run of four to six and
+"A second minimum, not a linearisation failure"). One filter from zero rate falls into it in one run of four to six and
 cannot leave it; the data resolve it only later, so the choice is deferred to them.
-Members: the single filter itself (zero rate, sigma0 = sigma_rate0_deg_s: the null hypothesis) and 27 filters
-from the initial rates {-step, 0, +step}^3 (body axes), each with sigma step / 2 and prior weight
-w_i ~ N(omega_i; 0, sigma0^2 - (step / 2)^2) (the 27 approximate the single filter's N(0, sigma0^2) prior).
-Cost of a member: -2 ln w_i + sum_k (nu_k^T S_k^-1 nu_k + ln det S_k), its innovations nu_k and their covariance
-S_k (the iterated update's, ekf._Filter.update): -2 ln of its posterior weight up to a common constant. The
-single filter counts as the zero-rate member (w = 1, unnormalised like the others: normalised, the members'
-share of the prior mass, 1/8 here, held the single filter in a wrong minimum in 2 of 16 runs at 3 mm). Each epoch a member is dropped when its cost exceeds the best's by more
-than hypothesis_prune_cost (default 13.8 = 2 ln 1000: 1000 to 1 against it), or when it is within
-hypothesis_merge_sigma (Mahalanobis, attitude and rate) of a better member or of the single filter (the same
-minimum). The single filter is only ever dropped by cost, so where it is right (8 or more satellites: one minimum)
-the result is the single filter's. After hypothesis_max_epochs the best is kept and the start reported ambiguous
-(Solution.warnings, Solution.start_hypotheses).
+Members: the single filter itself (zero rate, sigma0 = sigma_rate0_deg_s: the null hypothesis) and 27 filters from
+the initial rates {-step, 0, +step}^3 (body axes), each with sigma step / 2 and prior weight w_i ~ N(omega_i; 0,
+sigma0^2 - (step / 2)^2) (the 27 approximate the single filter's N(0, sigma0^2) prior). Cost of a member: -2 ln w_i
++ sum_k (nu_k^T S_k^-1 nu_k + ln det S_k), its innovations nu_k and their covariance S_k (the iterated update's,
+ekf._Filter.update): -2 ln of its posterior weight up to a common constant. The single filter counts as the zero-
+rate member (w = 1, unnormalised like the others: normalised, the members' share of the prior mass, 1/8 here, held
+the single filter in a wrong minimum in one run of 16 at 3 mm, seed 12). Each epoch a member is dropped when its
+cost exceeds the best's by more than hypothesis_prune_cost (default 13.8 = 2 ln 1000: 1000 to 1 against it), or
+when it is within hypothesis_merge_sigma (Mahalanobis, attitude and rate) of a better member or of the single
+filter (the same minimum). The single filter is only ever dropped by cost, so where it is right (8 or more
+satellites: one minimum) the result is the single filter's. After hypothesis_max_epochs the best is kept and the
+start reported ambiguous (Solution.warnings, Solution.start_hypotheses).
 """
 from __future__ import annotations
 
