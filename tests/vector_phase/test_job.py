@@ -142,9 +142,11 @@ def test_position_walk_default_by_the_set_with_its_reason(tmp_path):
     """Unset position random walk: 0 for a static set, the velocity's sigma for a set with velocity.csv (the
     position then follows that velocity); both cases and their reasons in the config schema."""
     from gnssatt.gnss.frames import R_ned_from_ecef
-    from worker.jobs.single_antenna.vector_phase import Settings
+    from worker.jobs.registry import job_types
 
-    schema = Settings.model_json_schema()["x-platform-defaults"]["position_random_walk_m_per_sqrt_s"]
+    config_schema = job_types()["single-antenna-attitude"].config_model.model_json_schema()   # as /v1/job-types
+    listed = [d["x-platform-defaults"] for d in config_schema["$defs"].values() if "x-platform-defaults" in d]
+    schema = listed[0]["position_random_walk_m_per_sqrt_s"]
     assert {"static (no velocity in the set)", "velocity given (velocity.csv)"} == set(schema)
     assert all(case["reason"] for case in schema.values())
     v_ecef = R_ned_from_ecef(np.radians(45.3), np.radians(-75.8)).T @ np.array([2.0, 1.0, 0.0])   # horizontal
