@@ -3,10 +3,14 @@ noise and number of satellites, the consistency of the estimators' sigma, and th
 re-checked on simulated data that include a real antenna's wind-up.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_vector_phase.py [--seeds 4] [--epochs 180] [--write]
+        [--rate-step 0 --sats 8 9 10]   (one filter from zero rate instead of the start-hypothesis bank: its own
+                                         section, the comparison for "no degradation")
 
 1. Grid: the non-symmetric patch (asymmetry 0.5, harmonic 2) on the ground platform of
    gnssatt.vector_phase.scenario (yaw 0.5 deg/s, pitch +-10 deg, roll +-8 deg), phase noise 0.5-3 mm, 7-10
-   satellites (all the scenario has above 10 deg), EKF from the known initial state; per cell the RMS error of yaw, pitch, roll over the epochs
+   satellites (all the scenario has above 10 deg), EKF from the known initial state (with its default bank of
+   start hypotheses over the initial rate, gnssatt.vector_phase.rate_bank, unless --rate-step); per cell the RMS
+   error of yaw, pitch, roll over the epochs
    after the first 30 s and all seeds, and the RMS of error / sigma. Figure: docs/figures/vector_phase_accuracy.png.
 2. The batch (epoch-wise) estimator at 0.1 mm, 8 satellites, the same statistics.
 3. The attitude job (gnssatt.attitude.api.solve, preset seed000) on the earth-pointing pass (clean: no PCV, PCO,
@@ -61,16 +65,20 @@ def _stats(solver, antenna, n_sats, noise_mm, seeds, epochs, skip):
     return np.sqrt(np.nanmean(e ** 2, axis=0)), np.sqrt(np.nanmean(r ** 2, axis=0))
 
 
-def grid(seeds: int, epochs: int):
+def grid(seeds: int, epochs: int, rate_step=None, sats=N_SATS):
     from gnssatt.vector_phase.antenna import AsymmetricPatch
-    from gnssatt.vector_phase.ekf import ekf_solve
+    from gnssatt.vector_phase.ekf import EkfOptions, ekf_solve
 
     ant = AsymmetricPatch(asymmetry=ANTENNA["asymmetry"], harmonic=ANTENNA["harmonic"])
+    opt = EkfOptions() if rate_step is None else EkfOptions(rate_hypotheses_step_deg_s=rate_step)
+
+    def solver(obs, mount, initial):
+        return ekf_solve(obs, mount, initial, opt)
     out = {}
-    for n in N_SATS:
+    for n in sats:
         for mm in NOISE_MM:
             t0 = time.perf_counter()
-            out[(n, mm)] = (*_stats(ekf_solve, ant, n, mm, seeds, epochs, SKIP_S), time.perf_counter() - t0)
+            out[(n, mm)] = (*_stats(solver, ant, n, mm, seeds, epochs, SKIP_S), time.perf_counter() - t0)
             print(f"  n_sats {n:2d} noise {mm:.1f} mm: rms err {np.round(out[(n, mm)][0], 2)} deg, "
                   f"err/sigma {np.round(out[(n, mm)][1], 2)}", flush=True)
     return out
@@ -141,10 +149,17 @@ def attitude_recheck(minutes: float):
     return out, float(diff.max()) if diff.size else float("nan")
 
 
-def report(out, batch, seeds, epochs, seconds) -> str:
-    lines = [f"Machine: {machine_line()}. Command: `OPENBLAS_NUM_THREADS=1 .venv/bin/python "
-             f"bench/bench_vector_phase.py --seeds {seeds} --epochs {epochs} --write` ({seconds:.0f} s, one run).",
-             "", f"EKF from the known initial state, non-symmetric patch (asymmetry {ANTENNA['asymmetry']}, harmonic "
+def _load(loads) -> str:
+    return "load average (1 min) " + " -> ".join(f"{v:.1f}" for v in loads) + " (start -> end)"
+
+
+def report(out, batch, seeds, epochs, seconds, loads, extra_args: str = "") -> str:
+    start = ("start-hypothesis bank (default)" if "--rate-step" not in extra_args
+             else "one filter from zero rate (no start hypotheses)")
+    lines = [f"Machine: {machine_line()}, {_load(loads)}. Command: `OPENBLAS_NUM_THREADS=1 .venv/bin/python "
+             f"bench/bench_vector_phase.py --seeds {seeds} --epochs {epochs}{extra_args} --write` "
+             f"({seconds:.0f} s, one run).",
+             "", f"EKF ({start}) from the known initial state, non-symmetric patch (asymmetry {ANTENNA['asymmetry']}, harmonic "
              f"{ANTENNA['harmonic']}), {seeds} seeds x {epochs} s at 1 Hz, statistics after the first {SKIP_S} s. "
              "Figure: docs/figures/vector_phase_accuracy.png.", "",
              "| satellites | phase noise (mm) | RMS error yaw / pitch / roll (deg) | RMS error/sigma yaw / pitch / roll |",
@@ -152,6 +167,8 @@ def report(out, batch, seeds, epochs, seconds) -> str:
     for (n, mm), (rms, ratio, _) in out.items():
         lines.append(f"| {n} | {mm:.1f} | {' / '.join(f'{v:.2f}' for v in rms)} | "
                      f"{' / '.join(f'{v:.2f}' for v in ratio)} |")
+    if batch is None:
+        return "\n".join(lines)
     lines += ["", f"Batch (epoch-wise) estimator, 8 satellites, 0.1 mm, 16 seeds x 20 s: RMS error "
               f"{' / '.join(f'{v:.2f}' for v in batch[0])} deg, error/sigma {' / '.join(f'{v:.2f}' for v in batch[1])}."]
     return "\n".join(lines)
@@ -181,8 +198,12 @@ def main() -> None:
     ap.add_argument("--minutes", type=float, default=20.0, help="length of the attitude re-check pass")
     ap.add_argument("--recheck-only", action="store_true", help="only the attitude job re-check (its own section)")
     ap.add_argument("--write", action="store_true")
+    ap.add_argument("--rate-step", type=float, default=None,
+                    help="EKF start-hypothesis spacing (deg/s); 0: one filter from zero rate (own section)")
+    ap.add_argument("--sats", type=int, nargs="+", default=list(N_SATS))
     a = ap.parse_args()
     t0 = time.perf_counter()
+    loads = [os.getloadavg()[0]]
     if a.recheck_only:
         text = recheck_report(attitude_recheck(a.minutes), a.minutes, time.perf_counter() - t0)
         print(text)
@@ -190,9 +211,16 @@ def main() -> None:
             replace_section(ROOT / "docs" / "BENCHMARKS.md", "Vector-phase: attitude job with a real antenna's "
                             "wind-up", text)
         return
-    out = grid(a.seeds, a.epochs)
+    out = grid(a.seeds, a.epochs, a.rate_step, tuple(a.sats))
+    if a.rate_step is not None:
+        extra = f" --rate-step {a.rate_step:g} --sats {' '.join(map(str, a.sats))}"
+        text = report(out, None, a.seeds, a.epochs, time.perf_counter() - t0, loads + [os.getloadavg()[0]], extra)
+        print(text)
+        if a.write:
+            replace_section(ROOT / "docs" / "BENCHMARKS.md", "Vector-phase: one filter from zero rate", text)
+        return
     batch = batch_check(a.seeds)
-    text = report(out, batch, a.seeds, a.epochs, time.perf_counter() - t0)
+    text = report(out, batch, a.seeds, a.epochs, time.perf_counter() - t0, loads + [os.getloadavg()[0]])
     print(text)
     if a.write:
         plot(out, ROOT / "docs" / "figures" / "vector_phase_accuracy.png")

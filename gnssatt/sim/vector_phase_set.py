@@ -1,7 +1,8 @@
 """A simulated single-antenna observation set for the vector-phase method (seed 003), as files: RINEX 3.04 GPS
 observations (C1C, L1C) of one antenna, a RINEX navigation file of the same synthetic constellation,
 platform.json with the antenna's `antenna_pattern` (docs/formats/antenna_vector_length.md), the reference
-attitude (ECEF->body, CONVENTIONS.md) and truth.json.
+attitude (ECEF->body, CONVENTIONS.md), truth.json, and velocity.csv when the antenna moves (its position at the
+first epoch is truth.json's).
 
 The phases are those of gnssatt.vector_phase.scenario (eq. 35 with delta_s of eq. 32) written in the RINEX sign
 convention: L = Psi - f dt_sv (the satellite clock at emission), C1C = rho - c dt_sv + noise; the time tags are
@@ -28,6 +29,8 @@ __all__ = ["write_vector_phase_set", "F_L1_HZ"]
 F_L1_HZ = 1575.42e6
 #: code noise of the simulated C1C, m (a typical L1 C/A code)
 SIGMA_CODE_M = 0.3
+#: sigma_m_s written in velocity.csv for a moving antenna (ScenarioSpec.velocity_ecef_m_s), m/s
+SIGMA_VELOCITY_M_S = 0.02
 
 
 def _reference_csv(t0: GpsTime, dt_s: np.ndarray, R_body_from_ecef: np.ndarray) -> str:
@@ -35,6 +38,15 @@ def _reference_csv(t0: GpsTime, dt_s: np.ndarray, R_body_from_ecef: np.ndarray) 
     iso = (t0 + dt_s).iso(3)
     rows = [f"{t},ECEF,{w:.12f},{x:.12f},{y:.12f},{z:.12f}" for t, (w, x, y, z) in zip(iso, q)]
     return "time_gps,frame,qw,qx,qy,qz\n" + "\n".join(rows) + "\n"
+
+
+def _velocity_csv(path: Path, t0: GpsTime, dt_s: np.ndarray, v_ecef_m_s: np.ndarray) -> Path:
+    """velocity.csv (docs/formats/inertial_csv.md) of a moving antenna, sigma_m_s SIGMA_VELOCITY_M_S (the values
+    are exact: the column says what a receiver's Doppler velocity would be good to)."""
+    rows = [f"{t},{vx:.6f},{vy:.6f},{vz:.6f},{SIGMA_VELOCITY_M_S}" for t, (vx, vy, vz) in zip((t0 + dt_s).iso(3),
+                                                                                            v_ecef_m_s)]
+    path.write_text("time_gps,vx_ecef_m_s,vy_ecef_m_s,vz_ecef_m_s,sigma_m_s\n" + "\n".join(rows) + "\n")
+    return path
 
 
 def write_vector_phase_set(out_dir, spec: ScenarioSpec, *, antenna_id: str = "ANT", include_pattern: bool = True,
@@ -48,7 +60,8 @@ def write_vector_phase_set(out_dir, spec: ScenarioSpec, *, antenna_id: str = "AN
     obs, truth, mount = simulate(spec)
     const, t0, idx = truth.constellation, truth.t0, truth.sat_index
     dt = obs.t_gps_s - obs.t_gps_s[0]
-    rho = np.linalg.norm(obs.r_sat_ecef_m - truth.position_ecef_m, axis=-1)
+    r_rx = truth.position_ecef_m + dt[:, None] * np.asarray(spec.velocity_ecef_m_s, float)   # (n_ep, 3)
+    rho = np.linalg.norm(obs.r_sat_ecef_m - r_rx[:, None], axis=-1)
     _, dt_sv = const.position_clock((t0 - const.t_ref) + dt[:, None] - rho / C_M_S, idx)
     rng = np.random.default_rng(spec.seed + 1000)
     tropo_m = slant_delay_m(truth.position_ecef_m, obs.r_sat_ecef_m) if troposphere else np.zeros_like(rho)
@@ -79,4 +92,6 @@ def write_vector_phase_set(out_dir, spec: ScenarioSpec, *, antenna_id: str = "AN
     (out / "truth.json").write_text(json.dumps({"position_ecef_m": truth.position_ecef_m.tolist(),
                                                 "antenna": mount.antenna.name, "sats": obs.sats}))
     paths += [out / "platform.json", out / "reference_attitude.csv"]
+    if obs.velocity_ecef_m_s is not None:
+        paths.append(_velocity_csv(out / "velocity.csv", t0, dt, obs.velocity_ecef_m_s))
     return paths, replace(obs), truth, mount

@@ -25,7 +25,9 @@ class VectorPhaseOptions:
     """estimator: "ekf" or "batch"; initial_attitude: "reference" (the set's reference attitude at the first
     epoch), "given" (q_body_from_ecef) or "coarse-search"; initial_position_ecef_m: None = the code solution's
     median (metres off: position then absorbs part of the phase changes); ekf / batch: the estimators' options;
-    coarse_step_deg / coarse_tilt_max_deg / coarse_epochs: the coarse search grid."""
+    coarse_step_deg / coarse_tilt_max_deg / coarse_epochs: the coarse search grid;
+    position_random_walk_m_per_sqrt_s: solve_set sets ekf.q_position_m2_s from it, None = by the set
+    (gnssatt.vector_phase.defaults: 0 static, the velocity's sigma when the set gives a velocity)."""
 
     estimator: str = "ekf"
     initial_attitude: str = "reference"
@@ -40,6 +42,7 @@ class VectorPhaseOptions:
     coarse_step_deg: float = 30.0
     coarse_tilt_max_deg: float = 0.0
     coarse_epochs: int = 60
+    position_random_walk_m_per_sqrt_s: float | None = None
 
 
 @dataclass
@@ -132,7 +135,8 @@ def _summary(sol, euler, mount, opt: VectorPhaseOptions) -> dict:
                                  for i, a in enumerate(("yaw", "pitch", "roll"))},
             "rms_residual_cyc": float(np.sqrt(np.mean(res ** 2))) if res.size else None,
             "frames": "ECEF with zero EOP; Euler angles 3-2-1 of body relative to NED (terrestrial) or the "
-                      "orbital frame (spacecraft)", "warnings": list(sol.warnings)}
+                      "orbital frame (spacecraft)", "warnings": list(sol.warnings),
+            "start_hypotheses": sol.start_hypotheses}
 
 
 def _initial(inputs, opt: VectorPhaseOptions, position, R_ref0):
@@ -163,6 +167,19 @@ def _initial(inputs, opt: VectorPhaseOptions, position, R_ref0):
     return R, "reference", None
 
 
+def _position_walk(opt: VectorPhaseOptions, inputs) -> tuple[VectorPhaseOptions, list]:
+    """(options with ekf.q_position_m2_s set, [the default applied] or [])."""
+    from dataclasses import replace
+
+    from gnssatt.vector_phase.defaults import position_walk_default
+    applied = []
+    walk = opt.position_random_walk_m_per_sqrt_s
+    if walk is None:
+        walk, record = position_walk_default(inputs.obs.velocity_ecef_m_s is not None, inputs.sigma_velocity_m_s)
+        applied.append(record)
+    return replace(opt, ekf=replace(opt.ekf, q_position_m2_s=float(walk) ** 2)), applied
+
+
 def solve_set(files, options: VectorPhaseOptions | None = None, progress=None) -> VectorPhaseResult:
     """VectorPhaseResult of an observation set given as (name, kind, path) triples (gnssatt.attitude.api.
     identify_files gives them for plain paths). Raises gnssatt.vector_phase.inputs.InputProblem."""
@@ -179,6 +196,7 @@ def solve_set(files, options: VectorPhaseOptions | None = None, progress=None) -
                            f"satellites with L1 phase above the {opt.elevation_mask_deg:g} deg mask at any epoch; "
                            f"the vector-phase method needs >= {need} (position, clock and three angles, seed 003 "
                            "eq. 45)", file=inputs.obs_file)
+    opt, applied = _position_walk(opt, inputs)
     position = (np.asarray(opt.initial_position_ecef_m, float) if opt.initial_position_ecef_m is not None
                 else inputs.a_priori_position_ecef_m)
     kind = inputs.platform.kind
@@ -187,7 +205,8 @@ def solve_set(files, options: VectorPhaseOptions | None = None, progress=None) -
     R0, source, coarse = _initial(inputs, opt, position, R_ref0)
     ref = reference_R_body_from_ecef(inputs.reference, inputs.obs.t_gps_s) if inputs.reference is not None else None
     extra = {"initial_attitude": source, "antenna_id": inputs.antenna_id, "observation_file": inputs.obs_file,
-             "initial_position_source": "config" if opt.initial_position_ecef_m is not None else "code solution"}
+             "initial_position_source": "config" if opt.initial_position_ecef_m is not None else "code solution",
+             "defaults_applied": applied}
     if coarse is not None:
         extra["coarse_search"] = {"euler_deg": list(coarse.euler_deg), "score": coarse.score,
                                   "second_score": coarse.second_score, "candidates": coarse.n_candidates,

@@ -44,7 +44,7 @@ class CoarseResult:
 
 def _score(obs, mount, position, R0, n_epochs: int, min_sats: int, step_deg: float) -> float:
     sol = ekf_solve(_head(obs, n_epochs), mount, ReceiverState(position, 0.0, R0),
-                    EkfOptions(sigma_attitude0_deg=step_deg, min_sats=min_sats))
+                    EkfOptions(sigma_attitude0_deg=step_deg, min_sats=min_sats, rate_hypotheses_step_deg_s=0.0))
     r = sol.residuals_cyc[1:] / obs.sigma_phase_cyc
     if not np.isfinite(r).any():
         return np.inf
@@ -55,7 +55,8 @@ def _head(obs, n_epochs: int):
     from dataclasses import replace
     s = slice(0, n_epochs)
     return replace(obs, t_gps_s=obs.t_gps_s[s], phase_cyc=obs.phase_cyc[s], r_sat_ecef_m=obs.r_sat_ecef_m[s],
-                   x_sat_ecef=obs.x_sat_ecef[s], y_sat_ecef=obs.y_sat_ecef[s], arc_start=obs.arc_start[s])
+                   x_sat_ecef=obs.x_sat_ecef[s], y_sat_ecef=obs.y_sat_ecef[s], arc_start=obs.arc_start[s],
+                   velocity_ecef_m_s=None if obs.velocity_ecef_m_s is None else obs.velocity_ecef_m_s[s])
 
 
 def coarse_search(obs, mount, position_ecef_m, R_ref_from_ecef, *, step_deg: float = 30.0,

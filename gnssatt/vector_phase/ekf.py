@@ -1,7 +1,8 @@
 """Extended Kalman filter of position, clock and three-axis attitude from one antenna's carrier phase (seed 003
 eq. 35, 44-45), from a known initial state.
 
-State (error state, 10 + n_sv): position_ecef_m (3, random walk q_position), clock_cyc (1, white: re-estimated
+State (error state, 10 + n_sv): position_ecef_m (3, moved by the set's velocity where one is given, plus a random
+walk q_position), clock_cyc (1, white: re-estimated
 every epoch, the datum b(t0) = 0 of eq. 41), body rotation eps (3) and body angular rate omega (3, rad/s, a
 random walk q_rate: white angular acceleration), and one float phase offset N_s per satellite column (constant
 over an arc; reset at a new arc). The nominal attitude is propagated by omega dt and corrected by eps after each
@@ -34,7 +35,13 @@ class EkfOptions:
     q_position_m2_s: position random walk (default 0.0: a static antenna; a random walk on a static antenna makes
     the filter optimistic, docs/vector_phase.md "Consistency"); sigma_clock_cyc: per-epoch clock sigma
     (white); q_rate_rad2_s3: angular-rate random walk (white angular acceleration); iterations: Gauss-Newton
-    steps per update; min_sats: fewer satellites with an established offset skip the update."""
+    steps per update; min_sats: fewer satellites with an established offset skip the update.
+    Start hypotheses (gnssatt.vector_phase.rate_bank): rate_hypotheses_step_deg_s > 0 runs a bank of filters from
+    the initial rates {-step, 0, +step}^3 (body axes, each with sigma step / 2) beside the one from zero rate;
+    hypothesis_prune_cost: a member whose accumulated cost (-2 log likelihood) exceeds the best's by more is
+    dropped; hypothesis_merge_sigma: a member within this Mahalanobis distance (attitude and rate) of a better one
+    or of the single filter is dropped; hypothesis_max_epochs: the bank's longest run before the best member is kept
+    (ambiguous)."""
 
     sigma_position0_m: float = 1e-3
     sigma_attitude0_deg: float = 0.01
@@ -45,6 +52,10 @@ class EkfOptions:
     iterations: int = 4
     min_sats: int = 7
     sigma_offset0_cyc: float = 1e4
+    rate_hypotheses_step_deg_s: float = 1.0
+    hypothesis_prune_cost: float = 13.8
+    hypothesis_merge_sigma: float = 1.0
+    hypothesis_max_epochs: int = 300
 
 
 class _Filter:
@@ -59,11 +70,15 @@ class _Filter:
                   [np.radians(opt.sigma_rate0_deg_s) ** 2] * 3, [opt.sigma_offset0_cyc ** 2] * n_sv]
         self.P = np.diag(d)
         self.opt = opt
+        self.cost = 0.0            # -2 log likelihood of the phases so far (innovations), for rate_bank
 
-    def predict(self, dt: float, new_arcs: np.ndarray) -> None:
-        """x(t + dt): attitude turned by omega dt; clock re-initialised; new arcs' offsets unknown."""
+    def predict(self, dt: float, new_arcs: np.ndarray, velocity_ecef_m_s=None) -> None:
+        """x(t + dt): attitude turned by omega dt; position moved by the known velocity (if any); clock
+        re-initialised; new arcs' offsets unknown."""
         o = self.opt
         self.R = perturb_body(self.R, self.w * dt)
+        if velocity_ecef_m_s is not None and np.all(np.isfinite(velocity_ecef_m_s)):
+            self.r = self.r + np.asarray(velocity_ecef_m_s, float) * dt
         F = np.eye(self.n)
         F[4:7, 4:7] = rotation_matrix(self.w * dt).T              # body-frame error turns with the body
         F[4:7, 7:10] = np.eye(3) * dt
@@ -101,49 +116,73 @@ class _Filter:
                              prior[3] - self.w, prior[4] - self.N]
             S = H @ P0 @ H.T + Rm
             K = np.linalg.solve(S, H @ P0).T
-            dx = dx_prior + K @ (z - model - self.N[cols] - H @ dx_prior)
+            nu = z - model - self.N[cols] - H @ dx_prior              # innovation, linearised at the iterate
+            dx = dx_prior + K @ nu
             self.r, self.b = self.r + dx[:3], self.b + dx[3]
             self.R = perturb_body(self.R, dx[4:7])
             self.w, self.N = self.w + dx[7:10], self.N + dx[N_CORE:]
         model, delta = model_cycles(self.state(), geom, mount, refs.delta_rad[cols])
         refs.delta_rad[cols] = delta
+        self.cost += float(nu @ np.linalg.solve(S, nu)) + float(np.linalg.slogdet(S)[1])
         IKH = np.eye(self.n) - K @ H
         self.P = IKH @ P0 @ IKH.T + K @ Rm @ K.T                       # Joseph form
         return jacobian(self.state(), geom, mount), z - model - self.N[cols]
 
 
+class _Run:
+    """One filter over PhaseObservations obs: its arc references and the Solution rows it writes (row k - row0 of
+    sol for epoch k; rate_bank gives each start hypothesis rows for its window only)."""
+
+    def __init__(self, obs, mount: AntennaMount, initial: ReceiverState, opt: EkfOptions, sol: Solution,
+                 rate0_rad_s=None):
+        self.obs, self.mount, self.opt, self.sol, self.row0, self.label = obs, mount, opt, sol, 0, ""
+        self.f = _Filter(obs.phase_cyc.shape[1], initial, opt)
+        if rate0_rad_s is not None:
+            self.f.w = np.asarray(rate0_rad_s, float).copy()
+        self.refs = ArcReferences(obs.phase_cyc.shape[1])
+        self.tracked = np.isfinite(obs.phase_cyc)
+        self.established = np.zeros(obs.phase_cyc.shape[1], bool)
+
+    def step(self, k: int) -> None:
+        """Predict to epoch k (k > 0), update with its phases, store row k."""
+        obs, f, opt, tracked = self.obs, self.f, self.opt, self.tracked
+        new = tracked[k] & (obs.arc_start[k] | ~self.established) if k else tracked[k]
+        if k:
+            vel = obs.velocity_ecef_m_s
+            v = None if vel is None else 0.5 * (vel[k - 1] + vel[k])          # trapezoid over the interval
+            f.predict(obs.t_gps_s[k] - obs.t_gps_s[k - 1], np.flatnonzero(new), v)
+        cols, newc = np.flatnonzero(tracked[k]), np.flatnonzero(new)
+        if len(newc):
+            self.refs.start(obs, k, newc, f.state(), self.mount)
+        self.established |= tracked[k]
+        n_known = int(np.sum(tracked[k] & ~new)) if k else len(cols)
+        i, sol = k - self.row0, self.sol
+        if n_known < opt.min_sats:
+            sol.observability[i] = f"{n_known} satellites with an established offset (need {opt.min_sats})"
+            if len(cols):
+                f.update(obs, k, cols, self.mount, self.refs)
+            return
+        J, res = f.update(obs, k, cols, self.mount, self.refs)
+        ob = analyse(J, np.full(len(cols), obs.sigma_phase_cyc), self.mount.R_ant_from_body,
+                     nominal_scale(self.mount))
+        sol.position_ecef_m[i], sol.clock_cyc[i], sol.R_body_from_ecef[i] = f.r, f.b, f.R
+        sol.P[i] = f.P[:7, :7]
+        sol.rank[i], sol.condition[i], sol.null_rotation_body[i] = ob.rank, ob.condition, ob.null_rotation_body
+        sol.observability[i], sol.n_sats[i], sol.valid[i] = ob.description, len(cols), True
+        sol.residuals_cyc[i, cols] = res
+
+
 def ekf_solve(obs, mount: AntennaMount, initial: ReceiverState, options: EkfOptions | None = None,
               progress=None) -> Solution:
-    """Solution of the EKF over PhaseObservations obs from the known initial state (clock datum 0 at t0)."""
+    """Solution of the EKF over PhaseObservations obs from the known initial state (clock datum 0 at t0); with
+    options.rate_hypotheses_step_deg_s > 0 a bank of filters from several initial rates (rate_bank)."""
     opt = options or EkfOptions()
-    n_ep, n_sv = obs.phase_cyc.shape
-    sol = Solution.empty(obs.t_gps_s, obs.sats, "ekf")
-    f = _Filter(n_sv, initial, opt)
-    refs = ArcReferences(n_sv)
-    tracked = np.isfinite(obs.phase_cyc)
-    established = np.zeros(n_sv, bool)
-    for k in range(n_ep):
-        new = tracked[k] & (obs.arc_start[k] | ~established) if k else tracked[k]
-        if k:
-            f.predict(obs.t_gps_s[k] - obs.t_gps_s[k - 1], np.flatnonzero(new))
-        cols = np.flatnonzero(tracked[k])
-        newc = np.flatnonzero(new)
-        if len(newc):
-            refs.start(obs, k, newc, f.state(), mount)
-        established |= tracked[k]
-        n_known = int(np.sum(tracked[k] & ~new)) if k else len(cols)
-        if n_known < opt.min_sats:
-            sol.observability[k] = f"{n_known} satellites with an established offset (need {opt.min_sats})"
-            if len(cols):
-                f.update(obs, k, cols, mount, refs)
-            continue
-        J, res = f.update(obs, k, cols, mount, refs)
-        ob = analyse(J, np.full(len(cols), obs.sigma_phase_cyc), mount.R_ant_from_body, nominal_scale(mount))
-        sol.position_ecef_m[k], sol.clock_cyc[k], sol.R_body_from_ecef[k] = f.r, f.b, f.R
-        sol.P[k] = f.P[:7, :7]
-        sol.rank[k], sol.condition[k], sol.null_rotation_body[k] = ob.rank, ob.condition, ob.null_rotation_body
-        sol.observability[k], sol.n_sats[k], sol.valid[k] = ob.description, len(cols), True
-        sol.residuals_cyc[k, cols] = res
+    if opt.rate_hypotheses_step_deg_s > 0:
+        from gnssatt.vector_phase.rate_bank import bank_solve
+        return bank_solve(obs, mount, initial, opt, progress)
+    run = _Run(obs, mount, initial, opt, Solution.empty(obs.t_gps_s, obs.sats, "ekf"))
+    for k in range(len(obs.t_gps_s)):
+        run.step(k)
         if progress is not None and k % 50 == 0:
-            progress(k / n_ep)
-    return sol
+            progress(k / len(obs.t_gps_s))
+    return run.sol

@@ -43,7 +43,8 @@ class InputProblem(ValueError):
 class VectorPhaseInputs:
     """platform (gnssatt.gnss.io.platform.Platform), antenna_id, mount (AntennaMount), obs (PhaseObservations),
     obs_file (name), a_priori_position_ecef_m (3,) (median of the code positions), reference (ReferenceAttitude
-    or None), warnings."""
+    or None), warnings, sigma_velocity_m_s (the velocity file's median sigma; obs.velocity_ecef_m_s holds its
+    velocity)."""
 
     platform: object
     antenna_id: str
@@ -53,6 +54,7 @@ class VectorPhaseInputs:
     a_priori_position_ecef_m: np.ndarray
     reference: object = None
     warnings: list = field(default_factory=list)
+    sigma_velocity_m_s: float | None = None
 
 
 def _platform(files):
@@ -191,9 +193,26 @@ def load_set(files, *, antenna_id: str | None = None, antenna_model: str | None 
     nav = read_rinex_nav(navs[0][2], name=navs[0][0])
     phase_obs, r0 = _observations(parsed[obs_name], obs_name, nav, sigma_phase_cyc, elevation_mask_deg, axes)
     mount = AntennaMount(model, R_antenna_from_body(platform.antennas[ant].boresight_body))
+    phase_obs.velocity_ecef_m_s, sigma_v = _velocity(files, phase_obs.t_gps_s)
     reference = None
     for name, kind, path in files:
         if kind == "reference_attitude":
             from gnssatt.gnss.io.reference_attitude import read_reference_attitude
             reference = read_reference_attitude(Path(path).read_bytes(), name=name)
-    return VectorPhaseInputs(platform, ant, mount, phase_obs, obs_name, r0, reference)
+    return VectorPhaseInputs(platform, ant, mount, phase_obs, obs_name, r0, reference,
+                             sigma_velocity_m_s=sigma_v)
+
+
+def _velocity(files, t_gps_s):
+    """(velocity (n_ep, 3) at the phase epochs, linear between the rows of the set's velocity.csv, NaN outside
+    it; its median sigma_m_s or None) or (None, None) without a velocity file (docs/formats/inertial_csv.md)."""
+    from gnssatt.gnss.io.sensor_csv import read_sensor_csv
+
+    logs = [read_sensor_csv(Path(p), "velocity", name=n) for n, k, p in files if k == "velocity"]
+    if not logs:
+        return None, None
+    log = logs[0]
+    t = log.time.seconds()
+    v = np.stack([np.interp(t_gps_s, t, log.values[:, i], left=np.nan, right=np.nan) for i in range(3)], -1)
+    sig = log.extra.get("sigma_m_s")
+    return v, (float(np.nanmedian(sig)) if sig is not None and np.isfinite(sig).any() else None)

@@ -32,7 +32,8 @@ OMEGA_E_RAD_S = 7.2921151467e-5
 @dataclass(frozen=True)
 class ScenarioSpec:
     """What to simulate. n_sats: the highest satellites at the start (>= 6); sigma_phase_cyc: white phase noise;
-    elevation_mask_deg: satellites below it (local level) are not chosen."""
+    elevation_mask_deg: satellites below it (local level) are not chosen; velocity_ecef_m_s: a constant velocity
+    of the antenna (non-zero: obs.velocity_ecef_m_s carries it, as a set's velocity.csv would)."""
 
     antenna: object
     n_epochs: int = 60
@@ -52,6 +53,7 @@ class ScenarioSpec:
     clock_rw_cyc: float = 0.5
     elevation_mask_deg: float = 10.0
     boresight_body: tuple = (0.0, 0.0, -1.0)
+    velocity_ecef_m_s: tuple = (0.0, 0.0, 0.0)
 
 
 @dataclass
@@ -69,6 +71,7 @@ class PhaseObservations:
     arc_start: np.ndarray
     sigma_phase_cyc: float = 0.002
     warnings: list = field(default_factory=list)
+    velocity_ecef_m_s: np.ndarray | None = None
 
     def subset(self, columns) -> "PhaseObservations":
         """The same observations for a subset of satellites (column indices)."""
@@ -80,7 +83,7 @@ class PhaseObservations:
 
 @dataclass
 class Truth:
-    """position_ecef_m (3,), R_body_from_ecef (n_ep, 3, 3), clock_cyc (n_ep,), R_ned_from_ecef (3, 3); the
+    """position_ecef_m (3,) at the first epoch, R_body_from_ecef (n_ep, 3, 3), clock_cyc (n_ep,), R_ned_from_ecef (3, 3); the
     constellation (gnssatt.sim.constellation.Constellation), the first epoch t0 (GpsTime) and the chosen
     satellite indices, to write the set as files (gnssatt.sim.vector_phase_set)."""
 
@@ -116,7 +119,9 @@ def simulate(spec: ScenarioSpec) -> tuple[PhaseObservations, Truth, AntennaMount
     lat, lon = np.radians(spec.lat_deg), np.radians(spec.lon_deg)
     r_rx = geodetic_to_ecef(lat, lon, spec.height_m)
     R_ned = R_ned_from_ecef(lat, lon)
-    r_sat = _emission_positions(const, t_since_ref, r_rx)
+    v_rx = np.asarray(spec.velocity_ecef_m_s, float)
+    r_rx_t = (r_rx + dt[:, None] * v_rx)[:, None, :]                     # (n_ep, 1, 3)
+    r_sat = _emission_positions(const, t_since_ref, r_rx_t)
     e0 = (r_sat[0] - r_rx) / np.linalg.norm(r_sat[0] - r_rx, axis=-1, keepdims=True)
     up = -R_ned[2]
     el_deg = np.degrees(np.arcsin(np.clip(e0 @ up, -1, 1)))
@@ -136,7 +141,7 @@ def simulate(spec: ScenarioSpec) -> tuple[PhaseObservations, Truth, AntennaMount
     roll = spec.roll_amp_deg * np.sin(2 * np.pi * tt / (0.7 * spec.period_s) + 1.0)
     R_body = euler321_to_dcm(yaw, pitch, roll) @ R_ned
     mount = AntennaMount(spec.antenna, R_antenna_from_body(np.asarray(spec.boresight_body, float)))
-    d = r_sat - r_rx
+    d = r_sat - r_rx_t
     rho = np.linalg.norm(d, axis=-1)
     delta = np.unwrap(delta_rad(mount, R_body, d / rho[..., None], x_s, y_s), axis=0)
     clock = np.concatenate([[0.0], np.cumsum(rng.normal(0, spec.clock_rw_cyc, spec.n_epochs - 1))]) + 0.3
@@ -146,5 +151,6 @@ def simulate(spec: ScenarioSpec) -> tuple[PhaseObservations, Truth, AntennaMount
     arc = np.zeros(phase.shape, bool)
     arc[0] = True
     obs = PhaseObservations(t_gps, [const.sats[i] for i in chosen], phase, r_sat, x_s, y_s, arc,
-                            spec.sigma_phase_cyc)
+                            spec.sigma_phase_cyc,
+                            velocity_ecef_m_s=np.tile(v_rx, (spec.n_epochs, 1)) if np.any(v_rx) else None)
     return obs, Truth(r_rx, R_body, clock, R_ned, const, t0, chosen), mount

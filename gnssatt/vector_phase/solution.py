@@ -21,7 +21,8 @@ class Solution:
     R_body_from_ecef (n_ep, 3, 3), P (n_ep, 7, 7) covariance of (position m, clock cyc, body rotation rad), the
     pseudo-inverse in the observable subspace when rank < 7 (an unobservable direction gets no variance here:
     the angles it moves are reported as undetermined instead), rank, condition, null_rotation_body (n_ep, 3), observability (text),
-    n_sats, residuals_cyc (n_ep, n_sv) post-fit, method ("batch" or "ekf"), sats."""
+    n_sats, residuals_cyc (n_ep, n_sv) post-fit, method ("batch" or "ekf"), sats; start_hypotheses: how the EKF's
+    bank of start hypotheses ended (gnssatt.vector_phase.rate_bank), None without one."""
 
     t_gps_s: np.ndarray
     sats: list
@@ -38,6 +39,7 @@ class Solution:
     valid: np.ndarray
     method: str
     warnings: list = field(default_factory=list)
+    start_hypotheses: dict | None = None
 
     @classmethod
     def empty(cls, t_gps_s, sats, method: str) -> "Solution":

@@ -136,3 +136,35 @@ def test_vector_phase_job_without_the_true_position(tmp_path):
     for angle in ("yaw", "pitch", "roll"):
         assert comp[angle]["rms_error_deg"] < 10.0
         assert comp[angle]["rms_error_over_sigma"] < 2.0
+
+
+def test_position_walk_default_by_the_set_with_its_reason(tmp_path):
+    """Unset position random walk: 0 for a static set, the velocity's sigma for a set with velocity.csv (the
+    position then follows that velocity); both cases and their reasons in the config schema."""
+    from gnssatt.gnss.frames import R_ned_from_ecef
+    from worker.jobs.registry import job_types
+
+    config_schema = job_types()["single-antenna-attitude"].config_model.model_json_schema()   # as /v1/job-types
+    listed = [d["x-platform-defaults"] for d in config_schema["$defs"].values() if "x-platform-defaults" in d]
+    schema = listed[0]["position_random_walk_m_per_sqrt_s"]
+    assert {"static (no velocity in the set)", "velocity given (velocity.csv)"} == set(schema)
+    assert all(case["reason"] for case in schema.values())
+    v_ecef = R_ned_from_ecef(np.radians(45.3), np.radians(-75.8)).T @ np.array([2.0, 1.0, 0.0])   # horizontal
+    paths, obs, truth, mount = write_vector_phase_set(tmp_path / "moving", ScenarioSpec(
+        AsymmetricPatch(), n_epochs=40, n_sats=8, sigma_phase_cyc=5e-3, velocity_ecef_m_s=tuple(v_ecef)))
+    moving = local_set(paths, "vp-moving")
+    out = _run(tmp_path / "m", moving, initial_position_ecef_m=truth.position_ecef_m.tolist())
+    summary = json.loads(out["summary.json"].read_text())
+    applied = summary["defaults_applied"]
+    assert applied[0]["case"] == "velocity given (velocity.csv)" and applied[0]["value"] == pytest.approx(0.02)
+    # 87 m travelled in 40 s: with the velocity the attitude stays as good as the static set's (< 10 deg, < 2 sigma)
+    for angle in ("yaw", "pitch", "roll"):
+        assert summary["reference_comparison"][angle]["rms_error_deg"] < 10.0
+        assert summary["reference_comparison"][angle]["rms_error_over_sigma"] < 2.0
+    pos = [float(r[c]) for r in [list(csv.DictReader(io.StringIO(out["attitude.csv"].read_text())))[-1]]
+           for c in ("x_ecef_m", "y_ecef_m", "z_ecef_m")]
+    assert np.linalg.norm(np.array(pos) - (truth.position_ecef_m + 39 * v_ecef)) < 0.1   # followed the motion
+    obs_set, truth = _set(tmp_path / "s", n_epochs=10)
+    static = json.loads(_run(tmp_path / "s", obs_set, initial_position_ecef_m=truth.position_ecef_m.tolist())[
+        "summary.json"].read_text())["defaults_applied"]
+    assert static[0]["case"] == "static (no velocity in the set)" and static[0]["value"] == 0.0

@@ -13,13 +13,15 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from gnssatt.vector_phase.defaults import POSITION_WALK_DEFAULTS
 from worker.errors import JobInputError
 
 L1_WAVELENGTH_MM = 299792458.0 / 1575.42e6 * 1e3
 
 
 class Settings(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", json_schema_extra={
+        "x-platform-defaults": {"position_random_walk_m_per_sqrt_s": POSITION_WALK_DEFAULTS}})
     estimator: Literal["ekf", "batch"] = Field(
         "ekf", description="ekf: Kalman filter with an angular-rate state (the epochs tied by the dynamics); "
                            "batch: each epoch's seven unknowns from its own phase changes (eq. 44-45 as a closed "
@@ -53,12 +55,21 @@ class Settings(BaseModel):
                                            "starts from zero rate). With exactly 7 satellites a value near the "
                                            "platform's true rate avoids an early wrong solution "
                                            "(docs/vector_phase.md).")
+    start_rate_hypotheses_deg_s: float = Field(
+        1.0, ge=0.0, le=50.0, description="EKF: spacing of the bank of start hypotheses, initial angular rates "
+                                          "{-s, 0, s}^3 deg/s per body axis beside the single filter (28 "
+                                          "filters until the phases single one out; summary.json "
+                                          "start_hypotheses). With exactly 7 satellites one "
+                                          "filter from zero rate can settle on a wrong attitude in the first "
+                                          "seconds (docs/vector_phase.md); 0: one filter from zero rate.")
     rate_random_walk_deg_s_per_sqrt_s: float = Field(
         0.18, gt=0.0, le=100.0, description="EKF: angular-rate random walk (white angular acceleration), "
                                             "deg/s per sqrt(s).")
-    position_random_walk_m_per_sqrt_s: float = Field(
-        0.0, ge=0.0, le=100.0, description="EKF: position random walk, m per sqrt(s); 0 (the default) for a static "
-                                           "antenna, which keeps the attitude sigma honest (docs/vector_phase.md).")
+    position_random_walk_m_per_sqrt_s: float | None = Field(
+        None, ge=0.0, le=100.0, description="EKF: position random walk, m per sqrt(s). Unset: by the set (the "
+                                            "schema's x-platform-defaults, with reasons): 0 for a static antenna; "
+                                            "with a velocity.csv the position follows that velocity and walks by "
+                                            "its sigma.")
     coarse_step_deg: float = Field(30.0, ge=5.0, le=90.0, description="Coarse search: yaw grid step (deg).")
     coarse_tilt_max_deg: float = Field(0.0, ge=0.0, le=90.0, description="Coarse search: pitch and roll range "
                                                                          "(deg; 0: level only).")
@@ -82,8 +93,8 @@ class Settings(BaseModel):
         sigma_cyc = self.sigma_phase_mm / L1_WAVELENGTH_MM
         ekf = EkfOptions(sigma_attitude0_deg=self.sigma_initial_attitude_deg, min_sats=self.min_sats,
                          sigma_rate0_deg_s=self.sigma_initial_rate_deg_s,
+                         rate_hypotheses_step_deg_s=self.start_rate_hypotheses_deg_s,
                          q_rate_rad2_s3=math.radians(self.rate_random_walk_deg_s_per_sqrt_s) ** 2,
-                         q_position_m2_s=self.position_random_walk_m_per_sqrt_s ** 2,
                          sigma_position0_m=1e-3 if self.initial_position_ecef_m is not None else 10.0)
         return VectorPhaseOptions(
             estimator=self.estimator, initial_attitude=self.initial_attitude,
@@ -92,7 +103,7 @@ class Settings(BaseModel):
             antenna_id=self.antenna_id, antenna_model=self.antenna_model, sigma_phase_cyc=sigma_cyc,
             elevation_mask_deg=self.elevation_mask_deg, ekf=ekf, batch=BatchOptions(min_sats=self.min_sats),
             coarse_step_deg=self.coarse_step_deg, coarse_tilt_max_deg=self.coarse_tilt_max_deg,
-            coarse_epochs=self.coarse_epochs)
+            coarse_epochs=self.coarse_epochs, position_random_walk_m_per_sqrt_s=self.position_random_walk_m_per_sqrt_s)
 
 
 def run(ctx, config) -> None:
