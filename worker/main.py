@@ -75,12 +75,13 @@ def preload_pipelines() -> None:
 
 
 def _warm_up_kernels() -> None:
-    """Load (or compile, the first time on this machine) the attitude filter's numba kernels before taking jobs,
-    so the first job does not pay it (docs/attitude.md "Speed")."""
+    """Load (or compile, the first time on this machine) the attitude filter's and the CSV writer's numba kernels
+    before taking jobs, so the first job does not pay it (docs/attitude.md "Speed")."""
     try:
         from gnssatt.attitude.kernels import warm_up as warm_up_attitude
         from gnssatt.attitude.qc_kernels import warm_up as warm_up_qc
         from gnssatt.attitude.update_kernels import warm_up as warm_up_update
+        from gnssatt.csv_text import warm_up as warm_up_csv
         from gnssatt.estimation.ekf_kernels import warm_up as warm_up_ekf
 
         print("loading the filter kernels (a cold cache compiles them once, ~60-100 s; docs/DEPENDENCIES.md)",
@@ -90,6 +91,7 @@ def _warm_up_kernels() -> None:
         warm_up_attitude()
         warm_up_qc()
         warm_up_update()
+        warm_up_csv()
         print(f"filter kernels ready in {time.perf_counter() - t0:.1f} s", flush=True)
     except Exception:                       # a job would report the same error; the worker still serves others
         log.exception("numba kernels failed to compile at start")
