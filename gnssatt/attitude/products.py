@@ -272,6 +272,8 @@ def product_tables(sol) -> dict[str, dict[str, np.ndarray]]:
     the solution, for the plots: same column names and rows as the CSV texts, numbers as float64 (unrounded; NaN
     where the CSV cell is empty), names as str arrays, time_gps as datetime64[ms] (GPS time, as written).
     What read_csv_table would give back from the texts, without formatting and re-parsing ~6e5 residual rows."""
+    from gnssatt.plots.common import coded_strings
+
     t_ep, week_ep, sow_ep = _epoch_times(sol)
     out: dict[str, dict[str, np.ndarray]] = {}
     if sol.att_epochs is not None:
@@ -298,13 +300,14 @@ def product_tables(sol) -> dict[str, dict[str, np.ndarray]]:
     r = sol.fr.residuals
     ep = r["epoch"]
     reasons = np.array([REASONS[i] for i in range(len(REASONS))])
+    # label columns carry their categories (gnssatt.plots.common.coded_strings): the plots need not sort them
     out["residuals.csv"] = {
         "time_gps": t_ep[ep], "gps_sow": sow_ep[ep],
-        "baseline": np.array([f"{a}>{b}" for a, b in sol.baselines] or ["-"])[r["bl"]],
-        "sat": np.asarray(sol.pobs.sats, str)[r["sat"]], "signal": np.asarray(sol.pobs.signals, str)[r["sig"]],
-        "observable": np.array(["code", "phase"])[r["kind"]],
+        "baseline": coded_strings([f"{a}>{b}" for a, b in sol.baselines] or ["-"], r["bl"]),
+        "sat": coded_strings(sol.pobs.sats, r["sat"]), "signal": coded_strings(sol.pobs.signals, r["sig"]),
+        "observable": coded_strings(["code", "phase"], r["kind"]),
         **{c: np.asarray(r[c], float) for c in ("residual_m", "az_ant_deg", "el_ant_deg", "cn0_dbhz")},
-        "used": (r["reason"] == 0).astype(float), "reason": reasons[r["reason"]]}
+        "used": (r["reason"] == 0).astype(float), "reason": coded_strings(reasons, r["reason"])}
     return out
 
 
