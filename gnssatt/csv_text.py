@@ -196,11 +196,12 @@ def int_cells(values) -> Cells:
 
 def label_cells(labels, index=None) -> Cells:
     """Row i shows labels[index[i]] (index None: labels[i]); labels: a few texts (names, epoch times)."""
-    texts = [str(t) for t in (labels.tolist() if isinstance(labels, np.ndarray) else labels)]
-    table, lens = _with_python_texts(np.zeros((len(texts), 1), np.uint8), np.zeros(len(texts), np.int64),
-                                     dict(enumerate(texts)))
+    data = [str(t).encode() for t in (labels.tolist() if isinstance(labels, np.ndarray) else labels)]
+    lens = np.fromiter(map(len, data), np.int64, len(data))
+    width = max(int(lens.max()) if lens.size else 1, 1)
+    table = np.array(data, dtype=f"S{width}").view(np.uint8).reshape(len(data), width)
     idx = None if index is None else np.ascontiguousarray(index, dtype=np.int64).ravel()
-    if idx is not None and idx.size and (idx.min() < 0 or idx.max() >= len(texts)):
+    if idx is not None and idx.size and (idx.min() < 0 or idx.max() >= len(data)):
         raise IndexError("label index out of range")
     return Cells(table, lens, idx)
 

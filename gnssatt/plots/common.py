@@ -259,8 +259,10 @@ def coded_strings(labels, codes) -> np.ndarray:
     column_ = np.asarray(labels or [""], dtype=str)[codes]
     if len(set(labels)) != len(labels) or codes.size == 0:
         return column_
-    present, first = np.unique(codes, return_index=True)
-    order = present[np.argsort(first)]                        # label indices in order of first appearance
+    first = np.full(len(labels), codes.size, np.int64)
+    np.minimum.at(first, codes, np.arange(codes.size))       # first row of each label (no sort)
+    present = np.flatnonzero(first < codes.size)
+    order = present[np.argsort(first[present])]               # label indices in order of first appearance
     rank = np.full(len(labels), -1, np.int64)
     rank[order] = np.arange(order.size)
     out = column_.view(CodedStrings)
