@@ -87,3 +87,10 @@ def test_empty_table_is_the_header_line_and_mismatched_columns_are_refused():
         csv_text("a,b", [fixed_cells(np.zeros(2), 2), int_cells(np.zeros(3, int))])
     with pytest.raises(IndexError):
         label_cells(["x"], [0, 1])
+
+
+def test_warm_up_loads_the_kernels_the_products_call():
+    from gnssatt import csv_text
+
+    csv_text.warm_up()
+    assert all(k.signatures for k in (csv_text._fixed_kernel, csv_text._int_kernel, csv_text._row_put))

@@ -450,5 +450,5 @@ def polar_screen_points(ax, az_deg: np.ndarray, r: np.ndarray) -> np.ndarray:
 
 def warm_up() -> None:
     """Compile (or load from the cache) the decimation kernels."""
-    screen_points(np.arange(8.0), np.arange(8.0), 4, 4)
+    screen_points(np.arange(8.0), np.arange(8.0), 1, 4)             # > 4 points per column: the kernel runs
     first_per_epoch_and_key(np.arange(3).astype("datetime64[ms]"), np.zeros(3, np.int64), np.arange(3))

@@ -100,3 +100,10 @@ def test_coded_strings_carry_what_categories_computes():
     assert levels == want[0] == ["G17", "G05", "G09"] and code.tolist() == want[1].tolist()
     assert not hasattr(coded_strings(["a", "a"], [0, 1]), "coded")    # repeated labels: computed as usual
     assert categories(col[1:])[0] == ["G17", "G05", "G09"]           # a view sorts again, same answer
+
+
+def test_warm_up_loads_the_kernels_the_plots_call():
+    from gnssatt.plots import common
+
+    common.warm_up()
+    assert common._screen_kernel.signatures and common._first_per_time_and_code.signatures
