@@ -121,8 +121,9 @@ def main() -> None:
         lines.append(f"| {name.replace('_csv', '.csv')} | {n} | {mb:.1f} | {old:.3f} | {new:.3f} | "
                      f"{old / new:.1f}x | {'yes' if same else 'NO'} |")
     lines += ["", "Per-row Python = the same columns with `\"%.Nf\" % x` per cell and `\",\".join` per row (the "
-              "products' formatting before gnssatt.csv_text, without its caching of repeated angles and label pairs: the "
-              "tree before, be07f77, took 0.64-0.79 s CPU for residuals.csv on this pass on 2026-12-03, load ~2); "
+              "products' formatting before gnssatt.csv_text, without its caching of repeated angles and label "
+              "pairs: the tree before, be07f77, took 0.64-0.79 s CPU for residuals.csv on this pass on 2026-12-03, "
+              "load ~2); "
               "compiled = gnssatt.csv_text's numba kernels. The job pays one more copy when it stores the text "
               "(encoded and hashed, 'storing products').", "",
               f"Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_products_speed.py --runs {args.runs} "
