@@ -17,6 +17,11 @@ from worker.queue import make_huey
 
 log = logging.getLogger("gnssatt.worker")
 
+#: (first, longest) wait [s] of an idle consumer thread between two looks at the embedded SQLite queue (Huey backs
+#: off by 1.3x per empty look): a job waits at most the longest for its pick-up (0.5 s before; ~20 cheap SELECTs
+#: a second per idle job slot now). Redis queues block on the read instead (BRPOP) and do not poll.
+POLL_S = (0.02, 0.05)
+
 
 def build_runtime(settings: Settings, *, immediate: bool = False, name: str | None = None) -> runner.Runtime:
     settings.ensure_dirs()
@@ -75,13 +80,15 @@ def preload_pipelines() -> None:
 
 
 def _warm_up_kernels() -> None:
-    """Load (or compile, the first time on this machine) the attitude filter's numba kernels before taking jobs,
-    so the first job does not pay it (docs/attitude.md "Speed")."""
+    """Load (or compile, the first time on this machine) the attitude filter's, the CSV writer's and the plots'
+    numba kernels before taking jobs, so the first job does not pay it (docs/attitude.md "Speed")."""
     try:
         from gnssatt.attitude.kernels import warm_up as warm_up_attitude
         from gnssatt.attitude.qc_kernels import warm_up as warm_up_qc
         from gnssatt.attitude.update_kernels import warm_up as warm_up_update
+        from gnssatt.csv_text import warm_up as warm_up_csv
         from gnssatt.estimation.ekf_kernels import warm_up as warm_up_ekf
+        from gnssatt.plots.common import warm_up as warm_up_plots
 
         print("loading the filter kernels (a cold cache compiles them once, ~60-100 s; docs/DEPENDENCIES.md)",
               flush=True)
@@ -90,6 +97,8 @@ def _warm_up_kernels() -> None:
         warm_up_attitude()
         warm_up_qc()
         warm_up_update()
+        warm_up_csv()
+        warm_up_plots()
         print(f"filter kernels ready in {time.perf_counter() - t0:.1f} s", flush=True)
     except Exception:                       # a job would report the same error; the worker still serves others
         log.exception("numba kernels failed to compile at start")
@@ -113,7 +122,8 @@ def run_worker(settings: Settings, concurrency: int | None = None) -> None:
     log.info("worker %s: %d job slot(s), database %s, queue %s", rt.worker_name, workers,
              rt.engine.url.render_as_string(hide_password=True), settings.queue_url or "huey-sqlite")
     consumer = rt.huey.create_consumer(workers=workers, worker_type="thread", periodic=False,
-                                       initial_delay=0.05, backoff=1.3, max_delay=0.5, check_worker_health=True)
+                                       initial_delay=POLL_S[0], backoff=1.3, max_delay=POLL_S[1],
+                                       check_worker_health=True)
     try:
         consumer.run()
     finally:

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from gnssatt.attitude.filter import REASONS
+from gnssatt.csv_text import csv_text, fixed_cells, int_cells, label_cells
 
 __all__ = ["attitude_csv", "baselines_csv", "residuals_csv", "events_csv", "errors_csv", "aem_kvn", "nmea_hdt",
            "sign_continuous", "all_products",
@@ -44,87 +45,66 @@ def _fmt(arr: np.ndarray, fmt: str) -> np.ndarray:
     return np.array(list(map(fmt.__mod__, np.asarray(arr).tolist())), dtype=object)
 
 
-def _fmt_repeated(arr: np.ndarray, fmt: str) -> np.ndarray:
-    """Like _fmt for a column with few distinct values (angles per satellite and epoch repeated over signals and
-    observables, C/N0 in 0.25 dB-Hz steps): each distinct value (bitwise, so -0.0 stays apart from 0.0) is
-    formatted once. Same text as _fmt."""
-    arr = np.ascontiguousarray(arr, dtype=np.float64)
-    bits, inverse = np.unique(arr.view(np.int64), return_inverse=True)
-    return _fmt(bits.view(np.float64), fmt)[inverse.ravel()]
-
-
 def attitude_csv(sol) -> str | None:
     """attitude.csv text (CONVENTIONS.md columns + gps_time flags); None with fewer than two baselines."""
     if sol.att_epochs is None:
         return None
-    iso, week, sow = _time_cols(sol, sol.att_epochs)
-    cols = [iso, _fmt(week, "%d"), _fmt(sow, "%.3f")]
+    iso_all, week_all, sow_all = _epoch_time_texts(sol)
+    ep = sol.att_epochs
+    cols = [label_cells(iso_all, ep), int_cells(week_all[ep]), fixed_cells(sow_all[ep], 3)]
     for q in (sol.q_body_from_ecef, sol.q_body_from_gcrf):
-        cols += [_fmt(q[:, i], "%.12f") for i in range(4)]
-    cols += [_fmt(sol.euler_deg[:, i], "%.6f") for i in range(3)]
-    cols += [_fmt(sol.sigma_euler_deg[:, i], "%.6f") for i in range(3)]
-    cols += [_fmt(sol.att_fixed.astype(int), "%d"), _fmt(sol.att_n_sats, "%d")]
+        cols += [fixed_cells(q[:, i], 12) for i in range(4)]
+    cols += [fixed_cells(sol.euler_deg[:, i], 6) for i in range(3)]
+    cols += [fixed_cells(sol.sigma_euler_deg[:, i], 6) for i in range(3)]
+    cols += [int_cells(sol.att_fixed.astype(int)), int_cells(sol.att_n_sats)]
     header = ("time_gps,gps_week,gps_sow,qe_w,qe_x,qe_y,qe_z,qi_w,qi_x,qi_y,qi_z,yaw_deg,pitch_deg,roll_deg,"
               "sigma_yaw_deg,sigma_pitch_deg,sigma_roll_deg,fixed,n_sats")
-    return _join(header, cols)
-
-
-def _join(header: str, cols: list[np.ndarray]) -> str:
-    if len(cols[0]) == 0:
-        return header + "\n"
-    rows = map(",".join, zip(*[c.tolist() if isinstance(c, np.ndarray) else list(c) for c in cols]))
-    return header + "\n" + "\n".join(rows) + "\n"
+    return csv_text(header, cols)
 
 
 def baselines_csv(sol) -> str:
     """baselines.csv text, one row per epoch and baseline with a solution (CONVENTIONS.md)."""
     bt = sol.baseline_table
-    iso, week, sow = _time_cols(sol, bt["epoch"])
+    iso_all, week_all, sow_all = _epoch_time_texts(sol)
+    ep = bt["epoch"]
     names = np.array([f"{a}>{b}" for a, b in sol.baselines] or ["-"])
-    cols = [iso, _fmt(week, "%d"), _fmt(sow, "%.3f"), names[bt["bl"]]]
-    cols += [_fmt(bt["b"][:, i], "%.5f") for i in range(3)]
-    cols += [_fmt(bt["length_m"], "%.5f"), _fmt(bt["azimuth_deg"], "%.5f"), _fmt(bt["elevation_deg"], "%.5f"),
-             _fmt(bt["sigma_azimuth_deg"], "%.5f"), _fmt(bt["sigma_elevation_deg"], "%.5f"),
-             _fmt(bt["sigma_length_m"], "%.5f"), _fmt(bt["fixed"].astype(int), "%d"), _fmt(bt["n_sats"], "%d")]
+    cols = [label_cells(iso_all, ep), int_cells(week_all[ep]), fixed_cells(sow_all[ep], 3),
+            label_cells(names, bt["bl"])]
+    cols += [fixed_cells(bt["b"][:, i], 5) for i in range(3)]
+    cols += [fixed_cells(bt[c], 5) for c in ("length_m", "azimuth_deg", "elevation_deg", "sigma_azimuth_deg",
+                                             "sigma_elevation_deg", "sigma_length_m")]
+    cols += [int_cells(bt["fixed"].astype(int)), int_cells(bt["n_sats"])]
     header = ("time_gps,gps_week,gps_sow,baseline,x_ecef_m,y_ecef_m,z_ecef_m,length_m,azimuth_deg,elevation_deg,"
               "sigma_azimuth_deg,sigma_elevation_deg,sigma_length_m,fixed,n_sats")
-    return _join(header, cols)
+    return csv_text(header, cols)
 
 
 def residuals_csv(sol) -> str:
     """residuals.csv: per epoch, baseline, satellite, signal and observable, the post-fit SD residual (m),
-    antenna-frame azimuth/elevation, C/N0, used flag and rejection reason."""
+    antenna-frame azimuth/elevation, C/N0, used flag and rejection reason (empty numeric cells where not finite)."""
     r = sol.fr.residuals
     header = ("time_gps,gps_sow,baseline,sat,signal,observable,residual_m,az_ant_deg,el_ant_deg,cn0_dbhz,used,"
               "reason")
     if r["epoch"].size == 0:
         return header + "\n"
     iso_all, _, sow_all = _epoch_time_texts(sol)
-    names = np.array([f"{a}>{b}" for a, b in sol.baselines])
-    sats = np.asarray(sol.pobs.sats)
-    sigs = np.asarray(sol.pobs.signals)
-    reasons = np.array([REASONS[i] for i in range(len(REASONS))])
-    kinds = np.array(["code", "phase"])
-    ep = r["epoch"]
-
-    def num(a, f, repeated=False):
-        out = np.full(a.shape, "", dtype=object)
-        ok = np.isfinite(a)
-        out[ok] = (_fmt_repeated if repeated else _fmt)(a[ok], f)
-        return out
+    names = [f"{a}>{b}" for a, b in sol.baselines]
+    sats, sigs = [str(s) for s in sol.pobs.sats], [str(s) for s in sol.pobs.signals]
 
     def pairs(a, b):
         """'a,b' for every pair of two small label lists, flat index i * len(b) + j."""
-        return np.array([f"{x},{y}" for x in a.tolist() for y in b.tolist()], dtype=object)
+        return [f"{x},{y}" for x in a for y in b]
 
     # columns that come from a few labels (epoch times, baseline + satellite, signal + observable,
-    # used + reason) are joined once per combination and indexed: fewer cells to join per row
-    used_reason = np.array([f"{int(i == 0)},{reasons[i]}" for i in range(len(reasons))], dtype=object)
-    cols = [(iso_all.astype(object) + "," + _fmt(sow_all, "%.3f"))[ep],
-            pairs(names, sats)[r["bl"] * len(sats) + r["sat"]], pairs(sigs, kinds)[r["sig"] * 2 + r["kind"]],
-            num(r["residual_m"], "%.5f"), num(r["az_ant_deg"], "%.2f", True), num(r["el_ant_deg"], "%.2f", True),
-            num(r["cn0_dbhz"], "%.1f", True), used_reason[r["reason"]]]
-    return _join(header, cols)
+    # used + reason) are one label column each, indexed per row
+    used_reason = [f"{int(i == 0)},{REASONS[i]}" for i in range(len(REASONS))]
+    cols = [label_cells((iso_all.astype(object) + "," + _fmt(sow_all, "%.3f")).tolist(), r["epoch"]),
+            label_cells(pairs(names, sats), r["bl"] * len(sats) + r["sat"]),
+            label_cells(pairs(sigs, ["code", "phase"]), r["sig"] * 2 + r["kind"]),
+            fixed_cells(r["residual_m"], 5, True), fixed_cells(r["az_ant_deg"], 2, True),
+            fixed_cells(r["el_ant_deg"], 2, True), fixed_cells(r["cn0_dbhz"], 1, True),
+            label_cells(used_reason, r["reason"])]
+    return csv_text(header, cols)
 
 
 def events_csv(sol) -> str:
@@ -234,20 +214,15 @@ def errors_csv(sol, ref) -> str | None:
     the formal 1-sigma; None without a reference."""
     if ref is None:
         return None
-    iso, _, sow = _time_cols(sol, sol.att_epochs)
-
-    def num(a):
-        out = np.full(a.shape, "", dtype=object)
-        ok = np.isfinite(a)
-        out[ok] = _fmt(a[ok], "%.6f")
-        return out
-
-    cols = [iso, _fmt(sow, "%.3f")]
-    cols += [num(ref.euler_ref_deg[:, i]) for i in range(3)] + [num(ref.error_deg[:, i]) for i in range(3)]
-    cols += [_fmt(sol.sigma_euler_deg[:, i], "%.6f") for i in range(3)] + [_fmt(sol.att_fixed.astype(int), "%d")]
+    iso_all, _, sow_all = _epoch_time_texts(sol)
+    ep = sol.att_epochs
+    cols = [label_cells(iso_all, ep), fixed_cells(sow_all[ep], 3)]
+    cols += [fixed_cells(ref.euler_ref_deg[:, i], 6, True) for i in range(3)]
+    cols += [fixed_cells(ref.error_deg[:, i], 6, True) for i in range(3)]
+    cols += [fixed_cells(sol.sigma_euler_deg[:, i], 6) for i in range(3)] + [int_cells(sol.att_fixed.astype(int))]
     header = ("time_gps,gps_sow,yaw_ref_deg,pitch_ref_deg,roll_ref_deg,yaw_error_deg,pitch_error_deg,"
               "roll_error_deg,sigma_yaw_deg,sigma_pitch_deg,sigma_roll_deg,fixed")
-    return _join(header, cols)
+    return csv_text(header, cols)
 
 
 def all_products(sol, creation_date: str | None = None, aem_float_epochs: str = "omit") -> dict[str, str | dict]:
@@ -297,6 +272,8 @@ def product_tables(sol) -> dict[str, dict[str, np.ndarray]]:
     the solution, for the plots: same column names and rows as the CSV texts, numbers as float64 (unrounded; NaN
     where the CSV cell is empty), names as str arrays, time_gps as datetime64[ms] (GPS time, as written).
     What read_csv_table would give back from the texts, without formatting and re-parsing ~6e5 residual rows."""
+    from gnssatt.plots.common import coded_strings
+
     t_ep, week_ep, sow_ep = _epoch_times(sol)
     out: dict[str, dict[str, np.ndarray]] = {}
     if sol.att_epochs is not None:
@@ -323,13 +300,14 @@ def product_tables(sol) -> dict[str, dict[str, np.ndarray]]:
     r = sol.fr.residuals
     ep = r["epoch"]
     reasons = np.array([REASONS[i] for i in range(len(REASONS))])
+    # label columns carry their categories (gnssatt.plots.common.coded_strings): the plots need not sort them
     out["residuals.csv"] = {
         "time_gps": t_ep[ep], "gps_sow": sow_ep[ep],
-        "baseline": np.array([f"{a}>{b}" for a, b in sol.baselines] or ["-"])[r["bl"]],
-        "sat": np.asarray(sol.pobs.sats, str)[r["sat"]], "signal": np.asarray(sol.pobs.signals, str)[r["sig"]],
-        "observable": np.array(["code", "phase"])[r["kind"]],
+        "baseline": coded_strings([f"{a}>{b}" for a, b in sol.baselines] or ["-"], r["bl"]),
+        "sat": coded_strings(sol.pobs.sats, r["sat"]), "signal": coded_strings(sol.pobs.signals, r["sig"]),
+        "observable": coded_strings(["code", "phase"], r["kind"]),
         **{c: np.asarray(r[c], float) for c in ("residual_m", "az_ant_deg", "el_ant_deg", "cn0_dbhz")},
-        "used": (r["reason"] == 0).astype(float), "reason": reasons[r["reason"]]}
+        "used": (r["reason"] == 0).astype(float), "reason": coded_strings(reasons, r["reason"])}
     return out
 
 

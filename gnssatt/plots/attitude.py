@@ -17,9 +17,10 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from gnssatt.gnss.rotations import dcm_to_euler321, euler321_to_dcm, quat_to_dcm
-from gnssatt.plots.common import (EULER_COLOURS, Margins, PlotContext, Table, categories, category_memo, column, figure_png,
-                                 first_per_epoch_and_key, gps_time, new_figure, no_data, numeric, read_csv_table,
-                                 set_title, time_axis, truthy, wrap_deg)
+from gnssatt.plots.common import (EULER_COLOURS, Margins, PlotContext, Table, axes_pixels, categories, category_memo,
+                                 column, figure_png, first_per_epoch_and_key, gps_time, new_figure, no_data, numeric,
+                                 polar_screen_points, read_csv_table, screen_points, set_title, time_axis, truthy,
+                                 wrap_deg)
 
 AXES = ("yaw", "pitch", "roll")
 #: Offsets of the error curves, as seed 000 Figs. 5-7 draw them (roll +1.5 deg, pitch -1.5 deg) "for better
@@ -28,10 +29,10 @@ ERROR_OFFSETS_DEG = {"yaw": 0.0, "pitch": -1.5, "roll": 1.5}
 #: A reference sample farther than this from both neighbours of an epoch is not interpolated across [s]
 #: (star trackers drop out; bridging a gap would invent a reference).
 MAX_REFERENCE_GAP_S = 60.0
-#: Sky plots and residual scatters draw at most this many points per series (evenly thinned beyond, as the panel
-#: titles say; a 1100-px panel shows no more distinct points;
-#: all statistics use all rows, and residuals.csv holds them all).
-MAX_POINTS = 6000
+#: Sky plots and residual scatters draw the points a screen shows apart (gnssatt.plots.common.screen_points: each
+#: pixel column's extremes and one point per occupied 2 x 2 px cell, as the panel titles say); all statistics use
+#: all rows, and residuals.csv holds them all.
+DRAWN_NOTE = "screen-decimated, spikes kept"
 
 RESIDUAL_COLUMNS = {
     "baseline": ("baseline",),
@@ -473,12 +474,6 @@ def dop_plot(residuals_csv: Any = None, attitude_csv: Any = None, context: PlotC
 
 # --- residuals and sky plot -------------------------------------------------------------------------------------
 
-def _thin(idx: np.ndarray, n_max: int = MAX_POINTS) -> np.ndarray:
-    if len(idx) <= n_max:
-        return idx
-    return idx[np.linspace(0, len(idx) - 1, n_max).round().astype(np.int64)]
-
-
 def residuals_figure(residuals_csv: Any, context: PlotContext | Mapping | None = None) -> Figure:
     """Single-difference residuals over time, one row per baseline: carrier phase [mm] (left) and code [m]
     (right), one colour per signal, used observations only; the legend gives each signal's RMS."""
@@ -504,6 +499,7 @@ def residuals_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
     sig_names, sig_code = categories(sig) if sig is not None else (["?"], np.zeros(len(t), dtype=np.int64))
     used = truthy(_residual(res, "used")) if _residual(res, "used") is not None else np.ones(len(t), bool)
     phase, code = residual_values(res)
+    t_s = _seconds(t)
     for row, name in enumerate(names):
         for col, (values, unit, what) in enumerate(((phase, "mm", "phase"), (code, "m", "code"))):
             ax = axes[row, col]
@@ -518,12 +514,12 @@ def residuals_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
                 if not len(m):
                     continue
                 rms = float(np.sqrt(np.mean(values[m] ** 2)))
-                k = _thin(m)
+                k = m[screen_points(t_s[m], values[m], *axes_pixels(ax))]
                 n_used, n_drawn = n_used + len(m), n_drawn + len(k)
                 ax.plot(t[k], values[k], ".", ms=1.5, label=f"{s}: RMS {rms:.3g} {unit} (n={len(m)})")
             ax.set_ylabel(f"{what} residual [{unit}]")
             ax.set_title(f"{name} · {what}" + (f" · {n_rejected} rejected not shown" if n_rejected else "")
-                         + (f" · {n_drawn} of {n_used} drawn (evenly thinned; RMS of all)"
+                         + (f" · {n_drawn} of {n_used} drawn ({DRAWN_NOTE})"
                             if n_drawn < n_used else ""), fontsize=8)
             ax.grid(color="0.88", lw=0.5)
             if ax.get_legend_handles_labels()[0]:
@@ -577,7 +573,7 @@ def skyplot_figure(residuals_csv: Any, context: PlotContext | Mapping | None = N
     for j, (ax, name) in enumerate(zip(axes, names)):
         m = (base_code == j) & np.isfinite(az) & np.isfinite(el)
         rows_all = first_per_epoch_and_key(t, sat_code, np.flatnonzero(m))
-        rows = _thin(rows_all)
+        rows = rows_all[polar_screen_points(ax, az[rows_all], 90.0 - el[rows_all])]
         ax.set_theta_zero_location("N")
         ax.set_theta_direction(-1)
         r_max = max(90.0, 90.0 - float(np.min(el[rows])) + 2.0) if len(rows) else 90.0
@@ -595,7 +591,7 @@ def skyplot_figure(residuals_csv: Any, context: PlotContext | Mapping | None = N
             last = rows[sats[rows] == s][-1]
             ax.annotate(s, (np.radians(az[last]), 90.0 - el[last]), fontsize=6, color="0.25")
         first_ant = name.split(">")[0] if ">" in name else name
-        thinned = (f"\n{len(rows)} of {len(rows_all)} epoch-satellite points drawn (evenly thinned)"
+        thinned = (f"\n{len(rows)} of {len(rows_all)} epoch-satellite points drawn ({DRAWN_NOTE})"
                    if len(rows) < len(rows_all) else "")
         ax.set_title(f"{name}\nantenna frame of {first_ant} (elevation on radius){thinned}", fontsize=8)
     if scatter is not None:

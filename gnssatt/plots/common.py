@@ -11,6 +11,7 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 from matplotlib import dates as mdates
+from numba import njit
 from matplotlib.figure import Figure
 
 #: One product table: column name -> 1-D array (float64 where every non-empty cell is a number, else str).
@@ -244,10 +245,39 @@ def category_memo():
         _memo.table = outer
 
 
+class CodedStrings(np.ndarray):
+    """A str column built from a few labels and a code per row (`coded_strings`), carrying what `categories`
+    gives for it (`coded`), so the plots do not sort ~6e5 strings to find the labels again. Views and results
+    of operations on it are plain-behaving arrays without `coded` (categories then computes as usual)."""
+
+
+def coded_strings(labels, codes) -> np.ndarray:
+    """labels[codes] as a str column that carries its categories (CodedStrings); a plain str array when the
+    labels repeat (categories would merge them)."""
+    labels = [str(v) for v in labels]
+    codes = np.asarray(codes, dtype=np.int64)
+    column_ = np.asarray(labels or [""], dtype=str)[codes]
+    if len(set(labels)) != len(labels) or codes.size == 0:
+        return column_
+    first = np.full(len(labels), codes.size, np.int64)
+    np.minimum.at(first, codes, np.arange(codes.size))       # first row of each label (no sort)
+    present = np.flatnonzero(first < codes.size)
+    order = present[np.argsort(first[present])]               # label indices in order of first appearance
+    rank = np.full(len(labels), -1, np.int64)
+    rank[order] = np.arange(order.size)
+    out = column_.view(CodedStrings)
+    out.coded = ([labels[j] for j in order], rank[codes])
+    return out
+
+
 def categories(values: np.ndarray) -> tuple[list[str], np.ndarray]:
     """(distinct values in order of first appearance, int code per row indexing that list) of a column, as
     `list(dict.fromkeys(values))` and a lookup would give, by one sort of the fixed-width cells as raw bytes
-    (~6e5 residual rows: 0.07 s instead of ~0.3 s for dict/set over numpy str scalars)."""
+    (~6e5 residual rows: 0.07 s instead of ~0.3 s for dict/set over numpy str scalars); a CodedStrings column
+    gives the categories it carries."""
+    coded = getattr(values, "coded", None) if isinstance(values, CodedStrings) else None
+    if coded is not None:
+        return coded[0], coded[1]
     memo = getattr(_memo, "table", None)
     if memo is not None:
         hit = memo.get(id(values))
@@ -283,9 +313,27 @@ def first_per_epoch_and_key(time: np.ndarray, codes: np.ndarray, rows: np.ndarra
         return rows
     n_codes = int(codes.max()) + 1 if codes.size else 1
     t_ms = np.asarray(time, dtype="datetime64[ms]").astype(np.int64)
-    key = t_ms[rows] * n_codes + codes[rows]
+    t_rows, c_rows = t_ms[rows], np.asarray(codes, np.int64)[rows]
+    if np.all(t_rows[1:] >= t_rows[:-1]) and c_rows.min() >= 0:
+        return rows[_first_per_time_and_code(t_rows, c_rows, n_codes)]     # rows in time order: one pass
+    key = t_rows * n_codes + c_rows
     _, first = np.unique(key, return_index=True)
     return rows[np.sort(first)]
+
+
+@njit(cache=True, nogil=True)
+def _first_per_time_and_code(t, codes, n_codes):
+    """keep[i]: row i is the first of its (t, code) pair; t nondecreasing, so each pair's rows share one run of t."""
+    last_t = np.zeros(n_codes, np.int64)
+    seen = np.zeros(n_codes, np.bool_)
+    keep = np.zeros(t.shape[0], np.bool_)
+    for i in range(t.shape[0]):
+        c = codes[i]
+        if not seen[c] or last_t[c] != t[i]:
+            keep[i] = True
+            seen[c] = True
+            last_t[c] = t[i]
+    return keep
 
 
 def truthy(values: np.ndarray) -> np.ndarray:
@@ -326,3 +374,81 @@ def wrap_deg(angle_deg: np.ndarray) -> np.ndarray:
     """Angles wrapped into (-180, 180] degrees."""
     wrapped = np.mod(np.asarray(angle_deg, dtype=np.float64) + 180.0, 360.0) - 180.0
     return np.where(wrapped == -180.0, 180.0, wrapped)
+
+
+def axes_pixels(ax) -> tuple[int, int]:
+    """(width, height) of an axes' plotting area in output pixels (figure size x DPI x axes position)."""
+    fig = ax.get_figure()
+    pos = ax.get_position()
+    w_in, h_in = fig.get_size_inches()
+    return max(int(round(pos.width * w_in * DPI)), 1), max(int(round(pos.height * h_in * DPI)), 1)
+
+
+def screen_points(x: np.ndarray, y: np.ndarray, width_px: int, height_px: int | None = None,
+                  cell_px: float = 2.0) -> np.ndarray:
+    """Sorted indices of the points of (x, y) that a width_px-wide panel can show apart: in each pixel column the
+    first, last, lowest and highest finite point (M4 aggregation: Jugel et al. 2014, "M4: a visualization-oriented
+    time series data aggregation", PVLDB 7(10)), so spikes and the envelope stay as the full series draws them;
+    with height_px, also the first point of every occupied cell of cell_px x cell_px pixels (a scatter's dots
+    fill the same cells). Columns and cells span the finite data's own range. Non-finite points are dropped; a
+    series of at most 4 points per pixel column is kept whole."""
+    x, y = np.asarray(x, np.float64), np.asarray(y, np.float64)
+    ok = np.flatnonzero(np.isfinite(x) & np.isfinite(y))
+    n_cols = max(int(width_px), 1)
+    if ok.size <= 4 * n_cols:
+        return ok                                        # no more than M4 would keep: drawn whole
+    xs, ys = np.ascontiguousarray(x[ok]), np.ascontiguousarray(y[ok])
+    grid = (0, 0) if height_px is None else (max(int(np.ceil(width_px / cell_px)), 1),
+                                             max(int(np.ceil(height_px / cell_px)), 1))
+    keep = np.zeros(ok.size, np.bool_)
+    _screen_kernel(xs, ys, n_cols, grid[0], grid[1], keep)
+    return ok[keep]
+
+
+@njit(cache=True, nogil=True)
+def _bin(v, lo, hi, n):
+    """Bin 0..n-1 of v in [lo, hi] split into n equal bins (all in bin 0 when hi == lo)."""
+    if hi <= lo:
+        return 0
+    return min(int((v - lo) * (n / (hi - lo))), n - 1)
+
+
+@njit(cache=True, nogil=True)
+def _screen_kernel(x, y, n_cols, cell_cols, cell_rows, keep):
+    """keep[i] = True for screen_points' points of finite (x, y): per column first/last/min/max, and the first
+    point of each occupied cell of a cell_cols x cell_rows grid (none when cell_rows == 0)."""
+    x0, x1, y0, y1 = x.min(), x.max(), y.min(), y.max()
+    ext = np.full((4, n_cols), -1, np.int64)             # first, last, lowest, highest per column
+    occupied = np.zeros(max(cell_cols * cell_rows, 1), np.bool_)
+    for i in range(x.shape[0]):
+        c = _bin(x[i], x0, x1, n_cols)
+        if ext[0, c] < 0 or x[i] < x[ext[0, c]]:
+            ext[0, c] = i
+        if ext[1, c] < 0 or x[i] >= x[ext[1, c]]:
+            ext[1, c] = i
+        if ext[2, c] < 0 or y[i] < y[ext[2, c]]:
+            ext[2, c] = i
+        if ext[3, c] < 0 or y[i] > y[ext[3, c]]:
+            ext[3, c] = i
+        if cell_rows > 0:
+            cell = _bin(x[i], x0, x1, cell_cols) * cell_rows + _bin(y[i], y0, y1, cell_rows)
+            if not occupied[cell]:
+                occupied[cell] = True
+                keep[i] = True
+    for k in range(4):
+        for c in range(n_cols):
+            if ext[k, c] >= 0:
+                keep[ext[k, c]] = True
+
+
+def polar_screen_points(ax, az_deg: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """screen_points of a polar axes' (azimuth, radius) points, on the plane the panel shows them in."""
+    w, h = axes_pixels(ax)
+    a = np.radians(az_deg)
+    return screen_points(r * np.sin(a), r * np.cos(a), w, h)
+
+
+def warm_up() -> None:
+    """Compile (or load from the cache) the decimation kernels."""
+    screen_points(np.arange(8.0), np.arange(8.0), 1, 4)             # > 4 points per column: the kernel runs
+    first_per_epoch_and_key(np.arange(3).astype("datetime64[ms]"), np.zeros(3, np.int64), np.arange(3))

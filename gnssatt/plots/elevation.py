@@ -15,20 +15,18 @@ from typing import Any, Mapping
 import numpy as np
 from matplotlib.figure import Figure
 
-from gnssatt.plots.common import (Margins, PlotContext, categories, column, figure_png, first_per_epoch_and_key,
-                                  gps_time, new_figure, no_data, numeric, read_csv_table, set_title, truthy)
+from gnssatt.plots.common import (Margins, PlotContext, axes_pixels, categories, column, figure_png,
+                                  first_per_epoch_and_key, gps_time, new_figure, no_data, numeric, polar_screen_points,
+                                  read_csv_table, screen_points, set_title, truthy)
 
 __all__ = ["elevation_figure", "elevation_plot", "fix_skyplot_figure", "fix_skyplot_plot", "binned"]
 
 BIN_DEG = 5.0
-#: scatter points drawn per series at most (evenly thinned; the bin statistics use every row)
-MAX_POINTS = 6000
 
-
-def _thin(idx: np.ndarray, n_max: int = MAX_POINTS) -> np.ndarray:
-    if len(idx) <= n_max:
-        return idx
-    return idx[np.linspace(0, len(idx) - 1, n_max).round().astype(np.int64)]
+def _drawn(ax, rows: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The rows of a scatter the panel shows apart (gnssatt.plots.common.screen_points; the bin statistics use
+    every row)."""
+    return rows[screen_points(x[rows], y[rows], *axes_pixels(ax))]
 
 
 def binned(el_deg: np.ndarray, values: np.ndarray, stat: str = "rms", bin_deg: float = BIN_DEG):
@@ -57,7 +55,8 @@ def _columns(res):
     used = np.ones(n, bool) if used is None else truthy(used)
     kind, r = column(res, "observable"), numeric(res, "residual_m")
     if kind is not None and r is not None:
-        phase = np.char.lower(np.asarray(kind, dtype=str)) == "phase"
+        kinds, kind_code = categories(kind)
+        phase = np.isin(kind_code, [i for i, k in enumerate(kinds) if k.lower() == "phase"])
         phase_mm = 1e3 * r
     else:
         mm, m = numeric(res, "phase_residual_mm"), numeric(res, "phase_residual_m")
@@ -97,7 +96,7 @@ def elevation_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
         for s, sig in enumerate(sig_names):
             m = np.flatnonzero((code == row) & (sig_code == s) & used & phase & np.isfinite(r_mm) & np.isfinite(el))
             if m.size:
-                k = _thin(m)
+                k = _drawn(ax_r, m, el, r_mm)
                 colour = f"C{s % 10}"
                 ax_r.plot(el[k], r_mm[k], ".", ms=1.2, color=colour, alpha=0.35)
                 c, rms, n = binned(el[m], r_mm[m])
@@ -106,7 +105,7 @@ def elevation_figure(residuals_csv: Any, context: PlotContext | Mapping | None =
             mc = np.flatnonzero((code == row) & (sig_code == s) & phase & np.isfinite(cn0) & np.isfinite(el))
             if mc.size:
                 mc = first_per_epoch_and_key(gps_time(res), sig_code, mc)
-                k = _thin(mc)
+                k = _drawn(ax_c, mc, el, cn0)
                 ax_c.plot(el[k], cn0[k], ".", ms=1.2, color=f"C{s % 10}", alpha=0.35)
                 c, med, n = binned(el[mc], cn0[mc], "median")
                 ok = n >= 10
@@ -165,7 +164,7 @@ def fix_skyplot_figure(residuals_csv: Any, baselines_csv: Any, context: PlotCont
         ax.set_theta_zero_location("N")
         ax.set_theta_direction(-1)
         for mask, colour, label in ((~fx, "#ff7f0e", "float"), (fx, "#2ca02c", "fixed")):
-            k = _thin(rows[mask])
+            k = rows[mask][polar_screen_points(ax, az[rows[mask]], 90.0 - el[rows[mask]])]
             ax.scatter(np.radians(az[k]), 90.0 - el[k], s=3, color=colour, linewidths=0,
                        label=f"{label} ({int(mask.sum())})")
         r_max = max(90.0, 90.0 - float(np.min(el[rows])) + 2.0) if len(rows) else 90.0
