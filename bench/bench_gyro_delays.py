@@ -2,7 +2,8 @@
 the GPS FDI figures and the gyro false events of the same runs; sets are simulated once into --sets and reused.
 
     PYTHONPATH=. python bench/bench_gyro_delays.py --sets DIR [--orbits equatorial polar] [--seeds 2 3 4]
-        [--clean] [--simulate-only] [--settings JSON] [--out RESULTS.json]
+        [--clean] [--step] [--simulate-only] [--settings JSON] [--out RESULTS.jsonl]
+    PYTHONPATH=. python bench/bench_gyro_delays.py --table RESULTS.jsonl      # the docs/BENCHMARKS.md tables
 
 The scenario is bench/bench_gyro_fusion.py's (one orbit + 600 s, GPS faults every 60 s, a 30 s outage at 1800 s,
 a 10x y-axis drift fault after the orbit: a ramp over 300 s, or a step with --step). Prints one JSON line per run.
@@ -96,9 +97,77 @@ def one_run(files, set_dir: Path, settings: dict, clean: bool) -> dict:
             "wrong_integers": integer_failures(set_dir, res.run, res.gps)["epochs_with_wrong_integer"]}
 
 
+F_RAD_S = 10 * 48.48e-6      # the fault's full size
+RAMP_S = 300.0
+
+
+def integrated_fault_rad(tau_s: float, step: bool) -> float:
+    """Integral of the fault over its first tau_s seconds (a step of F, or a ramp to F over RAMP_S)."""
+    if step:
+        return F_RAD_S * tau_s
+    if tau_s <= RAMP_S:
+        return F_RAD_S * tau_s ** 2 / (2 * RAMP_S)
+    return F_RAD_S * (RAMP_S / 2 + tau_s - RAMP_S)
+
+
+def earliest_delay_s(threshold_rad: float, step: bool) -> float:
+    """The first tau at which the integrated fault reaches threshold_rad (no noise, nothing absorbed)."""
+    taus = np.arange(0.0, 2000.0, 1.0)
+    vals = np.array([integrated_fault_rad(t, step) for t in taus])
+    return float(taus[np.argmax(vals >= threshold_rad)])
+
+
+def _fmt(d: dict | None, j: int) -> str:
+    return f"{d[str(j)]:.0f}" if d and str(j) in d else "-"
+
+
+def table(path: str, kappa: float = 5.0, delay_step_s: float = 60.0) -> None:
+    """Markdown tables of a results file (docs/BENCHMARKS.md "Gyro fault detection delay per propagator")."""
+    docs = [json.loads(ln) for ln in open(path) if ln.strip()]
+    faults = [d for d in docs if d["kind"] != "clean"]
+    print("| fault | orbit | seed | delay s, propagator 1 / 2 / 3 / 4 / 5 | first detection, bank of 1 / 2 / 3 / 4 / 5 |"
+          " axis | gyro false events | GPS missed | isolated right | GPS false alarms / fault-free epochs |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for d in faults:
+        g, dl = d["gps"], d["gyro_delay_s"] or {}
+        bank = []
+        for n in range(1, 6):
+            v = [dl[str(j)] for j in range(1, n + 1) if str(j) in dl]
+            bank.append(f"{min(v):.0f}" if v else "-")
+        print(f"| {d['kind']} | {d['orbit']} | {d['seed']} | {' / '.join(_fmt(dl, j) for j in range(1, 6))} | "
+              f"{' / '.join(bank)} | {''.join(d['gyro_axis'] or [])} | {d['gyro_false_events']} | "
+              f"{g['missed']}/{g['faults_on_used_satellites']} | {g['isolated_right']}/{g['detected']} | "
+              f"{g['false_alarms']}/{g['clean_epochs']} |")
+    print()
+    print("| propagator (delay) | sigma_y before the fault, mrad (median over runs) | 5 sigma, mrad | fault over one "
+          "delay F D_j, mrad | earliest delay ramp / step, s | measured ramp: median (runs detected) | "
+          "measured step: median (runs detected) |")
+    print("|---|---|---|---|---|---|---|")
+    for j in range(1, 6):
+        sig = np.median([d["fault_axis"][str(j)]["sigma_mrad_before"] for d in faults])
+        thr = kappa * sig * 1e-3
+        meas = []
+        for kind in ("ramp", "step"):
+            v = [d["gyro_delay_s"][str(j)] for d in faults if d["kind"] == kind and str(j) in (d["gyro_delay_s"] or {})]
+            n = sum(1 for d in faults if d["kind"] == kind)
+            meas.append(f"{np.median(v):.0f} ({len(v)} of {n})" if v else f"- (0 of {n})")
+        print(f"| {j} ({j * delay_step_s:.0f} s) | {sig:.1f} | {1e3 * thr:.0f} | {1e3 * F_RAD_S * j * delay_step_s:.0f} | "
+              f"{earliest_delay_s(thr, False):.0f} / {earliest_delay_s(thr, True):.0f} | {meas[0]} | {meas[1]} |")
+    print()
+    print("| clean run | gyro false events | residual / sigma rms per propagator (x, y, z: min-max) | max |")
+    print("|---|---|---|---|")
+    for d in docs:
+        if d["kind"] != "clean":
+            continue
+        rms = np.array([v["rms"] for v in d["residual"].values()])
+        mx = max(v["max"] for v in d["residual"].values())
+        print(f"| {d['orbit']} seed {d['seed']} | {d['gyro_false_events']} | {rms.min():.2f}-{rms.max():.2f} | {mx:.1f} |")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--sets", required=True)
+    ap.add_argument("--sets", default=None)
+    ap.add_argument("--table", default=None, help="print the markdown tables of this results file and stop")
     ap.add_argument("--orbits", nargs="+", default=["equatorial", "polar"])
     ap.add_argument("--seeds", nargs="+", type=int, default=[2, 3, 4])
     ap.add_argument("--clean", action="store_true")
@@ -107,6 +176,9 @@ def main() -> None:
     ap.add_argument("--settings", default="{}", help="fusion settings as JSON (FusionSettings.from_dict)")
     ap.add_argument("--out", default=None, help="append the JSON lines to this file too")
     a = ap.parse_args()
+    if a.table:
+        table(a.table)
+        return
     root = Path(a.sets)
     for orbit in a.orbits:
         for seed in a.seeds:

@@ -1,22 +1,24 @@
 """Gyro fault detection by a bank of delayed attitude propagators (seed 002 sec. 3.2, Fig. 1 part a).
 
-Propagator j (j = 1..N) starts from the filter's posterior of D_j = j * delay_step_s earlier and propagates the
-attitude with the gyro alone (eq. 9, drift estimate of that time removed) up to the current GPS epoch, with P_j the
-delayed posterior carried through the filter's transition matrices and process noise over the delay.
-
-What its residual is compared with (`GyroFdi.reference`):
-- "filter" (default): the filter's posterior attitude q_k|k of the same epoch, as seed 002 Fig. 5 shows the
-  filtered quaternion increment of each filter-propagator pair against its 1-sigma bound. r_j = rotvec(q_k|k (x)
-  q_j^-1) is the difference of two estimates of one state from nested data (the posterior of k - D_j carried to
-  k, and the posterior of k), so without a fault its covariance is S_j = P_j - P_k|k (attitude block). The GPS
-  snapshot's white noise, which the filter averages over the delay, is not in it.
-- "gps": the snapshot attitude q_gps, r_j = rotvec(q_gps (x) q_j^-1), S_j = H P_j H' + R with R the snapshot's
-  white covariance (one epoch's GPS noise in every test).
+`GyroFdi.reference` chooses the propagators and what their residual is compared with:
+- "independent" (default; the abstract's "bank of extended Kalman filters with different time delays"):
+  propagator j (j = 1..N) is its own EKF (`IndependentFilters`), started once from the main filter; it
+  integrates the gyro with its own drift estimate (eq. 9) and carries its own covariance, and takes a snapshot
+  update only when D_j = j * delay_step_s has run since its last one. Every GPS epoch, before the main update,
+  r_j = rotvec(q_gps (x) q_j^-1) - beta_theta_j is tested against S_j = H P_j H' + R (R: the snapshot's white
+  covariance). Nothing of the main filter's later posteriors enters it, so a slow fault the main filter has
+  absorbed is still in its residual.
+- "filter": propagator j starts from the main filter's posterior of D_j earlier, propagates with the gyro alone
+  (drift estimate of that time) to now, with P_j that posterior carried through the filter's transitions and
+  process noise, and is compared with the filter's posterior q_k|k of now: two estimates of one state from
+  nested data, S_j = P_j - P_k|k (attitude block).
+- "gps": the same delayed posteriors, compared with the snapshot q_gps, S_j = H P_j H' + R.
 
 The gyro is flagged when |r_j| exceeds `threshold_sigma` sqrt(diag S_j) on some axis in
 `persistence` consecutive epochs (the residues "grow above a tolerance level proportional to its theoretical
 standard deviation"); the axis is the one of the largest normalised residual. In seed 002 Table 2 a longer
-delay detects sooner; docs/BENCHMARKS.md ("GPS + gyro fusion") gives this bank's delays next to the paper's.
+delay detects sooner; docs/BENCHMARKS.md ("GPS + gyro fusion") gives this bank's delays next to the paper's
+and why they do not fall with the delay here.
 """
 from __future__ import annotations
 
