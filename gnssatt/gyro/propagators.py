@@ -1,14 +1,14 @@
 """Gyro fault detection by a bank of delayed attitude propagators (seed 002 sec. 3.2, Fig. 1 part a).
 
 `GyroFdi.reference` chooses the propagators and what their residual is compared with:
-- "independent" (default; the abstract's "bank of extended Kalman filters with different time delays"):
+- "independent" (the abstract's "bank of extended Kalman filters with different time delays"):
   propagator j (j = 1..N) is its own EKF (`IndependentFilters`), started once from the main filter; it
   integrates the gyro with its own drift estimate (eq. 9) and carries its own covariance, and takes a snapshot
   update only when D_j = j * delay_step_s has run since its last one. Every GPS epoch, before the main update,
   r_j = rotvec(q_gps (x) q_j^-1) - beta_theta_j is tested against S_j = H P_j H' + R (R: the snapshot's white
   covariance). Nothing of the main filter's later posteriors enters it, so a slow fault the main filter has
   absorbed is still in its residual.
-- "filter": propagator j starts from the main filter's posterior of D_j earlier, propagates with the gyro alone
+- "filter" (default): propagator j starts from the main filter's posterior of D_j earlier, propagates with the gyro alone
   (drift estimate of that time) to now, with P_j that posterior carried through the filter's transitions and
   process noise, and is compared with the filter's posterior q_k|k of now: two estimates of one state from
   nested data, S_j = P_j - P_k|k (attitude block).

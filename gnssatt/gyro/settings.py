@@ -58,7 +58,7 @@ class GyroFdi:
     delay_step_s: float = 60.0
     threshold_sigma: float = 5.0          # |residual| / its theoretical sigma on any axis ...
     persistence: int = 3                  # ... in this many consecutive GPS epochs flags the gyro
-    reference: str = "independent"        # own delayed filters vs the snapshot; "filter" posterior; "gps" snapshot
+    reference: str = "filter"             # "filter": vs the posterior; "independent": own delayed EKFs; "gps"
     clear_after: int = 6                  # epochs below the threshold that end a gyro fault event
     fault_drift_sigma_rad_s: float = 10 * 10.0 * np.pi / 180.0 / 3600.0   # drift uncertainty added on detection
 

@@ -58,27 +58,21 @@ def test_outage_continuity_and_sigma_growth(gyro_set, fused):
 
 
 def test_gyro_drift_fault_detected_no_false_alarm(gyro_set, fused):
-    """The 10x drift step on y: detected on y, no event before it, and the trend of seed 002 Table 2 on this set:
-    the propagators with the longest delays detect first. Measured: 205 s by propagators 4 and 5 (240, 300 s),
-    none by 1-3 in the 300 s left. A 60 s window integrates 29 mrad of this fault against 5 sigma ~ 68 mrad, a
-    300 s one 145 mrad against ~ 95 mrad (docs/BENCHMARKS.md "Gyro fault detection delay per propagator")."""
     d = gyro_delays(gyro_set.sim.dir, fused.run, fused.gps)
     assert d["false_events"] == 0
     f = d["faults"][0]
     assert f["axis_isolated"] == ["y"]
     delays = f["delay_s_by_propagator"]
-    assert 5 in delays and 0 < delays[5] < 250, delays
-    assert all(delays[5] <= v for v in delays.values()), delays
-    assert 1 not in delays or delays[1] > delays[5], delays
+    assert delays and all(0 < v < 200 for v in delays.values()), delays
     t_e = fused.gps.time - gyro_set.t0
     assert all(t_e[e.start] >= GYRO_FAULT_START_S for e in fused.run.gyro_events)
 
 
 def test_propagator_residuals_within_their_theoretical_sigma(gyro_set, fused):
-    """Before the gyro fault, each independent propagator's residual against the snapshot, over its sigma
-    sqrt(H P_j H' + R), has an rms of at most about 1 on every axis and stays below the threshold: the sigma is
-    not too small, so a clean gyro is not flagged. The one-orbit runs, past the start, give 0.87-1.27
-    (docs/BENCHMARKS.md); in these first 300 s the start keeps it lower."""
+    """Before the gyro fault, each propagator's residual against the filter's posterior, over its sigma
+    sqrt(P_j - P_k|k), has an rms of at most about 1 on every axis and stays below the threshold: the sigma is not
+    too small, so a clean gyro is not flagged. The one-orbit runs, past the filter's start, give 0.92-1.11
+    (docs/BENCHMARKS.md); in these first 300 s the filter's start keeps it lower."""
     rows = np.array(fused.run.gyro_tests)
     t_e = np.asarray(fused.gps.time - gyro_set.t0, float)
     z = rows[t_e[rows[:, 0].astype(int)] < GYRO_FAULT_START_S, 2:5]

@@ -69,9 +69,29 @@ def test_longer_delay_detects_a_fault_the_shorter_cannot():
     assert 1 not in first and first[2] <= 24        # 2 flags by 120 s (epoch 24); 1 never within 300 s
 
 
+def test_independent_bank_on_the_shared_set_longest_delay_first(gyro_set):
+    """The shared 10-minute set (10x drift step on y from 300 s) with gyro_fdi.reference = independent: detected
+    on y, nothing before the fault, and the trend of seed 002 Table 2: the longest delays detect first. Measured:
+    205 s by propagators 4 and 5 (240, 300 s), none by 1-3 in the 300 s left. A 60 s window integrates 29 mrad
+    of this fault against 5 sigma ~ 68 mrad, a 300 s one 145 mrad against ~ 95 mrad (docs/BENCHMARKS.md "Gyro
+    fault detection delay per propagator")."""
+    from gnssatt.gyro.api import fuse
+    from gnssatt.gyro.truth import gyro_delays
+
+    res = fuse(gyro_set.files, {"gyro_fdi": {"reference": "independent"}})
+    d = gyro_delays(gyro_set.sim.dir, res.run, res.gps)
+    assert d["false_events"] == 0
+    assert d["faults"][0]["axis_isolated"] == ["y"]
+    delays = d["faults"][0]["delay_s_by_propagator"]
+    assert 5 in delays and 0 < delays[5] < 250, delays
+    assert all(delays[5] <= v for v in delays.values()), delays
+    assert 1 not in delays or delays[1] > delays[5], delays
+
+
 @pytest.fixture(scope="module")
 def clean_runs(tmp_path_factory):
-    """Three clean 15-minute seed 002 Table 1 sets (no GPS or gyro fault, no outage), two orbits, fused."""
+    """Three clean 15-minute seed 002 Table 1 sets (no GPS or gyro fault, no outage), two orbits, each fused
+    with the default propagators (tested against the filter's posterior) and with the independent ones."""
     from gnssatt.gyro.api import fuse
     from gnssatt.sim.gyro_scenario import GyroScenario, simulate_gyro_set
 
@@ -79,20 +99,24 @@ def clean_runs(tmp_path_factory):
     for orbit, seed in (("equatorial", 5), ("polar", 6), ("equatorial", 7)):
         gs = simulate_gyro_set(GyroScenario(orbit=orbit, duration_s=900.0),
                                tmp_path_factory.mktemp("clean") / "set", seed=seed)
-        out.append((orbit, seed, fuse(gs.files)))
+        for ref in ("filter", "independent"):
+            out.append((orbit, seed, ref, fuse(gs.files, {"gyro_fdi": {"reference": ref}})))
     return out
 
 
 def test_no_gyro_false_alarm_on_clean_runs(clean_runs):
-    """The independent propagators' residuals over their own sigma on clean data: no event, the largest below the
-    5-sigma threshold, and a sigma not too small: rms below 1.4 (~180 tests per propagator, correlated over ~1
-    min). No lower bound: in 15 min the 300 s propagator has had three updates of its own and its sigma is still
-    the start's, conservative (rms 0.57 seen; the one-orbit runs in docs/BENCHMARKS.md give 0.87-1.27)."""
-    for orbit, seed, res in clean_runs:
-        assert res.run.gyro_events == [], (orbit, seed, res.run.gyro_events)
+    """Both banks on clean data: no event in any run and the largest normalised residual below the 5-sigma
+    threshold (seen: 2.7-3.3). Their sigma is about right: the rms per axis pooled over the three runs and five
+    propagators is 0.86-0.98 (seen). Consecutive tests of one propagator share all but 5 s of its window, so a
+    15-minute run holds a few independent samples of each (single-propagator rms of 0.43-1.49 seen); pooled,
+    0.6-1.25 would still catch a sigma 25 % too small or 40 % too large."""
+    pooled = {"filter": [], "independent": []}
+    for orbit, seed, ref, res in clean_runs:
+        assert res.run.gyro_events == [], (orbit, seed, ref, res.run.gyro_events)
         z = np.array(res.run.gyro_tests)
-        assert len(z) >= 5 * 150
-        assert np.abs(z[:, 2:5]).max() < res.settings.gyro_fdi.threshold_sigma, (orbit, seed)
-        for j in range(1, 6):
-            rms = np.sqrt((z[z[:, 1] == j, 2:5] ** 2).mean(axis=0))
-            assert np.all(rms < 1.4), (orbit, seed, j, rms)
+        assert len(z) >= 600                      # the filter-referenced bank starts propagator j after its delay
+        assert np.abs(z[:, 2:5]).max() < res.settings.gyro_fdi.threshold_sigma, (orbit, seed, ref)
+        pooled[ref].append(z[:, 2:5])
+    for ref, zs in pooled.items():
+        rms = np.sqrt((np.vstack(zs) ** 2).mean(axis=0))
+        assert np.all((rms > 0.6) & (rms < 1.25)), (ref, rms)
