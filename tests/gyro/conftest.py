@@ -1,7 +1,6 @@
 """One short simulated seed 002 set shared by the gyro tests: 10 min of the Table 1 scenario (equatorial 650 km,
 0.6 m square, 0.2 Hz L1, 10 Hz gyro) with GPS phase faults of 0.35 cycle every 60 s, a 30 s outage of all
-satellites at 200 s and a 10x gyro drift step on the y axis from 300 s (the independent propagators take
-~200 s to see it), fused once with the default settings."""
+satellites at 200 s and a 10x gyro drift step on the y axis from 400 s, fused once with the default settings."""
 from __future__ import annotations
 
 import pytest
@@ -9,7 +8,7 @@ import pytest
 from gnssatt.sim.gyro import DriftFault, GyroErrorModel
 from gnssatt.sim.gyro_scenario import GyroScenario, simulate_gyro_set
 
-GYRO_FAULT_START_S = 300.0
+GYRO_FAULT_START_S = 400.0
 OUTAGE = (200.0, 30.0)
 
 
