@@ -125,6 +125,14 @@ def table(path: str, kappa: float = 5.0, delay_step_s: float = 60.0) -> None:
     """Markdown tables of a results file (docs/BENCHMARKS.md "Gyro fault detection delay per propagator")."""
     docs = [json.loads(ln) for ln in open(path) if ln.strip()]
     faults = [d for d in docs if d["kind"] != "clean"]
+    _delay_table(faults)
+    print()
+    _why_table(faults, kappa, delay_step_s)
+    print()
+    _clean_table([d for d in docs if d["kind"] == "clean"])
+
+
+def _delay_table(faults: list) -> None:
     print("| fault | orbit | seed | delay s, propagator 1 / 2 / 3 / 4 / 5 | first detection, bank of 1 / 2 / 3 / 4 / 5 |"
           " axis | gyro false events | GPS missed | isolated right | GPS false alarms / fault-free epochs |")
     print("|---|---|---|---|---|---|---|---|---|---|")
@@ -138,7 +146,9 @@ def table(path: str, kappa: float = 5.0, delay_step_s: float = 60.0) -> None:
               f"{' / '.join(bank)} | {''.join(d['gyro_axis'] or [])} | {d['gyro_false_events']} | "
               f"{g['missed']}/{g['faults_on_used_satellites']} | {g['isolated_right']}/{g['detected']} | "
               f"{g['false_alarms']}/{g['clean_epochs']} |")
-    print()
+
+
+def _why_table(faults: list, kappa: float, delay_step_s: float) -> None:
     print("| propagator (delay) | sigma_y before the fault, mrad (median over runs) | 5 sigma, mrad | fault over one "
           "delay F D_j, mrad | earliest delay ramp / step, s | measured ramp: median (runs detected) | "
           "measured step: median (runs detected) |")
@@ -148,20 +158,22 @@ def table(path: str, kappa: float = 5.0, delay_step_s: float = 60.0) -> None:
         thr = kappa * sig * 1e-3
         meas = []
         for kind in ("ramp", "step"):
-            v = [d["gyro_delay_s"][str(j)] for d in faults if d["kind"] == kind and str(j) in (d["gyro_delay_s"] or {})]
-            n = sum(1 for d in faults if d["kind"] == kind)
-            meas.append(f"{np.median(v):.0f} ({len(v)} of {n})" if v else f"- (0 of {n})")
-        print(f"| {j} ({j * delay_step_s:.0f} s) | {sig:.1f} | {1e3 * thr:.0f} | {1e3 * F_RAD_S * j * delay_step_s:.0f} | "
+            runs = [d for d in faults if d["kind"] == kind]
+            v = [d["gyro_delay_s"][str(j)] for d in runs if str(j) in (d["gyro_delay_s"] or {})]
+            meas.append(f"{np.median(v):.0f} ({len(v)} of {len(runs)})" if v else f"- (0 of {len(runs)})")
+        window_mrad = 1e3 * F_RAD_S * j * delay_step_s
+        print(f"| {j} ({j * delay_step_s:.0f} s) | {sig:.1f} | {1e3 * thr:.0f} | {window_mrad:.0f} | "
               f"{earliest_delay_s(thr, False):.0f} / {earliest_delay_s(thr, True):.0f} | {meas[0]} | {meas[1]} |")
-    print()
+
+
+def _clean_table(clean: list) -> None:
     print("| clean run | gyro false events | residual / sigma rms per propagator (x, y, z: min-max) | max |")
     print("|---|---|---|---|")
-    for d in docs:
-        if d["kind"] != "clean":
-            continue
+    for d in clean:
         rms = np.array([v["rms"] for v in d["residual"].values()])
         mx = max(v["max"] for v in d["residual"].values())
-        print(f"| {d['orbit']} seed {d['seed']} | {d['gyro_false_events']} | {rms.min():.2f}-{rms.max():.2f} | {mx:.1f} |")
+        print(f"| {d['orbit']} seed {d['seed']} | {d['gyro_false_events']} | {rms.min():.2f}-{rms.max():.2f} | "
+              f"{mx:.1f} |")
 
 
 def main() -> None:

@@ -8,8 +8,8 @@
   r_j = rotvec(q_gps (x) q_j^-1) - beta_theta_j is tested against S_j = H P_j H' + R (R: the snapshot's white
   covariance). Nothing of the main filter's later posteriors enters it, so a slow fault the main filter has
   absorbed is still in its residual.
-- "filter" (default): propagator j starts from the main filter's posterior of D_j earlier, propagates with the gyro alone
-  (drift estimate of that time) to now, with P_j that posterior carried through the filter's transitions and
+- "filter" (default): propagator j starts from the main filter's posterior of D_j earlier, propagates with the
+  gyro alone (drift estimate of that time) to now, with P_j that posterior carried through the filter's transitions and
   process noise, and is compared with the filter's posterior q_k|k of now: two estimates of one state from
   nested data, S_j = P_j - P_k|k (attitude block).
 - "gps": the same delayed posteriors, compared with the snapshot q_gps, S_j = H P_j H' + R.
