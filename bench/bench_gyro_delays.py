@@ -133,8 +133,8 @@ def table(path: str, kappa: float = 5.0, delay_step_s: float = 60.0) -> None:
 
 
 def _delay_table(faults: list) -> None:
-    print("| fault | orbit | seed | delay s, propagator 1 / 2 / 3 / 4 / 5 | first detection, bank of 1 / 2 / 3 / 4 / 5 |"
-          " axis | gyro false events | GPS missed | isolated right | GPS false alarms / fault-free epochs |")
+    print("| fault | orbit | seed | delay s, propagator 1 / 2 / 3 / 4 / 5 | "
+          "first detection, bank of 1 / 2 / 3 / 4 / 5 | axis | gyro false events | GPS missed | isolated right | GPS false alarms / fault-free epochs |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for d in faults:
         g, dl = d["gps"], d["gyro_delay_s"] or {}
