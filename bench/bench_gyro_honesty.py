@@ -75,7 +75,10 @@ def main() -> None:
     a = ap.parse_args()
     if a.summary:
         docs = [json.loads(ln) for ln in open(a.summary) if ln.strip()]
-        print(json.dumps(summary(docs)))
+        out = {"all": summary(docs)}
+        for orbit in sorted({d["orbit"] for d in docs}):
+            out[orbit] = summary([d for d in docs if d["orbit"] == orbit])
+        print(json.dumps(out))
         return
     for i, seed in enumerate(a.seeds):
         doc = one_run(a.orbits[i % len(a.orbits)], seed, a.duration_s, a.settle_s)
