@@ -42,7 +42,9 @@ def one_run(orbit: str, seed: int, duration_s: float, settle_s: float) -> dict:
         return {"orbit": orbit, "seed": seed, "duration_s": duration_s, "settle_s": settle_s,
                 "ratio": [round(r, 4) for r, _ in per_axis], "ratio_sd": [round(s, 4) for _, s in per_axis],
                 "sum_z2": (z ** 2).sum(axis=0).tolist(), "n": int(len(z)),
-                "fused_rms_deg": sc["fused"]["rms_deg"], "wall_s": round(time.perf_counter() - t, 1)}
+                "fused_rms_deg": sc["fused"]["rms_deg"], "gyro_events": len(res.run.gyro_events),
+                "gps_detections": len(res.run.gps_events), "gps_epochs": len(res.gps.time),
+                "wall_s": round(time.perf_counter() - t, 1)}
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 
@@ -59,7 +61,9 @@ def summary(docs: list[dict]) -> dict:
     return {"runs": n, "mean_ratio": r.mean(0).round(3).tolist(), "ci95_low": (r.mean(0) - half).round(3).tolist(),
             "ci95_high": (r.mean(0) + half).round(3).tolist(), "across_run_sd": r.std(0, ddof=1).round(3).tolist(),
             "pooled_rms": pooled.round(3).tolist(), "mean_sampling_sd_model": sd_model.round(3).tolist(),
-            "min": r.min(0).round(3).tolist(), "max": r.max(0).round(3).tolist()}
+            "min": r.min(0).round(3).tolist(), "max": r.max(0).round(3).tolist(),
+            "gyro_events": sum(d.get("gyro_events", 0) for d in docs),
+            "runs_with_gyro_count": sum(1 for d in docs if "gyro_events" in d)}
 
 
 def main() -> None:
