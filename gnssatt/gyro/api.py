@@ -88,6 +88,7 @@ def _summary(res_run, gps, gyro, settings) -> dict:
             "kappa": settings.gps_fdi.kappa, "n_propagators": settings.gyro_fdi.n_propagators,
             "propagator_delays_s": [settings.gyro_fdi.delay_step_s * (j + 1)
                                     for j in range(settings.gyro_fdi.n_propagators)],
+            "gyro_test_reference": settings.gyro_fdi.reference,
             "frames": "GCRF from ECEF by IAU 2006/2000A, zero EOP", "warnings": gps.warnings}
 
 

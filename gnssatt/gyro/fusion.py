@@ -44,6 +44,7 @@ class FusionRun:
     costs: list = field(default_factory=list)
     gyro_events: list = field(default_factory=list)
     gyro_tests: list = field(default_factory=list)
+    gyro_test_sigmas: list = field(default_factory=list)   # (epoch, propagator, sigma x, y, z rad) of gyro_tests
     integers: dict = field(default_factory=dict)      # epoch -> (reference sat, other sats, DD integers (m-1, n-1))
     P_post: np.ndarray | None = None                  # (n_ep, 9, 9) covariance after each GPS epoch
     gyro_rates: np.ndarray | None = None
@@ -106,7 +107,7 @@ def run_fusion(gps: GpsData, gyro: GyroLog, s: FusionSettings, progress=None) ->
             q, P, Phi, Qi = propagate(state.q, state.bias, state.P, rates[seg], dts[seg], arw2,
                                       s.gyro.drift_sigma_rad_s, s.gyro.drift_tau_s, gm_cov, s.gps.multipath_tau_s,
                                       out_q[seg], out_P[seg])
-            bank_g.transition(k, Phi, Qi)
+            bank_g.transition(k, Phi, Qi, rates[seg], dts[seg])
             span = float(dts[seg].sum())
             state = FilterState(q, state.bias * np.exp(-span / s.gyro.drift_tau_s),
                                 state.beta_theta * np.exp(-span / s.gps.multipath_tau_s), P)
@@ -131,13 +132,15 @@ def run_fusion(gps: GpsData, gyro: GyroLog, s: FusionSettings, progress=None) ->
         R_white = 0.5 * (R_white + R_white.T) + np.eye(3) * 1e-12
         if state is None:
             state = _init_state(fit, R_bi_gps, s)
-            bank_g.remember(k, state.q, state.bias, state.P, i_k)
+            bank_g.remember(k, state.q, state.bias, state.P, i_k, state.beta_theta)
             i_prev = i_k
             continue
         if s.gyro_fdi.reference == "gps":
             _gyro_test(bank_g, state, k, q_gps, R_white, rates, dts, i_k, s)
+        elif s.gyro_fdi.reference == "independent":
+            _flag(state, bank_g.test_independent(k, q_gps, R_white), s)
         state, z, S = update(state, q_gps, R_white)
-        if s.gyro_fdi.reference != "gps":
+        if s.gyro_fdi.reference == "filter":
             _gyro_test(bank_g, state, k, state.q, state.P, rates, dts, i_k, s)
         run.innovation[k] = z / np.sqrt(np.diag(S))
         run.bias[k], run.bias_P[k] = state.bias, state.P[3:6, 3:6]
@@ -155,12 +158,17 @@ def run_fusion(gps: GpsData, gyro: GyroLog, s: FusionSettings, progress=None) ->
     run.gyro_rates, run.gyro_dts = rates, dts
     run.gyro_events = bank_g.finish()
     run.gyro_tests = bank_g.rows
+    run.gyro_test_sigmas = bank_g.sigma_rows
     return run
 
 
 def _gyro_test(bank_g, state, k, q_ref, P_ref, rates, dts, i_k, s: FusionSettings) -> None:
     """The propagator bank's test of epoch k; a new gyro fault event opens the drift's uncertainty on its axis."""
-    event = bank_g.test(k, q_ref, P_ref, rates, dts, i_k)
+    _flag(state, bank_g.test(k, q_ref, P_ref, rates, dts, i_k), s)
+
+
+def _flag(state, event, s: FusionSettings) -> None:
+    """A new gyro fault event opens the drift's uncertainty on its axis."""
     if event is not None:
         a = 3 + event.axis
         state.P[a, a] += s.gyro_fdi.fault_drift_sigma_rad_s ** 2

@@ -1,22 +1,24 @@
 """Gyro fault detection by a bank of delayed attitude propagators (seed 002 sec. 3.2, Fig. 1 part a).
 
-Propagator j (j = 1..N) starts from the filter's posterior of D_j = j * delay_step_s earlier and propagates the
-attitude with the gyro alone (eq. 9, drift estimate of that time removed) up to the current GPS epoch, with P_j the
-delayed posterior carried through the filter's transition matrices and process noise over the delay.
-
-What its residual is compared with (`GyroFdi.reference`):
-- "filter" (default): the filter's posterior attitude q_k|k of the same epoch, as seed 002 Fig. 5 shows the
-  filtered quaternion increment of each filter-propagator pair against its 1-sigma bound. r_j = rotvec(q_k|k (x)
-  q_j^-1) is the difference of two estimates of one state from nested data (the posterior of k - D_j carried to
-  k, and the posterior of k), so without a fault its covariance is S_j = P_j - P_k|k (attitude block). The GPS
-  snapshot's white noise, which the filter averages over the delay, is not in it.
-- "gps": the snapshot attitude q_gps, r_j = rotvec(q_gps (x) q_j^-1), S_j = H P_j H' + R with R the snapshot's
-  white covariance (one epoch's GPS noise in every test).
+`GyroFdi.reference` chooses the propagators and what their residual is compared with:
+- "independent" (the abstract's "bank of extended Kalman filters with different time delays"):
+  propagator j (j = 1..N) is its own EKF (`IndependentFilters`), started once from the main filter; it
+  integrates the gyro with its own drift estimate (eq. 9) and carries its own covariance, and takes a snapshot
+  update only when D_j = j * delay_step_s has run since its last one. Every GPS epoch, before the main update,
+  r_j = rotvec(q_gps (x) q_j^-1) - beta_theta_j is tested against S_j = H P_j H' + R (R: the snapshot's white
+  covariance). Nothing of the main filter's later posteriors enters it, so a slow fault the main filter has
+  absorbed is still in its residual.
+- "filter" (default): propagator j starts from the main filter's posterior of D_j earlier, propagates with the
+  gyro alone (drift estimate of that time) to now, with P_j that posterior carried through the filter's transitions and
+  process noise, and is compared with the filter's posterior q_k|k of now: two estimates of one state from
+  nested data, S_j = P_j - P_k|k (attitude block).
+- "gps": the same delayed posteriors, compared with the snapshot q_gps, S_j = H P_j H' + R.
 
 The gyro is flagged when |r_j| exceeds `threshold_sigma` sqrt(diag S_j) on some axis in
 `persistence` consecutive epochs (the residues "grow above a tolerance level proportional to its theoretical
 standard deviation"); the axis is the one of the largest normalised residual. In seed 002 Table 2 a longer
-delay detects sooner; docs/BENCHMARKS.md ("GPS + gyro fusion") gives this bank's delays next to the paper's.
+delay detects sooner; docs/BENCHMARKS.md ("GPS + gyro fusion") gives this bank's delays next to the paper's
+and why they do not fall with the delay here.
 """
 from __future__ import annotations
 
@@ -57,13 +59,23 @@ class PropagatorBank:
         self.events: list[GyroEvent] = []
         self.open: GyroEvent | None = None
         self.rows: list = []          # (epoch, propagator, r/sigma x, y, z)
+        self.sigma_rows: list = []    # (epoch, propagator, theoretical sigma x, y, z rad) of the same tests
+        self.own = IndependentFilters(self.delays) if settings.reference == "independent" else None
 
-    def transition(self, k: int, Phi, Q) -> None:
-        """The filter's transition matrix and process noise of the interval ending at epoch k."""
+    def transition(self, k: int, Phi, Q, rates=None, dts=None) -> None:
+        """The filter's transition matrix and process noise of the interval ending at epoch k (and that interval's
+        gyro samples, which the independent propagators integrate)."""
         self.trans[k] = (Phi, Q)
+        if self.own is not None and rates is not None:
+            self.own.advance(Phi, Q, rates, dts)
 
-    def remember(self, k: int, q, bias, P, i_gyro: int) -> None:
-        """The filter's posterior at epoch k (its prior when epoch k had no GPS update)."""
+    def remember(self, k: int, q, bias, P, i_gyro: int, beta_theta=None) -> None:
+        """The filter's posterior at epoch k (its prior when epoch k had no GPS update); the independent
+        propagators start from the first one."""
+        if self.own is not None:
+            if not self.own.started:
+                self.own.start(k, q, bias, np.zeros(3) if beta_theta is None else beta_theta, P)
+            return
         self.post[k] = (q.copy(), bias.copy(), P.copy(), i_gyro)
         for old in [e for e in self.post if e < k - self.delays[-1] - 1]:
             self.post.pop(old, None)
@@ -85,14 +97,34 @@ class PropagatorBank:
             Qs = np.array([self.trans[e][1] for e in range(k0 + 1, k + 1)])
             Pj = propagate_covariance(P0, Phis, Qs)
             r = rotvec_of(q_ref, qj)
-            zn = np.abs(r) / np.sqrt(self._variance(Pj, P_ref))
+            sig = np.sqrt(self._variance(Pj, P_ref))
+            zn = np.abs(r) / sig
             self.rows.append((k, j + 1, *zn))
+            self.sigma_rows.append((k, j + 1, *sig))
             z_max[j] = zn.max()
             if zn.max() > self.s.threshold_sigma:
                 self.counts[j] += 1
                 flagged_axes.append((zn.max(), int(np.argmax(zn)), j))
             else:
                 self.counts[j] = 0
+        return self._events(k, z_max, flagged_axes)
+
+    def test_independent(self, k: int, q_gps, R_white):
+        """Test epoch k's snapshot attitude q_gps (white covariance R_white) against every independent propagator's
+        prediction, then update the propagators whose delay has run since their last update; new event or None."""
+        zs, sigmas = self.own.normalised_residuals(q_gps, R_white)
+        z_max = np.full(len(self.delays), np.nan)
+        flagged_axes = []
+        for j, zn in enumerate(zs):
+            self.rows.append((k, j + 1, *zn))
+            self.sigma_rows.append((k, j + 1, *sigmas[j]))
+            z_max[j] = zn.max()
+            if zn.max() > self.s.threshold_sigma:
+                self.counts[j] += 1
+                flagged_axes.append((zn.max(), int(np.argmax(zn)), j))
+            else:
+                self.counts[j] = 0
+        self.own.update_due(k, q_gps, R_white)
         return self._events(k, z_max, flagged_axes)
 
     def _variance(self, Pj, P_ref):
@@ -128,3 +160,57 @@ class PropagatorBank:
             self.events.append(self.open)
             self.open = None
         return self.events
+
+
+class IndependentFilters:
+    """Propagator j as its own EKF (seed 002 abstract: "a bank of extended Kalman filters with different time
+    delays"): started once from the main filter, it integrates the gyro (eq. 9, its own drift estimate removed) and
+    carries its own 9x9 covariance through the filter's transitions and process noise; it takes a GPS snapshot
+    update (ekf.update) only when delay_j has run since its last one, so between its updates it is a pure gyro
+    propagation of the state of up to delay_j ago, never reset from the main filter's posterior. Every GPS epoch
+    its residual rotvec(q_gps (x) q_j^-1) - beta_theta_j is compared with sqrt(diag(H P_j H' + R))."""
+
+    def __init__(self, delays_epochs: list[int]):
+        self.delays = delays_epochs
+        self.started = False
+        self.q = self.bias = self.beta = self.P = None
+        self.last: list[int] = []
+
+    def start(self, k: int, q, bias, beta_theta, P) -> None:
+        n = len(self.delays)
+        self.q = [q.copy() for _ in range(n)]
+        self.bias = [bias.copy() for _ in range(n)]
+        self.beta = [beta_theta.copy() for _ in range(n)]
+        self.P = [P.copy() for _ in range(n)]
+        self.last = [k] * n
+        self.started = True
+
+    def advance(self, Phi, Q, rates, dts) -> None:
+        """One GPS interval of gyro samples: attitude by eq. 9, P <- Phi P Phi' + Q (the main filter's Phi and Q:
+        Phi depends on the drift estimate only through omega dt, < 1e-5 rad here), Gauss-Markov decays."""
+        if not self.started:
+            return
+        f_w, f_t = Phi[3, 3], Phi[6, 6]          # exp(-span / tau) of the drift and of beta_theta
+        for j in range(len(self.delays)):
+            self.q[j] = propagate_attitude(self.q[j], self.bias[j], rates, dts)
+            self.P[j] = Phi @ self.P[j] @ Phi.T + Q
+            self.bias[j] = self.bias[j] * f_w
+            self.beta[j] = self.beta[j] * f_t
+
+    def normalised_residuals(self, q_gps, R_white) -> tuple[list, list]:
+        """(|r_j| / sigma_j per propagator, sigma_j (3,) rad per propagator)."""
+        out, sig = [], []
+        for j in range(len(self.delays)):
+            r = rotvec_of(q_gps, self.q[j]) - self.beta[j]
+            sig.append(np.sqrt(np.diag(H_GPS @ self.P[j] @ H_GPS.T + R_white)))
+            out.append(np.abs(r) / sig[-1])
+        return out, sig
+
+    def update_due(self, k: int, q_gps, R_white) -> None:
+        from gnssatt.gyro.ekf import FilterState, update
+
+        for j, d in enumerate(self.delays):
+            if k - self.last[j] >= d:
+                st, _, _ = update(FilterState(self.q[j], self.bias[j], self.beta[j], self.P[j]), q_gps, R_white)
+                self.q[j], self.bias[j], self.beta[j], self.P[j] = st.q, st.bias, st.beta_theta, st.P
+                self.last[j] = k

@@ -58,14 +58,15 @@ class GyroFdi:
     delay_step_s: float = 60.0
     threshold_sigma: float = 5.0          # |residual| / its theoretical sigma on any axis ...
     persistence: int = 3                  # ... in this many consecutive GPS epochs flags the gyro
-    reference: str = "filter"             # residual against the filter's posterior ("filter") or the snapshot ("gps")
+    reference: str = "filter"             # "filter": vs the posterior; "independent": own delayed EKFs; "gps"
     clear_after: int = 6                  # epochs below the threshold that end a gyro fault event
     fault_drift_sigma_rad_s: float = 10 * 10.0 * np.pi / 180.0 / 3600.0   # drift uncertainty added on detection
 
     def __post_init__(self):
-        if self.reference not in ("filter", "gps"):
-            raise ValueError(f"gyro_fdi.reference is {self.reference!r}; use 'filter' (the filter's posterior) or "
-                             "'gps' (the snapshot attitude)")
+        if self.reference not in ("filter", "gps", "independent"):
+            raise ValueError(f"gyro_fdi.reference is {self.reference!r}; use 'independent' (own delayed filters "
+                             "against the snapshot), 'filter' (the filter's posterior) or 'gps' (the snapshot "
+                             "attitude)")
 
 
 @dataclass
