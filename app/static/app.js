@@ -184,6 +184,50 @@
     return out;
   }
 
+  /* One help line per config field, nested objects as nested lists: type, allowed values or range, default, and
+     the field's description (the schema's own words; $ref and Optional's anyOf resolved). */
+  function resolveRef(root, prop) {
+    let p = prop || {};
+    for (let i = 0; i < 8 && p.$ref; i++) p = {...((root.$defs || {})[p.$ref.split("/").pop()] || {}), ...p, $ref: undefined};
+    const alt = (p.anyOf || p.oneOf || []).filter((a) => a.type !== "null");
+    if (alt.length === 1) p = {...resolveRef(root, alt[0]), ...p, anyOf: undefined, oneOf: undefined};
+    if (p.allOf && p.allOf.length === 1) p = {...resolveRef(root, p.allOf[0]), ...p, allOf: undefined};
+    return p;
+  }
+
+  function fieldFacts(p) {
+    const facts = [];
+    if (p.enum) facts.push(`one of ${p.enum.map((v) => JSON.stringify(v)).join(", ")}`);
+    else if (p.type) facts.push(p.type === "array" && p.items && p.items.type ? `array of ${p.items.type}` : p.type);
+    const lo = p.minimum !== undefined ? `[${p.minimum}` : (p.exclusiveMinimum !== undefined ? `(${p.exclusiveMinimum}` : null);
+    const hi = p.maximum !== undefined ? `${p.maximum}]` : (p.exclusiveMaximum !== undefined ? `${p.exclusiveMaximum})` : null);
+    if (lo || hi) facts.push(`range ${lo || "(-inf"}, ${hi || "inf)"}`);
+    if (p.minItems !== undefined || p.maxItems !== undefined) facts.push(`${p.minItems ?? 0} to ${p.maxItems ?? "any"} items`);
+    if (Object.prototype.hasOwnProperty.call(p, "default") && (p.default === null || typeof p.default !== "object"))
+      facts.push(`default ${JSON.stringify(p.default)}`);
+    return facts.join("; ");
+  }
+
+  function fieldItems(root, schema, prefix) {
+    const items = [];
+    for (const [name, raw] of Object.entries(resolveRef(root, schema).properties || {})) {
+      const p = resolveRef(root, raw);
+      const path = prefix ? `${prefix}.${name}` : name;
+      const li = el("li", {"data-field": path});
+      li.appendChild(el("code", {}, path));
+      const facts = fieldFacts(p);
+      if (facts) li.appendChild(el("span", {class: "muted js-field-facts"}, ` (${facts})`));
+      li.appendChild(document.createTextNode(` ${p.description || p.title || ""}`));
+      if (p.properties) {
+        const sub = el("ul");
+        sub.replaceChildren(...fieldItems(root, p, path));
+        li.appendChild(sub);
+      }
+      items.push(li);
+    }
+    return items;
+  }
+
   function wireNewPage() {
     const uploadForm = document.getElementById("upload-form");
     const jobForm = document.getElementById("job-form");
@@ -205,12 +249,7 @@
           `${t.min_sets} to ${t.max_sets === null ? "any number of" : t.max_sets} observation sets`);
       help.textContent = `${t.description} Takes ${sets}.`;
       config.value = JSON.stringify(defaultsOf(t.config_schema), null, 2);
-      for (const [name, prop] of Object.entries((t.config_schema && t.config_schema.properties) || {})) {
-        const li = el("li");
-        li.appendChild(el("code", {}, name));
-        li.appendChild(document.createTextNode(` ${prop.description || prop.title || ""}`));
-        fieldHelp.appendChild(li);
-      }
+      fieldHelp.replaceChildren(...fieldItems(t.config_schema || {}, t.config_schema || {}, ""));
     }
 
     api("GET", "/v1/job-types").then(({body}) => {

@@ -303,3 +303,71 @@ def test_pcv_map_page_reads_out_the_bin_under_the_pointer(browser, site, artifac
     page.screenshot(path=str(artifacts / "ui-pcv-map.png"), full_page=True)
     assert page.console_errors == [], page.console_errors
     context.close()
+
+
+def _walk(schema: dict, node: dict, prefix: str = ""):
+    """(path, resolved property) of every field of a pydantic JSON schema, nested objects included ($ref and
+    Optional's anyOf resolved, as the page resolves them)."""
+    def resolve(p):
+        while "$ref" in p:
+            p = {**schema["$defs"][p["$ref"].split("/")[-1]], **{k: v for k, v in p.items() if k != "$ref"}}
+        alt = [a for a in p.get("anyOf", []) if a.get("type") != "null"]
+        return {**resolve(alt[0]), **{k: v for k, v in p.items() if k != "anyOf"}} if len(alt) == 1 else p
+    for name, raw in resolve(node).get("properties", {}).items():
+        p = resolve(raw)
+        path = f"{prefix}.{name}" if prefix else name
+        yield path, p
+        if "properties" in p:
+            yield from _walk(schema, p, path)
+
+
+def _js_number(x) -> str:
+    """A number as JavaScript's String() writes it: positional from 1e-7 to 1e21 (shortest round-trip digits)."""
+    import numpy as np
+    x = float(x)
+    if x == 0 or 1e-7 <= abs(x) < 1e21:
+        return np.format_float_positional(x, trim="-")
+    return repr(x).replace("e-0", "e-").replace("e+0", "e+")
+
+
+def _range_text(p: dict) -> str:
+    lo = f"[{_js_number(p['minimum'])}" if "minimum" in p else (
+        f"({_js_number(p['exclusiveMinimum'])}" if "exclusiveMinimum" in p else "(-inf")
+    hi = f"{_js_number(p['maximum'])}]" if "maximum" in p else (
+        f"{_js_number(p['exclusiveMaximum'])})" if "exclusiveMaximum" in p else "inf)")
+    return f"{lo}, {hi}"
+
+
+def test_config_help_lists_every_field_nested_ones_too_with_its_range_and_default(browser, site):
+    """The job form's "configuration fields" list (issue 24 item 8): every field of the chosen type's config,
+    nested objects as nested lists, each with its type or allowed values, its range from the schema's own bounds,
+    its default and its description; checked for the types with the deepest configs."""
+    key = site.create_key("ops-help")
+    context, page = sign_in(browser, site, key)
+    page.goto("/ui/new")
+    page.wait_for_selector("#job-type[data-loaded='1']")
+    specs = {t["name"]: t for t in page.request.get("/v1/job-types").json()}
+    page.click("summary:has-text('configuration fields')")  # opened as a user opens it
+    for job_type in ("attitude", "ttff", "gyro-fusion"):
+        page.select_option("#job-type", job_type)
+        schema = specs[job_type]["config_schema"]
+        fields = list(_walk(schema, schema))
+        nested = [f for f, _ in fields if "." in f]
+        assert job_type == "gyro-fusion" or nested, f"{job_type}: expected nested fields"
+        shown = page.eval_on_selector_all(".js-config-help li", "ls => ls.map(l => l.dataset.field)")
+        assert shown == [f for f, _ in fields]
+        for path, p in fields:
+            item = page.locator(f'.js-config-help li[data-field="{path}"]').first
+            facts = item.locator(".js-field-facts")  # the item's own comes before its nested list's
+            text = facts.first.inner_text() if facts.count() else ""
+            if any(k in p for k in ("minimum", "exclusiveMinimum", "maximum", "exclusiveMaximum")):
+                assert f"range {_range_text(p)}" in text, (path, text)
+            if "enum" in p:
+                assert all(f'"{v}"' in text for v in p["enum"] if isinstance(v, str)), (path, text)
+            if "default" in p and isinstance(p["default"], (int, float, str)) and not isinstance(p["default"], bool):
+                default = _js_number(p["default"]) if isinstance(p["default"], (int, float)) else f'"{p["default"]}"'
+                assert f"default {default}" in text, (path, text)
+            if p.get("description"):
+                assert " ".join(p["description"].split()) in " ".join(item.inner_text().split()), path
+    assert page.console_errors == []
+    context.close()
