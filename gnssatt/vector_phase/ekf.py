@@ -56,6 +56,7 @@ class EkfOptions:
     hypothesis_prune_cost: float = 13.8
     hypothesis_merge_sigma: float = 1.0
     hypothesis_max_epochs: int = 300
+    hypothesis_mixture_covariance: bool = True
 
 
 class _Filter:
