@@ -18,6 +18,10 @@ when it is within hypothesis_merge_sigma (Mahalanobis, attitude and rate) of a b
 filter (the same minimum). The single filter is only ever dropped by cost, so where it is right (8 or more
 satellites: one minimum) the result is the single filter's. After hypothesis_max_epochs the best is kept and the
 start reported ambiguous (Solution.warnings, Solution.start_hypotheses).
+Reported covariance (hypothesis_mixture_covariance, default on): at every epoch where more than one member lived, the
+kept member's state with the Gaussian sum's covariance about it, sum_i w_i (P_i + d_i d_i^T) (w_i ~ exp(-cost_i / 2)
+at that epoch, d_i the member's state minus the kept one's): the spread of the posterior, not only its curvature at
+one member. 7 satellites, 3 mm, seeds 0-7: error/sigma 1.12 / 1.30 / 0.97 -> 1.08 / 1.14 / 0.94 (docs/vector_phase.md).
 """
 from __future__ import annotations
 
@@ -131,9 +135,8 @@ def bank_solve(obs, mount: AntennaMount, initial: ReceiverState, opt: EkfOptions
 
 def _snapshot(members: list, costs: dict, k: int) -> dict:
     """The living members' states at epoch k (after pruning): cost, position, clock, attitude, 7 x 7 covariance."""
-    i = k
-    return {id(m): (costs[id(m)], m.sol.position_ecef_m[i].copy(), m.sol.clock_cyc[i], m.sol.R_body_from_ecef[i].copy(),
-                    m.sol.P[i].copy(), bool(m.sol.valid[i])) for m in members}
+    return {id(m): (costs[id(m)], m.sol.position_ecef_m[k].copy(), m.sol.clock_cyc[k], m.sol.R_body_from_ecef[k].copy(),
+                    m.sol.P[k].copy(), bool(m.sol.valid[k])) for m in members}
 
 
 def mixture_covariance(entries: list, ref) -> np.ndarray:
@@ -150,16 +153,20 @@ def mixture_covariance(entries: list, ref) -> np.ndarray:
     return out
 
 
-def _mix_rows(best, full: Solution, history: list, opt: EkfOptions) -> None:
-    """Rows of full while several members lived: the Gaussian-sum covariance about the kept member's state."""
+def _mix_rows(best, full: Solution, history: list, opt: EkfOptions) -> int:
+    """Rows of full while several members lived: the Gaussian-sum covariance about the kept member's state. Returns
+    the number of such rows."""
     if not opt.hypothesis_mixture_covariance:
-        return
+        return 0
+    n = 0
     for k, snap in enumerate(history):
         mine = snap.get(id(best))
         if mine is None or len(snap) < 2 or not full.valid[k]:
             continue
         entries = [e[:5] for e in snap.values() if e[5]]
         full.P[k] = mixture_covariance(entries, (mine[1], mine[2], mine[3]))
+        n += 1
+    return n
 
 
 def _decide(members: list, prior: dict, n_members: int, epoch: int, full: Solution, history: list,
@@ -171,6 +178,6 @@ def _decide(members: list, prior: dict, n_members: int, epoch: int, full: Soluti
     record["kept"] = members[0].label
     best = members[0]
     _copy_rows(best.sol, full, epoch + 1)
-    _mix_rows(best, full, history, opt)
+    record["mixture_covariance_epochs"] = _mix_rows(best, full, history, opt)
     best.sol, best.row0 = full, 0
     return record

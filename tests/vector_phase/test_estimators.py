@@ -141,6 +141,24 @@ def test_seven_satellites_start_hypotheses_leave_the_wrong_minimum():
     assert np.nanmax(np.abs(err_bank[30:, 1])) < 30.0         # measured 24 deg: ~3 sigma at its worst epoch
     assert sol.start_hypotheses["members"] == 28 and sol.start_hypotheses["decided_epoch"] < 119
     assert sol.start_hypotheses["kept"] != "single filter (zero rate)"      # measured: (0, 1, 1) deg/s at epoch 70
+    assert sol.start_hypotheses["mixture_covariance_epochs"] > 30            # the Gaussian sum while they lived
+
+
+def test_mixture_covariance_is_the_spread_about_the_reported_state():
+    """Two members of equal cost 2 deg apart about body z, each with a 1 deg sigma: about the first one's state the
+    mixture's z variance is 1 + 0.5 * 2^2 = 3 deg^2 (sum_i w_i (P_i + d_i d_i^T)); a member 20 units of cost worse
+    (weight e^-10) adds < 1e-3 deg^2."""
+    from gnssatt.vector_phase.rate_bank import mixture_covariance
+    from gnssatt.vector_phase.rotation import perturb_body
+    P = np.diag([1e-6] * 3 + [1.0] + [np.radians(1.0) ** 2] * 3)
+    r, R = np.zeros(3), np.eye(3)
+    other = perturb_body(R, np.radians([0.0, 0.0, 2.0]))
+    mix = mixture_covariance([(5.0, r, 0.0, R, P), (5.0, r, 0.0, other, P)], (r, 0.0, R))
+    assert abs(np.degrees(np.sqrt(mix[6, 6])) - np.sqrt(3.0)) < 1e-6
+    assert abs(np.degrees(np.sqrt(mix[4, 4])) - 1.0) < 1e-9                  # no spread about x
+    far = perturb_body(R, np.radians([0.0, 0.0, 2.0]))
+    one = mixture_covariance([(0.0, r, 0.0, R, P), (20.0, r, 0.0, far, P)], (r, 0.0, R))
+    assert 0.0 <= np.degrees(np.degrees(one[6, 6])) - 1.0 < 1e-3
 
 
 def test_start_bank_with_eight_satellites_is_the_single_filter():
