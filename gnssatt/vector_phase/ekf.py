@@ -41,7 +41,8 @@ class EkfOptions:
     hypothesis_prune_cost: a member whose accumulated cost (-2 log likelihood) exceeds the best's by more is
     dropped; hypothesis_merge_sigma: a member within this Mahalanobis distance (attitude and rate) of a better one
     or of the single filter is dropped; hypothesis_max_epochs: the bank's longest run before the best member is kept
-    (ambiguous)."""
+    (ambiguous); hypothesis_mixture_covariance: while several members live, report the Gaussian sum's covariance
+    about the kept member (weighted member covariances plus the spread of their states) instead of its own."""
 
     sigma_position0_m: float = 1e-3
     sigma_attitude0_deg: float = 0.01
@@ -56,6 +57,7 @@ class EkfOptions:
     hypothesis_prune_cost: float = 13.8
     hypothesis_merge_sigma: float = 1.0
     hypothesis_max_epochs: int = 300
+    hypothesis_mixture_covariance: bool = True
 
 
 class _Filter:
