@@ -30,7 +30,7 @@ from itertools import product
 
 import numpy as np
 
-from gnssatt.vector_phase.ekf import EkfOptions, _Run
+from gnssatt.vector_phase.ekf_filter import EkfOptions, _Run
 from gnssatt.vector_phase.phase_model import AntennaMount, ReceiverState
 from gnssatt.vector_phase.rotation import error_rotvec_body
 from gnssatt.vector_phase.solution import Solution
