@@ -7,7 +7,9 @@ locate the cause:
   --no-omega-reset  a fix never resets omega (OMEGA_RESET_TURN_DEG raised to 1e9 for the run);
   --run-delay N     the smoother's first all-fixed run starts N epochs after the first fixed epoch (the epochs before
                     stay as filtered): if the smoothed epochs after the delay do not change, the early epochs' data
-                    are not what biases them.
+                    are not what biases them;
+  --no-corr-share   the smoother reports its RTS covariance alone (corr_share set to 0: no correlated share of the
+                    phase variance kept at its filtered size; gnssatt.attitude.smoother.smooth_filter_result).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_slew_first_fix.py --slew pitch --seed 4 [--run-delay 12]
 """
@@ -58,6 +60,18 @@ def _delay_first_run(delay: int) -> None:
     sm.fixed_runs = fixed_runs
 
 
+def _no_corr_share() -> None:
+    """smooth_filter_result with the recorded correlated share of the phase variance set to 0."""
+    import gnssatt.attitude.smoother as sm
+
+    smooth = sm.smooth_filter_result
+
+    def smooth_filter_result(fr, settings=None):
+        fr.smoother_data["corr_share"] = np.zeros_like(fr.smoother_data["corr_share"])
+        return smooth(fr, settings)
+    sm.smooth_filter_result = smooth_filter_result
+
+
 def epoch_rows(d: Path, n_rows: int, n_float: dict) -> list[str]:
     """Forward and smoothed errors / sigmas per fixed epoch from the first fixed one (module doc)."""
     from gnssatt.attitude.process import load_inputs, process
@@ -92,6 +106,7 @@ def main() -> None:
     ap.add_argument("--rows", type=int, default=30)
     ap.add_argument("--no-omega-reset", action="store_true")
     ap.add_argument("--run-delay", type=int, default=0)
+    ap.add_argument("--no-corr-share", action="store_true")
     args = ap.parse_args()
     from gnssatt.sim import simulate_scenario
 
@@ -102,12 +117,14 @@ def main() -> None:
         ar.OMEGA_RESET_TURN_DEG = 1e9
     if args.run_delay:
         _delay_first_run(args.run_delay)
+    if args.no_corr_share:
+        _no_corr_share()
     label = next(k for k in SLEWS if k.startswith(args.slew))
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp) / "slew"
         simulate_scenario("slew", d, seed=args.seed, overrides={**SLEWS[label], **CLEAN})
         print(f"{label}, seed {args.seed}, omega reset {'off' if args.no_omega_reset else 'on'}, "
-              f"first run delayed by {args.run_delay} epochs")
+              f"first run delayed by {args.run_delay} epochs, corr_share {'0' if args.no_corr_share else 'kept'}")
         print("\n".join(epoch_rows(d, args.rows, n_float)))
 
 
