@@ -94,8 +94,8 @@ def epoch_rows(d: Path, n_rows: int, n_float: dict) -> list[str]:
         out.append(f"| {t[i]:.0f} | {n_float.get(k, -1)} | {de_f[i, 1]:+.3f} ({sig_f[i, 1]:.3f}) / {de_f[i, 2]:+.3f} "
                    f"({sig_f[i, 2]:.3f}) | {de[i, 1]:+.3f} ({sig[i, 1]:.3f}) / {de[i, 2]:+.3f} ({sig[i, 2]:.3f}) | "
                    f"{ang[i]:.3f} | {chi2[i]:.2f} |")
-    out.append(f"chi-square over the first 10 fixed epochs {chi2[fi[:10]].mean():.2f}, rest {chi2[fi[10:]].mean():.2f}; "
-               f"max angle {ang[fi].max():.3f} deg")
+    out.append(f"chi-square over the first 10 fixed epochs {chi2[fi[:10]].mean():.2f}, "
+               f"rest {chi2[fi[10:]].mean():.2f}; max angle {ang[fi].max():.3f} deg")
     return out
 
 
