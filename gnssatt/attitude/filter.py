@@ -44,7 +44,7 @@ _pseudo_update = pseudo_update
 
 def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: np.ndarray,
                boresight_body: np.ndarray, settings: AttitudeSettings, R_body_from_ecef_0: np.ndarray,
-               attitude_fn=None, progress=None, q_omega: np.ndarray = None) -> FilterResult:
+               attitude_fn=None, progress=None, q_omega: np.ndarray = None, noise0: dict = None) -> FilterResult:
     """FilterResult of the EKF over all epochs of `pobs` (PlatformObs) with `geom` (EpochGeometry): seed 000 Fig. 2.
 
     Args:
@@ -57,9 +57,11 @@ def run_filter(pobs, geom, baselines: list[tuple[int, int]], body_baselines_m: n
         progress: callable(fraction) called every ~100 epochs.
         q_omega: dynamic mode, (n_ep, 3, 3) omega random-walk rate (rad^2/s^3) of the propagation into each epoch,
             in place of Table 1's (and of the adapter's); None: Table 1's (smoother_adaptive_noise's second pass).
+        noise0: the noise estimator's state to start from (a first pass's smoother_data["noise_state"]); None:
+            Table 1's sigmas until the triple differences give an estimate.
     """
     run = FilterRun(pobs, geom, baselines, body_baselines_m, boresight_body, settings, R_body_from_ecef_0,
-                    attitude_fn, q_omega)
+                    attitude_fn, q_omega, noise0)
     for k in range(run.n_ep):
         run.st.epoch = k
         if progress is not None and k % 100 == 0:

@@ -309,7 +309,8 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
         from gnssatt.attitude.smoother import adaptive_noise_profile
         q_omega, info = adaptive_noise_profile(fr, settings)
         fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
-                        progress=lambda f: prog(0.15 + span * (1 + f)), q_omega=q_omega)
+                        progress=lambda f: prog(0.15 + span * (1 + f)), q_omega=q_omega,
+                        noise0=fr.smoother_data["noise_state"])
         fr.smoother_data["adaptive_noise"] = info
     if fr.smoother_data is not None:
         from gnssatt.attitude.smoother import smooth_filter_result

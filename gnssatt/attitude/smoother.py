@@ -137,7 +137,8 @@ def adaptive_noise_profile(fr, settings) -> tuple[np.ndarray, dict]:
     (docs/attitude.md "Adaptive process noise of the smoother"): the omega random walk per epoch from the angular
     acceleration of fr's RTS-smoothed omega over its all-fixed runs (acceleration_noise_rate: floor x Table 1 +
     gain alpha alpha^T dt, the largest alpha within +-window); Table 1's rate outside the runs (float epochs, and
-    so everything up to the first fix: the second pass starts exactly as the first). info: summary.json."""
+    so everything up to the first fix; the second pass starts its noise estimator from the first's, run_filter
+    noise0). info: summary.json."""
     sd = fr.smoother_data
     q1 = float(sd["q_omega"])
     fixed_all, start = fixed_runs(fr)

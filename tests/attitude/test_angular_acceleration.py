@@ -64,13 +64,9 @@ def test_slew_with_the_acceleration_state(slew_pass):
     assert out[True][2] < 1.1 * out[False][2], out
 
 
-@pytest.mark.xfail(strict=True, reason="issue 21 item 3 not met: the first fixed epoch of this slew is 0.43 deg off "
-                                       "with the option (0.61 without), smoother tilt chi-square 5.2 over the first "
-                                       "10 fixed epochs (docs/attitude.md 'Angular-acceleration state')")
-def test_slew_target_from_the_first_fixed_epoch(slew_pass):
-    """The issue's target on the short slew: with angular_acceleration_state and smoother_adaptive_noise, every fixed
-    epoch from the first one below 0.3 deg, and the smoother's tilt chi-square (2 dof) over the first 10 fixed epochs
-    within 1.0-1.5 (honest sigmas from the first fixed epoch)."""
+def _first_fixed_epochs(slew_pass):
+    """(rotation angle error (n_fixed,) deg, tilt chi-square (2 dof) of the first 10 fixed epochs) of the short slew,
+    dynamic mode with angular_acceleration_state and smoother_adaptive_noise."""
     from gnssatt.attitude.truth import attitude_errors_deg
 
     sol = process(load_inputs(set_files(slew_pass)), AttitudeSettings.preset(
@@ -78,6 +74,23 @@ def test_slew_target_from_the_first_fixed_epoch(slew_pass):
     ang, de = attitude_errors_deg(slew_pass, sol)
     fi = np.flatnonzero(sol.att_fixed)
     z = de[fi[:10], 1:3] / sol.sigma_euler_deg[fi[:10], 1:3]
-    chi2 = (z ** 2).sum(1)
-    assert ang[fi].max() < 0.3
-    assert 1.0 <= chi2.mean() <= 1.5
+    return ang[fi], (z ** 2).sum(1)
+
+
+def test_slew_below_0_3_deg_from_the_first_fixed_epoch(slew_pass):
+    """The issue's slew target on the short slew: with angular_acceleration_state and smoother_adaptive_noise every
+    fixed epoch from the first one below 0.3 deg (measured 0.43 deg at the first fixed epoch while the second pass
+    started its noise estimate at Table 1's 3 mm floor; below 0.3 since it starts from the first pass's estimate)."""
+    ang, _ = _first_fixed_epochs(slew_pass)
+    assert ang.max() < 0.3, ang.max()
+
+
+@pytest.mark.xfail(strict=True, reason="issue 21 item 7 not met: smoother tilt chi-square over the first 10 fixed "
+                                       "epochs 0.97 on this slew (5.2 before the second pass started from the first "
+                                       "pass's noise estimate), the target is 1.0-1.5 (docs/attitude.md "
+                                       "'Angular-acceleration state')")
+def test_slew_chi_square_from_the_first_fixed_epoch(slew_pass):
+    """Honest sigmas from the first fixed epoch: the smoother's tilt chi-square (2 dof) over the first 10 fixed
+    epochs of the short slew within 1.0-1.5."""
+    _, chi2 = _first_fixed_epochs(slew_pass)
+    assert 1.0 <= chi2.mean() <= 1.5, chi2

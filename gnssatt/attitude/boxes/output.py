@@ -67,6 +67,6 @@ def filter_result(run: FilterRun) -> FilterResult:
              "multipath_correlation_factor": float(run.mp_infl)}
     smoother_data = {"x_prior": run.sm_xp, "P_prior": run.sm_Pp, "x_post": run.sm_xf, "P_post": run.sm_Pf,
                      "Phi": run.sm_Phi, "start": run.sm_start, "corr_share": run.sm_corr, "dt_s": run.sm_dt,
-                     "q_omega": run.q_w} if run.record else None
+                     "q_omega": run.q_w, "noise_state": run.noise_state()} if run.record else None
     return FilterResult(run.out_ok, run.out_b, run.out_P, run.out_fixed, run.out_n, run.out_ratio, run.out_w,
                         residuals, run.events.rows, run.first_fix, run.first_data, fix_log, noise, smoother_data)
