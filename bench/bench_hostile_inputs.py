@@ -106,10 +106,12 @@ class _Sampler(threading.Thread):
         self.proc, self.peak, self.stop = psutil.Process(pid), 0, threading.Event()
 
     def run(self) -> None:
-        while not self.stop.wait(0.02):
+        while True:  # one sample at once, so a request answered within 20 ms has its RSS too
             try:
                 self.peak = max(self.peak, self.proc.memory_info().rss)
             except psutil.Error:
+                return
+            if self.stop.wait(0.02):
                 return
 
 
