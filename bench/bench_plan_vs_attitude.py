@@ -25,11 +25,11 @@ from pathlib import Path
 import numpy as np
 
 from gnssatt.attitude.api import solve
-from gnssatt.gnss.ephemeris import BroadcastEphemeris
 from gnssatt.gnss.io.platform import parse_platform
 from gnssatt.gnss.io.rinex_nav import read_rinex_nav
 from gnssatt.gnss.io.sp3 import read_sp3
 from gnssatt.gnss.time import GpsTime
+from gnssatt.planning.satellites import positions_from_nav
 from gnssatt.planning.series import PlanPlatform, PlanSettings, plan_series
 from gnssatt.planning.trajectory import track_from_sp3
 from gnssatt.sim.api import simulate_set
@@ -65,17 +65,7 @@ def one_pass(k: int, duration_s: float, work: Path) -> dict:
     sp3 = read_sp3(s.platform_sp3)
     t = sol.time[keep]
     track = track_from_sp3(sp3, sp3.sats[0], t)
-    nav = read_rinex_nav(s.nav)
-    eph = BroadcastEphemeris(nav)
-    sats = sorted({str(x) for kk in nav.kepler.values() for x in kk.sat})
-
-    def positions(tt):
-        n = len(np.atleast_1d(tt.s))
-        r = np.full((n, len(sats), 3), np.nan)
-        for j, sat in enumerate(sats):
-            st = eph.state([sat] * n, tt)
-            r[:, j] = np.where(st.valid[:, None], st.r_ecef_m, np.nan)
-        return sats, r
+    positions = positions_from_nav(read_rinex_nav(s.nav))
     ps = plan_series(track, positions, pp, PlanSettings(sigma_phase_m=SIGMA_SD_M, antenna_mask_deg=0.0, max_sats=12))
     snapshot = np.sqrt(np.nanmean(ps.sigma_euler_deg ** 2, axis=0))
     predicted = np.sqrt(np.nanmean(ps.sigma_filter_deg ** 2, axis=0))

@@ -184,20 +184,10 @@ def _gnss_positions(ctx: JobContext, t0):
 
     navs = [f for s in ctx.sets for f in s.of_kind("rinex_nav")]
     if navs:
-        from gnssatt.gnss.ephemeris import BroadcastEphemeris
         from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+        from gnssatt.planning.satellites import positions_from_nav
 
-        nav = read_rinex_nav(navs[0].path, name=navs[0].name)
-        eph = BroadcastEphemeris(nav)
-        sats = sorted({str(x) for k in nav.kepler.values() for x in k.sat})
-
-        def from_nav(t):
-            n = len(np.atleast_1d(t.s))
-            r = np.full((n, len(sats), 3), np.nan)
-            for j, sat in enumerate(sats):
-                st = eph.state([sat] * n, t)
-                r[:, j] = np.where(st.valid[:, None], st.r_ecef_m, np.nan)
-            return sats, r
+        from_nav = positions_from_nav(read_rinex_nav(navs[0].path, name=navs[0].name))
         return from_nav, f"broadcast ephemerides of {navs[0].name}"
     from gnssatt.sim.constellation import synthetic_gps
 
