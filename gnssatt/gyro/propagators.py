@@ -98,15 +98,7 @@ class PropagatorBank:
             Pj = propagate_covariance(P0, Phis, Qs)
             r = rotvec_of(q_ref, qj)
             sig = np.sqrt(self._variance(Pj, P_ref))
-            zn = np.abs(r) / sig
-            self.rows.append((k, j + 1, *zn))
-            self.sigma_rows.append((k, j + 1, *sig))
-            z_max[j] = zn.max()
-            if zn.max() > self.s.threshold_sigma:
-                self.counts[j] += 1
-                flagged_axes.append((zn.max(), int(np.argmax(zn)), j))
-            else:
-                self.counts[j] = 0
+            self._record(k, j, np.abs(r) / sig, sig, z_max, flagged_axes)
         return self._events(k, z_max, flagged_axes)
 
     def test_independent(self, k: int, q_gps, R_white):
@@ -116,16 +108,21 @@ class PropagatorBank:
         z_max = np.full(len(self.delays), np.nan)
         flagged_axes = []
         for j, zn in enumerate(zs):
-            self.rows.append((k, j + 1, *zn))
-            self.sigma_rows.append((k, j + 1, *sigmas[j]))
-            z_max[j] = zn.max()
-            if zn.max() > self.s.threshold_sigma:
-                self.counts[j] += 1
-                flagged_axes.append((zn.max(), int(np.argmax(zn)), j))
-            else:
-                self.counts[j] = 0
+            self._record(k, j, zn, sigmas[j], z_max, flagged_axes)
         self.own.update_due(k, q_gps, R_white)
         return self._events(k, z_max, flagged_axes)
+
+    def _record(self, k: int, j: int, zn, sig, z_max, flagged_axes) -> None:
+        """Propagator j's normalised residual zn (3,) and sigma at epoch k: rows, its largest axis into z_max, and
+        its run of epochs over the threshold (counts; flagged_axes gets (z, axis, j) when over)."""
+        self.rows.append((k, j + 1, *zn))
+        self.sigma_rows.append((k, j + 1, *sig))
+        z_max[j] = zn.max()
+        if zn.max() > self.s.threshold_sigma:
+            self.counts[j] += 1
+            flagged_axes.append((zn.max(), int(np.argmax(zn)), j))
+        else:
+            self.counts[j] = 0
 
     def _variance(self, Pj, P_ref):
         """Per-axis variance of the residual without a fault (module docstring); floored at (1 urad)^2."""

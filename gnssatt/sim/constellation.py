@@ -219,6 +219,18 @@ def synthetic_gps(t_ref: GpsTime, seed: int = 2018) -> Constellation:
         af2=np.zeros(n), tgd=np.round(rng.uniform(-1.2e-8, 8e-9, n) / 2 ** -31) * 2 ** -31)
 
 
+def nearest_healthy_records(sats: list, health, dt_s: np.ndarray, max_s: float) -> dict[str, int]:
+    """{satellite: index of its healthy record nearest in time}: records i with health 0 and dt_s[i] <= max_s
+    (dt_s the records' absolute time from the start, s); the first of equally near records is kept."""
+    chosen: dict[str, int] = {}
+    for i, sat in enumerate(sats):
+        if int(health[i]) != 0 or dt_s[i] > max_s:
+            continue
+        if sat not in chosen or dt_s[i] < dt_s[chosen[sat]]:
+            chosen[sat] = i
+    return chosen
+
+
 def gps_from_nav(nav_path, t0: GpsTime) -> Constellation:
     """The GPS constellation of a real RINEX navigation file, as continuous models referenced at the 2 h
     boundary at or before t0: per healthy satellite, the record whose toe is nearest t0, its elements carried
@@ -242,12 +254,8 @@ def gps_from_nav(nav_path, t0: GpsTime) -> Constellation:
     ws_ref = int(t_ref.s) - int(t_ref.s) % SECONDS_PER_WEEK
     toe = kep.toe_gpst()
     toc = kep.toc_gpst()
-    chosen: dict[str, int] = {}
-    for i, sat in enumerate(kep.sat.tolist()):
-        if int(kep.health[i]) != 0 or abs(float(toe[i] - t0)) > 4 * 3600:
-            continue
-        if sat not in chosen or abs(float(toe[i] - t0)) < abs(float(toe[chosen[sat]] - t0)):
-            chosen[sat] = i
+    dt_s = np.array([abs(float(toe[i] - t0)) for i in range(len(kep.sat))])
+    chosen = nearest_healthy_records(kep.sat.tolist(), kep.health, dt_s, 4 * 3600.0)
     if len(chosen) < 4:
         raise ValueError(f"nav_file {nav_path}: only {len(chosen)} healthy GPS satellites within 4 h of "
                          f"{t0.iso()}; choose start_gps inside the file's span")
@@ -272,4 +280,5 @@ def gps_from_nav(nav_path, t0: GpsTime) -> Constellation:
         tgd=take["tgd_s"])
 
 
-__all__ = ["BroadcastRecord", "Constellation", "synthetic_gps", "gps_from_nav", "RECORD_INTERVAL_S"]
+__all__ = ["BroadcastRecord", "Constellation", "synthetic_gps", "gps_from_nav", "RECORD_INTERVAL_S",
+           "nearest_healthy_records"]

@@ -25,6 +25,7 @@ import numpy as np
 
 from gnssatt.gnss.orbits.glonass import AE_GLONASS_M, GM_GLONASS_M3_S2, J2_GLONASS, OMEGA_EARTH_GLONASS_RAD_S
 from gnssatt.gnss.time import SECONDS_PER_WEEK, GpsTime
+from gnssatt.sim.constellation import nearest_healthy_records
 
 __all__ = ["NOMINAL_CHANNELS", "GlonassConstellation", "GlonassRecord", "MixedConstellation", "synthetic_glonass",
            "glonass_from_nav", "RECORD_INTERVAL_S"]
@@ -242,12 +243,7 @@ def glonass_from_nav(nav_path, t0: GpsTime, t_ref: GpsTime, span_s: tuple[float,
     if glo is None or len(glo) == 0:
         raise ValueError(f"nav_file {nav_path}: no GLONASS records (systems includes R)")
     d = np.abs(np.asarray((glo.toc.s - int(t0.s)), dtype=np.float64) + glo.toc.frac - float(t0.frac))
-    chosen: dict[str, int] = {}
-    for i, sat in enumerate(glo.sat.tolist()):
-        if int(glo.health[i]) != 0 or d[i] > 3600.0:
-            continue
-        if sat not in chosen or d[i] < d[chosen[sat]]:
-            chosen[sat] = i
+    chosen = nearest_healthy_records(glo.sat.tolist(), glo.health, d, 3600.0)
     if len(chosen) < 4:
         raise ValueError(f"nav_file {nav_path}: only {len(chosen)} healthy GLONASS satellites within 1 h of "
                          f"{t0.iso()}; choose start_gps inside the file's span")
