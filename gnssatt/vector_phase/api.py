@@ -211,5 +211,7 @@ def solve_set(files, options: VectorPhaseOptions | None = None, progress=None) -
         extra["coarse_search"] = {"euler_deg": list(coarse.euler_deg), "score": coarse.score,
                                   "second_score": coarse.second_score, "candidates": coarse.n_candidates,
                                   "ambiguous": coarse.ambiguous}
-    return solve_observations(inputs.obs, inputs.mount, ReceiverState(position, 0.0, R0), opt, kind=kind,
-                              reference_R_body_from_ecef=ref, progress=progress, extra_summary=extra)
+    result = solve_observations(inputs.obs, inputs.mount, ReceiverState(position, 0.0, R0), opt, kind=kind,
+                                reference_R_body_from_ecef=ref, progress=progress, extra_summary=extra)
+    result.summary["warnings"] = list(inputs.warnings) + result.summary["warnings"]
+    return result

@@ -194,13 +194,28 @@ def load_set(files, *, antenna_id: str | None = None, antenna_model: str | None 
     phase_obs, r0 = _observations(parsed[obs_name], obs_name, nav, sigma_phase_cyc, elevation_mask_deg, axes)
     mount = AntennaMount(model, R_antenna_from_body(platform.antennas[ant].boresight_body))
     phase_obs.velocity_ecef_m_s, sigma_v = _velocity(files, phase_obs.t_gps_s)
+    warnings = _velocity_span_warnings(phase_obs.velocity_ecef_m_s, phase_obs.t_gps_s)
     reference = None
     for name, kind, path in files:
         if kind == "reference_attitude":
             from gnssatt.gnss.io.reference_attitude import read_reference_attitude
             reference = read_reference_attitude(Path(path).read_bytes(), name=name)
-    return VectorPhaseInputs(platform, ant, mount, phase_obs, obs_name, r0, reference,
+    return VectorPhaseInputs(platform, ant, mount, phase_obs, obs_name, r0, reference, warnings=warnings,
                              sigma_velocity_m_s=sigma_v)
+
+
+def _velocity_span_warnings(velocity_ecef_m_s, t_gps_s) -> list[str]:
+    """A warning when phase epochs lie outside velocity.csv: the EKF does not move the position there
+    (gnssatt.vector_phase.ekf_filter predict needs a finite velocity), so a moving antenna is then held still."""
+    if velocity_ecef_m_s is None:
+        return []
+    outside = ~np.all(np.isfinite(velocity_ecef_m_s), axis=1)
+    if not outside.any():
+        return []
+    t = np.asarray(t_gps_s, float)[outside]
+    return [f"velocity.csv does not cover {int(outside.sum())} of {len(outside)} phase epochs (GPS seconds "
+            f"{t.min():.1f} to {t.max():.1f}): the position is not propagated there; give velocity rows over the "
+            "whole observation span, or leave velocity.csv out for a static antenna"]
 
 
 def _velocity(files, t_gps_s):

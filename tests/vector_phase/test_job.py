@@ -168,3 +168,23 @@ def test_position_walk_default_by_the_set_with_its_reason(tmp_path):
     static = json.loads(_run(tmp_path / "s", obs_set, initial_position_ecef_m=truth.position_ecef_m.tolist())[
         "summary.json"].read_text())["defaults_applied"]
     assert static[0]["case"] == "static (no velocity in the set)" and static[0]["value"] == 0.0
+
+
+def test_phase_epochs_outside_velocity_csv_are_named_in_a_warning(tmp_path):
+    """velocity.csv ending before the observations: the position is not propagated there, and summary.json
+    warnings say how many epochs and which span (with the whole file: no such warning)."""
+    from gnssatt.gnss.frames import R_ned_from_ecef
+
+    v_ecef = R_ned_from_ecef(np.radians(45.3), np.radians(-75.8)).T @ np.array([0.2, 0.1, 0.0])
+    paths, obs, truth, mount = write_vector_phase_set(tmp_path / "moving", ScenarioSpec(
+        AsymmetricPatch(), n_epochs=20, n_sats=8, sigma_phase_cyc=5e-3, velocity_ecef_m_s=tuple(v_ecef)))
+    whole = json.loads(_run(tmp_path / "w", local_set(paths, "vp-whole"),
+                            initial_position_ecef_m=truth.position_ecef_m.tolist())["summary.json"].read_text())
+    assert not [w for w in whole["warnings"] if "velocity.csv" in w]
+    vel = next(p for p in paths if p.name == "velocity.csv")
+    lines = vel.read_text().splitlines()
+    vel.write_text("\n".join(lines[:1 + 15]) + "\n")          # header + the first 15 of 20 rows
+    cut = json.loads(_run(tmp_path / "c", local_set(paths, "vp-cut"),
+                          initial_position_ecef_m=truth.position_ecef_m.tolist())["summary.json"].read_text())
+    named = [w for w in cut["warnings"] if "velocity.csv" in w]
+    assert len(named) == 1 and "5 of 20 phase epochs" in named[0], cut["warnings"]
