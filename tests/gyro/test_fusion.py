@@ -151,3 +151,23 @@ def test_gyro_axes_rotated_by_platform_alignment(gyro_set, fused, tmp_path):
     pj.write_text(json.dumps(plat))
     with pytest.raises(FusionInputError, match="rotation matrix"):
         fuse(files)
+
+
+def test_job_config_chooses_the_gyro_test_reference(gyro_set, tmp_path):
+    """gyro_test_reference reaches the fusion (summary.json names the test used); an unknown value is refused."""
+    import json
+
+    from worker.context import InputFile
+    from worker.errors import JobInputError
+    from worker.local import local_set, run_job_locally
+
+    obs = local_set(gyro_set.sim.files, "set-1")
+    with_gyro = type(obs)(obs.id, obs.name, obs.files + [InputFile("gyro.csv", "gyro", gyro_set.gyro_csv, {})],
+                          obs.summary)
+    for ref in ("independent", "filter"):
+        out = run_job_locally("gyro-fusion", [with_gyro], {"n_propagators": 2, "gyro_test_reference": ref},
+                              tmp_path / ref, progress=None)
+        assert json.loads(out["summary.json"].read_text())["gyro_test_reference"] == ref
+    with pytest.raises(JobInputError):
+        run_job_locally("gyro-fusion", [with_gyro], {"gyro_test_reference": "posterior"}, tmp_path / "bad",
+                        progress=None)
