@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 from gnssatt.attitude.length_constraint import rescale_lengths
+from gnssatt.attitude.rigid_smoother import rts_smooth_rigid
 
 __all__ = ["rts_smooth", "smooth_filter_result", "fixed_runs", "adaptive_noise_profile", "acceleration_noise_rate"]
 
@@ -57,6 +58,16 @@ def rts_smooth(x_post: np.ndarray, P_post: np.ndarray, x_prior: np.ndarray, P_pr
     return (xs, Ps, C_all) if gains else (xs, Ps)
 
 
+def backward_pass(sd: dict, start: np.ndarray, n_bl: int, settings=None):
+    """(x_k|N, P_k|N) of the recorded sub-state: rts_smooth, or with settings.baseline_update "rigid" the same
+    recursion in the baselines' tangent space (gnssatt.attitude.rigid_smoother: consistent with the forward
+    filter's retraction)."""
+    args = (sd["x_post"], sd["P_post"], sd["x_prior"], sd["P_prior"], sd["Phi"], start)
+    if settings is not None and getattr(settings, "baseline_update", "additive") == "rigid":
+        return rts_smooth_rigid(*args, n_bl)
+    return rts_smooth(*args)
+
+
 def smooth_filter_result(fr, settings=None) -> int:
     """Replace the baselines, their covariance and omega of a dynamic-mode FilterResult (run with
     settings.smoothing.enabled) by the smoothed ones over the runs of epochs where every baseline is fixed (a run starts at
@@ -80,14 +91,13 @@ def smooth_filter_result(fr, settings=None) -> int:
     # an epoch is smoothed when it links to its successor (the last epoch of a run stays as filtered)
     linked = np.zeros(n_ep, bool)
     linked[:-1] = ~start[1:] & fixed_all[:-1]
-    xs, Ps = rts_smooth(sd["x_post"], sd["P_post"], sd["x_prior"], sd["P_prior"], sd["Phi"], start)
+    xs, Ps = backward_pass(sd, start, n_bl, settings)
     ep = np.flatnonzero(linked & np.isfinite(xs).all(1))
     fr.omega_ecef_rad_s[ep] = xs[ep, 0:3]
     r0 = xs.shape[1] - 3 * n_bl                      # omega (3) [+ alpha (3)] ahead of the baselines
     b_s = xs[ep, r0:].reshape(ep.size, n_bl, 3)
-    if settings is not None and (settings.length_constraint_sigma_m > 0 or settings.baseline_update == "rigid"):
-        # the forward filter's lengths (held to the body length, gnssatt.attitude.length_constraint, or updated along
-        # b only, gnssatt.attitude.rigid_update)
+    if settings is not None and settings.length_constraint_sigma_m > 0:
+        # the forward filter's lengths (held to the body length, gnssatt.attitude.length_constraint)
         b_s = rescale_lengths(b_s, np.linalg.norm(fr.b_ecef_m[ep], axis=-1))
     fr.b_ecef_m[ep] = b_s
     f = np.clip(sd.get("corr_share", np.zeros(n_ep)), 0.0, 1.0)[ep, None, None]
@@ -142,7 +152,7 @@ def adaptive_noise_profile(fr, settings) -> tuple[np.ndarray, dict]:
     sd = fr.smoother_data
     q1 = float(sd["q_omega"])
     fixed_all, start = fixed_runs(fr)
-    xs, _ = rts_smooth(sd["x_post"], sd["P_post"], sd["x_prior"], sd["P_prior"], sd["Phi"], start)
+    xs, _ = backward_pass(sd, start, fr.fixed.shape[1], settings)
     t_s = np.cumsum(np.nan_to_num(sd["dt_s"]))
     Qw = acceleration_noise_rate(xs[:, 0:3], t_s, start, settings.smoothing.noise_floor * q1,
                                  settings.smoothing.noise_gain, settings.smoothing.accel_window_s,
