@@ -70,9 +70,12 @@ browser:
 	@command -v chromium >/dev/null 2>&1 || (apt-get update -qq && apt-get install -y -qq chromium >/dev/null) \
 	  || echo "could not install chromium (not root?): the browser tests will say so"
 
+# The suite runs on every core (pytest-xdist), a test file per worker process at a time (--dist loadfile: a file's
+# module fixtures are built once); the 25 slowest tests are listed at the end.
+TEST_WORKERS ?= auto
 test: venv browser
 	GNSSATT_TEST_DATABASE_URL="$(GNSSATT_TEST_DATABASE_URL)" GNSSATT_TEST_QUEUE_URL="$(GNSSATT_TEST_QUEUE_URL)" \
-	  $(PY) -m pytest -q -p no:cacheprovider
+	  $(PY) -m pytest -q -p no:cacheprovider -n $(TEST_WORKERS) --dist loadfile --durations=25
 
 test-fast: venv
 	$(PY) -m pytest -q -p no:cacheprovider -m "not e2e"
