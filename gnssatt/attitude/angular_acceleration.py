@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["propagate_acceleration", "sub_transition"]
+__all__ = ["propagate_acceleration", "sub_transition", "jerk_rate_profile"]
 
 
 def propagate_acceleration(x: np.ndarray, P: np.ndarray, q_alpha: float, dt: float) -> None:
@@ -40,3 +40,14 @@ def sub_transition(Phi_rot: np.ndarray, dt: float) -> np.ndarray:
     Phi = Phi_rot.copy()
     Phi[:, 3:6] += dt * Phi_rot[:, 0:3]
     return Phi
+
+
+def jerk_rate_profile(q_alpha: float, q_omega: np.ndarray, q_quiet: float, share: float) -> np.ndarray:
+    """(n_ep,) angular-jerk rate per epoch (rad^2/s^5) of smoother_adaptive_noise's second pass
+    (settings.smoothing.quiet_jerk_share): q_alpha x min(1, share x sqrt(lambda_max(q_omega_k) / q_quiet)), q_omega
+    (n_ep, 3, 3) the pass's omega random-walk rates (gnssatt.attitude.smoother.adaptive_noise_profile), q_quiet their
+    quiet level (noise_floor x the filter's rate). Where the profile says quiet, a stiffer acceleration (the
+    integrated random walk's smoothing window lengthens); where it is raised to a manoeuvre's level, the configured
+    rate. Ours (docs/attitude.md 'Angular-acceleration state')."""
+    lam = np.linalg.eigvalsh(q_omega)[:, -1]
+    return q_alpha * np.minimum(1.0, share * np.sqrt(np.maximum(lam, 0.0) / max(q_quiet, 1e-300)))

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from gnssatt.attitude.adaptive import ManoeuvreDetector
+from gnssatt.attitude.angular_acceleration import jerk_rate_profile
 from gnssatt.attitude.fastops import clip as _clip, nz as _nz
 from gnssatt.attitude.pcv_correction import pcv_tables_for
 from gnssatt.attitude.qc_kernels import add_states, drop_states
@@ -241,6 +242,10 @@ class FilterRun:
         self.var_clk = (s.table1.sigma_clock_s * C_M_S) ** 2
         self.Qw_iso = np.eye(3) * q_w
         self.q_omega = np.ascontiguousarray(q_omega, dtype=np.float64) if q_omega is not None else None
+        # the angular-jerk rate per epoch of a second pass (smoothing.quiet_jerk_share < 1); None: q_alpha throughout
+        self.q_alpha_k = jerk_rate_profile(self.q_alpha, self.q_omega, s.smoothing.noise_floor * q_w,
+                                           s.smoothing.quiet_jerk_share) \
+            if self.accel and self.q_omega is not None and s.smoothing.quiet_jerk_share < 1 else None
         self.cn0_growth = s.noise.weighting == "cn0" or s.noise.noise_cn0_growth
         self.mp_model = max(s.noise.sigma_multipath_phase_m) > 0 or max(s.noise.sigma_multipath_code_m) > 0
         self.mp_infl = s.noise.multipath_correlation_factor if self.dynamic else 1.0

@@ -36,6 +36,7 @@ DIMENSIONLESS = {
     "noise_floor": "a fraction of a Table 1 rate",
     "noise_gain": "a factor on alpha alpha^T dt, which carries the units",
     "accel_noise_k": "a multiple of a median",
+    "quiet_jerk_share": "a share of a configured rate",
     "threshold": "a log-likelihood ratio",
     "mix_at": "a log-likelihood ratio",
     "kappa": "a multiple of sqrt(2 mu) of a chi-square statistic",

@@ -30,7 +30,8 @@ def propagate(run: FilterRun, ep: EpochData) -> None:
     Qw = run.q_omega[k] if run.q_omega is not None else (run.adapter.q_rate(dt) if run.adapter is not None
                                                           else run.Qw_iso)       # (3, 3) rad^2/s^3
     if run.accel:        # omega += alpha dt first (gnssatt.attitude.angular_acceleration)
-        propagate_acceleration(st.x, st.P, run.q_alpha, float(dt))
+        propagate_acceleration(st.x, st.P, run.q_alpha if run.q_alpha_k is None else float(run.q_alpha_k[k]),
+                               float(dt))
     Pbb, Pbw = propagate_dynamic(st.x, st.P, run.w_idx3, run.b_idx, Qw, float(dt), run.s.rk4_step_s, st.white,
                                  run.var_clk)
     if run.record:
