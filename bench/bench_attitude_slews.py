@@ -4,9 +4,10 @@ state (settings.angular_acceleration_state, gnssatt/attitude/angular_acceleratio
 `smoother_quiet_jerk_share` 0.04 (the second pass's jerk rate following the omega profile, jerk_rate_profile).
 
 Per run: max attitude error over every fixed epoch (from the first fixed epoch) with its time after the first fix,
-max after the first 30 s, the smoothed pitch / roll sigma at the first fixed epoch (the larger), and the smoother's
-tilt chi-square (pitch and roll error over their predicted sigmas,
-squared and summed: 2 degrees of freedom) as the mean over the first 10 fixed epochs and over the rest.
+max after the first 30 s, the smoothed pitch / roll sigma at the first fixed epoch (the larger), the smoother's
+tilt chi-square (pitch and roll error over their predicted sigmas, squared and summed: 2 degrees of freedom) as the
+mean over the first 10 fixed epochs and over the rest, and per degree of freedom (that sum / 2: 1 for honest sigmas)
+over every fixed epoch from the first one (issue 21's "smoother chi-square 1.0-1.5 from the first fixed epoch").
 
 With --passes also the four 106-minute passes of bench_attitude_lengths.py (wrong integers, attitude std, chi-square).
 
@@ -53,7 +54,8 @@ def figures(d: Path, inputs, cfg: dict) -> dict:
     late = fi[t[fi] > t0 + 30.0]
     return {"max": float(ang[i]), "at_s": float(t[i] - t0), "late": float(ang[late].max()),
             "sigma0": float(sol.sigma_euler_deg[fi[0], 1:3].max()),
-            "chi2_first": float(chi2[fi[:10]].mean()), "chi2_rest": float(chi2[fi[10:]].mean())}
+            "chi2_first": float(chi2[fi[:10]].mean()), "chi2_rest": float(chi2[fi[10:]].mean()),
+            "chi2_dof_all": float(chi2[fi].mean() / 2.0)}
 
 
 def pass_rows(tmp: Path, minutes: float) -> list[str]:
@@ -73,7 +75,7 @@ def pass_rows(tmp: Path, minutes: float) -> list[str]:
     out = ["", f"The four {minutes:.0f}-minute passes (bench_attitude_lengths.py, simulator seed {SEED}, "
            "\"all phases\", dynamic mode):", "",
            "| pass | run | wrong integers | attitude fix rate | std yaw / pitch / roll deg | max deg | "
-           "tilt chi-square first 10 / rest |", "|---|---|---|---|---|---|---|"]
+           "tilt chi-square first 10 / rest | per dof from the first fixed epoch |", "|---|---|---|---|---|---|---|---|"]
     for label, (preset, over) in PASSES.items():
         d = tmp / f"pass_{label}"
         simulate_scenario(preset, d, seed=SEED, overrides={"duration_s": minutes * 60.0, **over})
@@ -88,7 +90,7 @@ def pass_rows(tmp: Path, minutes: float) -> list[str]:
             sd = de[f].std(0)
             out.append(f"| {label} | {name} | {sc['wrong_constraints']} of {sc['constraints']} | {f.mean():.4f} | "
                        f"{sd[0]:.4f} / {sd[1]:.4f} / {sd[2]:.4f} | {ang[f].max():.2f} | "
-                       f"{chi2[fi[:10]].mean():.2f} / {chi2[fi[10:]].mean():.2f} |")
+                       f"{chi2[fi[:10]].mean():.2f} / {chi2[fi[10:]].mean():.2f} | {chi2[fi].mean() / 2:.2f} |")
             print(out[-1], flush=True)
     return out
 
@@ -110,10 +112,11 @@ def main() -> None:
              "random walk 0.01 deg/s per sqrt(s), sigma0 0.05 deg/s^2), and with it `smoother_quiet_jerk_share` 0.04. "
              "Max error over every fixed epoch from the first one (s after the first fix), max after the first 30 s, "
              "the smoothed tilt sigma at the first fixed epoch (larger of pitch / roll), smoother tilt chi-square "
-             "(2 dof) over the first 10 fixed epochs / the rest:", "",
+             "(2 dof) over the first 10 fixed epochs / the rest, and per degree of freedom (/ 2) over every fixed "
+             "epoch from the first one:", "",
              "| slew | seed | settings | max error deg (s after fix) | max after 30 s | sigma at first fix deg | "
-             "chi-square first 10 / rest |",
-             "|---|---|---|---|---|---|---|"]
+             "chi-square first 10 / rest | per dof from the first |",
+             "|---|---|---|---|---|---|---|---|"]
     summary = {name: [] for name in RUNS}
     with tempfile.TemporaryDirectory() as tmp:
         for label, over in SLEWS.items():
@@ -125,16 +128,19 @@ def main() -> None:
                     r = figures(d, inputs, cfg)
                     summary[name].append(r)
                     lines.append(f"| {label} | {seed} | {name} | {r['max']:.2f} ({r['at_s']:.0f} s) | {r['late']:.2f} "
-                                 f"| {r['sigma0']:.2f} | {r['chi2_first']:.2f} / {r['chi2_rest']:.2f} |")
+                                 f"| {r['sigma0']:.2f} | {r['chi2_first']:.2f} / {r['chi2_rest']:.2f} "
+                                 f"| {r['chi2_dof_all']:.2f} |")
                     print(lines[-1], flush=True)
         pass_lines = pass_rows(Path(tmp), args.minutes) if args.passes else []
     lines.append("")
     for name, rs in summary.items():
         mx = np.array([r["max"] for r in rs])
         c1 = np.array([r["chi2_first"] for r in rs])
+        ca = np.array([r["chi2_dof_all"] for r in rs])
         lines.append(f"- {name}: max error over all fixed epochs above 0.3 deg on {int((mx > 0.3).sum())} of {mx.size} "
                      f"runs (worst {mx.max():.2f}, median {np.median(mx):.2f}); chi-square over the first 10 fixed "
-                     f"epochs {c1.min():.2f}-{c1.max():.2f} (median {np.median(c1):.2f}).")
+                     f"epochs {c1.min():.2f}-{c1.max():.2f} (median {np.median(c1):.2f}); per dof from the first fixed "
+                     f"epoch {ca.min():.2f}-{ca.max():.2f} (median {np.median(ca):.2f}).")
     lines += pass_lines
     lines += ["", "Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_slews.py --passes --write`."]
     print("\n".join(lines[-4:]))

@@ -27,6 +27,7 @@ import numpy as np
 
 from gnssatt.attitude.length_constraint import rescale_lengths
 from gnssatt.attitude.rigid_smoother import rts_smooth_rigid
+from gnssatt.attitude.smoothed_covariance import covariance_scale
 
 __all__ = ["rts_smooth", "smooth_filter_result", "fixed_runs", "adaptive_noise_profile", "acceleration_noise_rate"]
 
@@ -75,11 +76,9 @@ def smooth_filter_result(fr, settings=None) -> int:
     the smoothed sub-state). Returns the number of epochs smoothed.
 
     Covariance: the recursion treats every phase error as white, but multipath and uncalibrated PCV are correlated
-    over minutes; the forward filter already counts them at their full (inflated) variance
-    (multipath_correlation_factor) and averaging over the later epochs too does not shrink them further. With f the
-    information-weighted share of that correlated variance in the epoch's phase variances (recorded by the filter),
-    the reported covariance is P_k|N + f (P_k|k - P_k|N): white errors shrink as smoothed, correlated ones stay as
-    filtered (f = 0 on white-noise data).
+    over minutes and do not average out over the smoother's window; the reported covariance is s_k P_k|N with the
+    white / time-correlated split of the phase post-fit residuals (gnssatt.attitude.smoothed_covariance: their
+    autocorrelation, the correlated part averaged over the epochs the smoother effectively averages at k).
 
     settings.smoothing.adaptive_noise changes nothing here: fr is then the second forward pass (run with the
     per-epoch noise of adaptive_noise_profile), smoothed as any other."""
@@ -100,9 +99,8 @@ def smooth_filter_result(fr, settings=None) -> int:
         # the forward filter's lengths (held to the body length, gnssatt.attitude.length_constraint)
         b_s = rescale_lengths(b_s, np.linalg.norm(fr.b_ecef_m[ep], axis=-1))
     fr.b_ecef_m[ep] = b_s
-    f = np.clip(sd.get("corr_share", np.zeros(n_ep)), 0.0, 1.0)[ep, None, None]
-    P_post = sd["P_post"][ep, r0:, r0:]
-    fr.P_b_m2[ep] = Ps[ep, r0:, r0:] + f * (P_post - Ps[ep, r0:, r0:])
+    scale, sd["covariance"] = covariance_scale(fr, Ps, ep, r0)
+    fr.P_b_m2[ep] = scale[:, None, None] * Ps[ep, r0:, r0:]
     sd["epochs_smoothed"] = int(ep.size)
     return int(ep.size)
 

@@ -130,6 +130,8 @@ def summarize(sol, R_ref_from_ecef: np.ndarray, orbit_source: str) -> dict:
                                "epochs_smoothed": int(fr.smoother_data.get("epochs_smoothed", 0))}
         if fr.smoother_data.get("adaptive_noise") is not None:
             summary["smoother"]["process_noise"] = fr.smoother_data["adaptive_noise"]
+        if fr.smoother_data.get("covariance") is not None:
+            summary["smoother"]["covariance"] = fr.smoother_data["covariance"]
     summary["fix_rate"] = float(fr.fixed.all(axis=1).sum() / max(fr.ok.all(axis=1).sum(), 1))
     summary["events"] = {}
     for e in fr.events:
