@@ -24,8 +24,49 @@ def json_default(value: Any):
 
 
 def product_json(content: dict | list) -> str:
-    """The text of a JSON product."""
-    return json.dumps(content, indent=2, sort_keys=False, default=json_default) + "\n"
+    """The text of a JSON product: json.dumps(content, indent=2, default=json_default) + a newline, byte for byte.
+    With an indent the standard library encodes in Python, ~2 us per number; `_indented` walks the dicts and lists
+    itself and hands each flat list of numbers to the C encoder (the job page's charts.json of a 106-min pass:
+    ~5e5 numbers, 0.12 -> ~0.03 s CPU)."""
+    return "".join(_indented(content, "\n")) + "\n"
+
+
+#: element types of a list the C encoder writes as json.dumps(indent=2) would, once re-indented (numbers, null)
+_FLAT_TYPES = frozenset((float, int, type(None)))
+_COMPACT = json.JSONEncoder(separators=(",", ":"))     # no indent: the C encoder (same float/int texts)
+
+
+def _indented(o: Any, nl: str) -> list[str]:
+    """Pieces of the indent=2 JSON text of o at the nesting whose line break + indent is nl; what json's
+    _iterencode gives: str, None, bool, int, float leaves as JSON writes them, list/tuple and dict (str keys, in
+    order) one item per line, anything else through json_default. Dicts with other keys: json.dumps itself."""
+    if isinstance(o, (str, int, float)) or o is None:      # bool is an int
+        return [json.dumps(o)]
+    if isinstance(o, (list, tuple)):
+        if not o:
+            return ["[]"]
+        inner = nl + "  "
+        if set(map(type, o)) <= _FLAT_TYPES:
+            return ["[", inner, _COMPACT.encode(o)[1:-1].replace(",", "," + inner), nl, "]"]
+        out = ["["]
+        for i, v in enumerate(o):
+            out.append(inner if i == 0 else "," + inner)
+            out += _indented(v, inner)
+        out += [nl, "]"]
+        return out
+    if isinstance(o, dict):
+        if not o:
+            return ["{}"]
+        if not all(type(k) is str for k in o):
+            return [json.dumps(o, indent=2, default=json_default).replace("\n", nl)]
+        inner = nl + "  "
+        out = ["{"]
+        for i, (k, v) in enumerate(o.items()):
+            out += [inner if i == 0 else "," + inner, json.dumps(k), ": "]
+            out += _indented(v, inner)
+        out += [nl, "}"]
+        return out
+    return _indented(json_default(o), nl)
 
 
 def product_bytes(content: str | bytes | dict | list) -> bytes:

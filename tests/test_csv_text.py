@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from gnssatt.csv_text import csv_text, fixed_cells, int_cells, label_cells
+from gnssatt.csv_text import csv_text, csv_text_blocks, fixed_cells, int_cells, label_cells
 
 EDGE = [np.nan, -np.nan, np.inf, -np.inf, 0.0, -0.0, -1e-300, 5e-324, -5e-324, 0.5, 1.5, 2.5, -0.5, -2.5, 0.125,
         0.375, -0.625, 0.05, 0.15, 0.25, 0.35, 1.005, 2.675, 999.9995, 1e15, -1e15, 2.0 ** 52, 2.0 ** 53 + 2.0,
@@ -79,6 +79,30 @@ def test_rows_join_labels_numbers_and_ints_like_str_join():
     rows = [",".join((names[i], "" if np.isnan(v) else "%.5f" % v, "%d" % j))
             for i, v, j in zip(idx.tolist(), x.tolist(), k.tolist())]
     assert text == "name,x,k\n" + "\n".join(rows) + "\n"
+
+
+def test_blocks_give_the_text_of_all_rows_at_once_without_new_kernel_signatures():
+    """csv_text_blocks (residuals.csv, ~1e6 rows) = csv_text of the whole columns, whatever the block size (a
+    last block shorter than the others, a block of one row), and the sliced tables are the layouts csv_text
+    already compiled for (no compilation inside a job)."""
+    from gnssatt import csv_text as module
+
+    module.warm_up()
+    rng = np.random.default_rng(11)
+    n = 1001
+    names, idx = ["A>B", "A>C", "Ä>B"], rng.integers(0, 3, n)
+    x, k = rng.normal(0, 100, n), rng.integers(-50, 50, n)
+    x[::9] = np.nan
+    labels = label_cells(names, idx)
+    whole = csv_text("name,x,k", [labels, fixed_cells(x, 3, True), int_cells(k)])
+    signatures = len(module._row_put.signatures)
+    for block in (1, 7, 128, 1000, 1001, 5000):
+        def columns_of(lo, hi):
+            return [labels.rows(lo, hi), fixed_cells(x[lo:hi], 3, True), int_cells(k[lo:hi]).rows(0, hi - lo)]
+
+        assert csv_text_blocks("name,x,k", n, columns_of, block_rows=block) == whole, block
+    assert len(module._row_put.signatures) == signatures
+    assert csv_text_blocks("a,b", 0, lambda lo, hi: []) == "a,b\n"
 
 
 def test_empty_table_is_the_header_line_and_mismatched_columns_are_refused():

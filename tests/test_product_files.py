@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gnssatt.product_files import product_json
+from gnssatt.product_files import json_default, product_json
 
 
 def test_numpy_values_and_paths_become_json():
@@ -40,3 +40,20 @@ def test_the_worker_writes_json_products_with_it(tmp_path):
     doc = {"x": np.float64(1.5), "a": np.arange(2)}
     ctx.write_product("summary.json", doc)
     assert stored["bytes"] == product_json(doc).encode()
+
+
+def test_the_text_is_json_dumps_indent_2_byte_for_byte():
+    """product_json walks dicts/lists itself and hands flat number lists to the C encoder: the text must stay the
+    standard library's json.dumps(indent=2) one for every shape a product has (the products' bytes are compared
+    across versions, tests/test_bench_products_identity.py)."""
+    rng = np.random.default_rng(3)
+    cases = [{}, [], {"a": []}, {"a": {}}, [[1, 2], [3.5, None]], (1, 2, (3, [4, {}])),
+             {"x": np.arange(3), "y": np.float64(0.1), "z": np.bool_(True), "p": Path("a/b")},
+             {1: 2, "a": {2.5: "x", None: [1]}},
+             {"s": "é\"\\\n\t", "n": [float("nan"), float("inf"), -float("inf"), True, False, None, 1e300, -0.0]},
+             {"a": [{"b": [1.0] * 3, "c": "x"}, [], [[]]]}, "text", 5, None, [True, 1], [np.int64(3), np.float32(0.25)],
+             {"chart": {"x": rng.normal(size=500).tolist(), "fixed": rng.integers(0, 2, 500).tolist(),
+                        "series": [{"values": (rng.normal(size=500) * 10.0 ** rng.integers(-12, 12, 500)).tolist()}]}},
+             {"k": np.array([[1.5, 2.0], [3.0, 4.0]])}]
+    for case in cases:
+        assert product_json(case) == json.dumps(case, indent=2, default=json_default) + "\n", case

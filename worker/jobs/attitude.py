@@ -289,8 +289,10 @@ def run(ctx: JobContext, config) -> None:
 
 
 #: plots a forked process draws while the job writes the CSV products (the others are drawn here after them):
-#: the three of residuals.csv that take the longest, about half the plot time
-FORKED_PLOTS = ("residuals.png", "skyplot.png", "elevation.png")
+#: the four of residuals.csv (skyplot_fix.png also takes baselines.csv's table), ~1.5 s CPU of the ~2.0 s of all
+#: plots on the 106-minute pass, against ~0.8 s of CSV texts + storing + the three plots drawn here (balanced so
+#: that neither process waits long for the other on 2 cores; docs/BENCHMARKS.md "Attitude job speed")
+FORKED_PLOTS = ("residuals.png", "skyplot.png", "elevation.png", "skyplot_fix.png")
 
 
 class _PlotJob:
