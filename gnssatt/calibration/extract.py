@@ -7,7 +7,7 @@ Producers:
   (gnssatt.calibration.filter_baselines) gives the epoch-wise ECEF baselines and their covariances at the epochs
   where it has them fixed; the single-difference integers of the map statistics are those of the filter's fixed
   baseline at each epoch (rounded from it after removing the epoch's common phase, gnssatt.calibration.kinematic),
-  the samples screened by the epoch-wise least squares' 5 cm gate. No reference attitude is used to fix anything.
+  the samples screened by the epoch-wise least squares' 10 cm gate. No reference attitude is used to fix anything.
 - "reference-aided-ablation": the calibration's former own processor, kept only as an ablation
   (gnssatt.calibration.kinematic): the reference attitude predicts each baseline, the integers are rounded from
   that prediction and the baselines come from epoch-wise least squares (3 components + one clock per signal).
@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gnssatt.calibration.kinematic import BaselineFix, BaselineObservations, solve_baseline
+from gnssatt.calibration.kinematic import DEFAULT_GATE_M, BaselineFix, BaselineObservations, solve_baseline
 from gnssatt.calibration.pcv import FixedPhases
 from gnssatt.calibration.reference import ReferenceAtEpochs, reference_at_epochs
 from gnssatt.gnss.constants import C_M_S
@@ -51,7 +51,7 @@ class ExtractOptions:
     cn0_mask_dbhz: dict = field(default_factory=lambda: {"L1": 35.0, "L2": 30.0})  # Table 2
     elevation_mask_antenna_deg: float = 0.0  # both antennas of a baseline
     max_reference_gap_s: float = 10.0
-    gate_m: float = 0.05
+    gate_m: float = DEFAULT_GATE_M  # residual gate of the epoch-wise least squares (kinematic.py)
     # phase variance x 10^((reference - C/N0)/10) per antenna (tracking-loop jitter ~ 1/sqrt(C/N0), clipped to
     # [1/4, 16]). Off by default: on the simulated 10-set campaign it made the baselines (x +0.6/+0.9 mm vs
     # +0.3/+0.3 mm) and the raw L2 maps (4.5 vs 3.6 mm RMS) worse, the errors there being dominated by
