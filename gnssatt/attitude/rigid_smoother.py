@@ -28,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from gnssatt.attitude.rigid_update import rotation_between
+from gnssatt.attitude.rts_links import rts_links
 
 __all__ = ["boxminus", "boxplus", "rts_smooth_rigid"]
 
@@ -75,19 +76,10 @@ def rts_smooth_rigid(x_post: np.ndarray, P_post: np.ndarray, x_prior: np.ndarray
                      Phi: np.ndarray, start: np.ndarray, n_bl: int):
     """(x_k|N (n, m), P_k|N (n, m, m)) as gnssatt.attitude.smoother.rts_smooth (same arguments, same segments and
     cuts), the last 3 n_bl states being rigid baselines smoothed in their tangent space (module doc)."""
-    n, m = x_post.shape
-    r0 = m - 3 * n_bl
+    r0 = x_post.shape[1] - 3 * n_bl
     xs, Ps = x_post.copy(), P_post.copy()
-    fin_post = np.isfinite(x_post).all(1) & np.isfinite(P_post).all((1, 2))
-    fin_prior = np.isfinite(x_prior).all(1) & np.isfinite(P_prior).all((1, 2)) & np.isfinite(Phi).all((1, 2))
-    for k in range(n - 2, -1, -1):
+    for k, C in rts_links(x_post, P_post, x_prior, P_prior, Phi, start):
         j = k + 1
-        if start[j] or not (fin_post[k] and fin_post[j] and fin_prior[j]):
-            continue
-        try:
-            C = np.linalg.solve(P_prior[j], Phi[j] @ P_post[k]).T      # P_k|k Phi^T P_prior^-1 (P symmetric)
-        except np.linalg.LinAlgError:
-            continue
         bs_j, bp_j = xs[j, r0:].reshape(n_bl, 3), x_prior[j, r0:].reshape(n_bl, 3)
         d = np.concatenate([xs[j, :r0] - x_prior[j, :r0], boxminus(bs_j, bp_j).ravel()])
         delta = C @ d

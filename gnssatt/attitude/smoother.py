@@ -27,6 +27,7 @@ import numpy as np
 
 from gnssatt.attitude.length_constraint import rescale_lengths
 from gnssatt.attitude.rigid_smoother import rts_smooth_rigid
+from gnssatt.attitude.rts_links import rts_links
 from gnssatt.attitude.smoothed_covariance import covariance_scale
 
 __all__ = ["rts_smooth", "smooth_filter_result", "fixed_runs", "adaptive_noise_profile", "acceleration_noise_rate"]
@@ -38,19 +39,10 @@ def rts_smooth(x_post: np.ndarray, P_post: np.ndarray, x_prior: np.ndarray, P_pr
     opens (start[k]: no link from k-1 to k). Epochs with non-finite inputs are left as filtered and cut the chain.
     gains: also return the gains C_k (n, m, m), nan where k does not link to k+1 (cov(x_k+1, x_k | N) =
     P_k+1|N C_k^T)."""
-    n = x_post.shape[0]
     xs, Ps = x_post.copy(), P_post.copy()
     C_all = np.full(P_post.shape, np.nan) if gains else None
-    fin_post = np.isfinite(x_post).all(1) & np.isfinite(P_post).all((1, 2))
-    fin_prior = np.isfinite(x_prior).all(1) & np.isfinite(P_prior).all((1, 2)) & np.isfinite(Phi).all((1, 2))
-    for k in range(n - 2, -1, -1):
+    for k, C in rts_links(x_post, P_post, x_prior, P_prior, Phi, start):
         j = k + 1
-        if start[j] or not (fin_post[k] and fin_post[j] and fin_prior[j]):
-            continue
-        try:
-            C = np.linalg.solve(P_prior[j], Phi[j] @ P_post[k]).T      # P_k|k Phi^T P_prior^-1 (P symmetric)
-        except np.linalg.LinAlgError:
-            continue
         xs[k] = x_post[k] + C @ (xs[j] - x_prior[j])
         Pk = P_post[k] + C @ (Ps[j] - P_prior[j]) @ C.T
         Ps[k] = 0.5 * (Pk + Pk.T)
@@ -64,7 +56,7 @@ def backward_pass(sd: dict, start: np.ndarray, n_bl: int, settings=None):
     recursion in the baselines' tangent space (gnssatt.attitude.rigid_smoother: consistent with the forward
     filter's retraction)."""
     args = (sd["x_post"], sd["P_post"], sd["x_prior"], sd["P_prior"], sd["Phi"], start)
-    if settings is not None and getattr(settings, "baseline_update", "additive") == "rigid":
+    if settings is not None and settings.baseline_update == "rigid":
         return rts_smooth_rigid(*args, n_bl)
     return rts_smooth(*args)
 

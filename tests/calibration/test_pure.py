@@ -273,13 +273,18 @@ def test_fix_integers_recovers_differences_and_wraps():
     assert np.isnan(fix_integers(z, np.ones_like(z))[3, 2])
 
 
+def _epoch_geometry(rng, n_ep: int, n_obs: int) -> tuple[np.ndarray, np.ndarray]:
+    """(H (n_ep, n_obs, 4), x_true (4,)) of the epoch-wise least squares: random unit lines of sight and a clock,
+    a 1 m baseline state."""
+    e = rng.normal(size=(n_ep, n_obs, 3))
+    e /= np.linalg.norm(e, axis=-1, keepdims=True)
+    return np.concatenate([-e, np.ones((n_ep, n_obs, 1))], axis=-1), np.array([1.0, -0.07, 0.005, 12.0])
+
+
 def test_epoch_lsq_solves_and_rejects_a_wrong_integer():
     rng = np.random.default_rng(10)
     n_ep, n_obs = 50, 10
-    e = rng.normal(size=(n_ep, n_obs, 3))
-    e /= np.linalg.norm(e, axis=-1, keepdims=True)
-    H = np.concatenate([-e, np.ones((n_ep, n_obs, 1))], axis=-1)
-    x_true = np.array([1.0, -0.07, 0.005, 12.0])
+    H, x_true = _epoch_geometry(rng, n_ep, n_obs)
     y = H @ x_true + rng.normal(0, 0.003, (n_ep, n_obs))
     y[7, 4] += 0.19  # one L1 cycle
     sol = epoch_lsq(y, H, np.full((n_ep, n_obs), 1 / 0.003 ** 2), gate=0.05)
@@ -298,10 +303,7 @@ def test_default_epoch_lsq_gate_keeps_the_uncalibrated_l2_tails_unbiased():
 
     rng = np.random.default_rng(11)
     n_ep, n_obs = 4000, 10
-    e = rng.normal(size=(n_ep, n_obs, 3))
-    e /= np.linalg.norm(e, axis=-1, keepdims=True)
-    H = np.concatenate([-e, np.ones((n_ep, n_obs, 1))], axis=-1)
-    x_true = np.array([1.0, -0.07, 0.005, 12.0])
+    H, x_true = _epoch_geometry(rng, n_ep, n_obs)
     err = rng.normal(0, 0.003, (n_ep, n_obs))
     err[:, 0] = 0.040 + rng.normal(0, 0.025, n_ep)   # PCV + L2 noise at the horizon
     err[7, 4] += 0.19                                 # one L1 cycle
