@@ -11,7 +11,7 @@ from gnssatt.attitude.process import load_inputs, process
 from gnssatt.attitude.settings import AttitudeSettings
 from tests.attitude.conftest import CLEAN, set_files
 
-#: the first 60 s of seed 000 Fig. 6's pitch manoeuvre, simulator seed 4: the receivers acquire from t = 5 s and
+#: the first 60 s of seed 000 Fig. 6's pitch manoeuvre, simulator seed 4: the first phases are at t = 6 s and
 #: the second baseline fixes two epochs before the first (measured: epochs 12 and 14)
 START = {"start_gps": "2018-06-06T16:31:00", "duration_s": 60.0,
          "waypoints": [[0.0, 0.0, 0.0, 0.0], [60.0, 0.0, 0.0, 0.0]]}
