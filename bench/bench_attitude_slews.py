@@ -12,6 +12,8 @@ over every fixed epoch from the first one (issue 21's "smoother chi-square 1.0-1
 With --passes also the four 106-minute passes of bench_attitude_lengths.py (wrong integers, attitude std, chi-square).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_slews.py [--seeds 0,1,2,3,4,5,6,7] [--passes] [--write]
+
+--write replaces the section "Slews from the first fixed epoch"; without --passes it keeps the passes block there.
 """
 from __future__ import annotations
 
@@ -95,6 +97,26 @@ def pass_rows(tmp: Path, minutes: float) -> list[str]:
     return out
 
 
+def kept_passes(path: Path) -> list[str]:
+    """--write without --passes: the section's earlier passes block (from "The four" up to its "Run:" line), kept
+    with a note of the run it came from, so that a slews-only re-measure does not drop it."""
+    import re
+
+    text = path.read_text()
+    m = re.search(r"^## Slews from the first fixed epoch\n(.*?)(?=^## |\Z)", text, re.S | re.M)
+    start = re.search(r"^(\(kept from [^)]*\) )?The four ", m.group(1), re.M) if m else None
+    if start is None:
+        return []
+    body = m.group(1)
+    origin = re.search(r"commit (\w+), (\d{4}-\d\d-\d\d)", body)
+    block = body[start.start():]
+    block = block[:block.rindex("\nRun:")] if "\nRun:" in block else block
+    block = block.strip()
+    if origin and not block.startswith("(kept from"):      # a block kept before carries its own origin already
+        block = f"(kept from the --passes run of commit {origin.group(1)}, {origin.group(2)}; not re-run) " + block
+    return ["", block]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", default="0,1,2,3,4,5,6,7")
@@ -141,9 +163,11 @@ def main() -> None:
                      f"runs (worst {mx.max():.2f}, median {np.median(mx):.2f}); chi-square over the first 10 fixed "
                      f"epochs {c1.min():.2f}-{c1.max():.2f} (median {np.median(c1):.2f}); per dof from the first fixed "
                      f"epoch {ca.min():.2f}-{ca.max():.2f} (median {np.median(ca):.2f}).")
+    if args.write and not args.passes:
+        pass_lines = kept_passes(ROOT / "docs" / "BENCHMARKS.md")
     lines += pass_lines
     lines += ["", "Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_slews.py --passes --write`."]
-    print("\n".join(lines[-4:]))
+    print("\n".join(lines[-len(RUNS) - 2:]))
     if args.write:
         replace_section(ROOT / "docs" / "BENCHMARKS.md", "Slews from the first fixed epoch", "\n".join(lines))
 
