@@ -7,7 +7,7 @@ consider term of summary.json (antenna_consider: median sigmas) and the pass mea
 (one draw of the constant error: its mean over seeds is 1 for an honest consider term).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_smoother_chi2.py [--passes clean,realistic,hard,slew]
-        [--seed 0] [--runs adaptive,acceleration,plain] [--sets DIR (keep the simulated sets)]
+        [--seed 0] [--runs forward,forward-adaptive,plain,adaptive,acceleration] [--sets DIR (keep the simulated sets)]
 
 Prints a markdown table; writes nothing into docs/BENCHMARKS.md (its section is hand-written).
 """
@@ -53,8 +53,8 @@ def chi2_row(d: Path, inputs, cfg: dict) -> dict:
     s0 = np.sqrt(s ** 2 - (sc0[fi, 1:3] ** 2 if sc0 is not None else 0.0))
     chi0 = ((e / s0) ** 2).sum(1).mean() / 2
     sc = score_fixes(sol, d / "truth")
-    cons = np.asarray((sol.summary.get("antenna_consider") or {}).get("attitude_sigma_deg_median_yaw_pitch_roll",
-                                                                       [np.nan] * 3), float)
+    cons = np.asarray((sol.summary.get("antenna_consider") or {}).get("attitude_sigma_deg_median", [np.nan] * 3),
+                      float)
     return {"bias_chi": float(((e.mean(0) / cons[1:]) ** 2).sum() / 2) if np.all(cons[1:] > 0) else float("nan"),
             "consider": np.round(cons, 3).tolist(),
             "wrong": f"{sc['wrong_constraints']} of {sc['constraints']}", "std": de[sol.att_fixed].std(0),
@@ -75,8 +75,9 @@ def main() -> None:
     ap.add_argument("--sets", default=None, help="folder to keep (and reuse) the simulated sets")
     args = ap.parse_args()
     print(f"Machine: {machine_line()}. Seed {args.seed}, {args.minutes:.0f} min.")
-    print("| pass | run | wrong integers | std yaw / pitch / roll deg | chi2/dof | without the consider term | chi2/dof, mean removed | "
-          "mean pitch / roll deg | median sigma pitch / roll deg | antenna consider yaw / pitch / roll deg | (mean / consider)^2 per dof | CPU s |")
+    print("| pass | run | wrong integers | std yaw / pitch / roll deg | chi2/dof | without the consider term | "
+          "chi2/dof, mean removed | mean pitch / roll deg | median sigma pitch / roll deg | "
+          "antenna consider yaw / pitch / roll deg | (mean / consider)^2 per dof | CPU s |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
         base = Path(args.sets) if args.sets else Path(tmp)
@@ -90,8 +91,8 @@ def main() -> None:
                 r = chi2_row(d, inputs, RUNS[name])
                 sd, m, sg = r["std"], r["mean"], r["sigma_med"]
                 print(f"| {label} | {name} | {r['wrong']} | {sd[0]:.4f} / {sd[1]:.4f} / {sd[2]:.4f} | {r['chi']:.2f} | "
-                      f"{r['chi0']:.2f} | {r['chi_c']:.2f} | {m[0]:+.3f} / {m[1]:+.3f} | {sg[0]:.3f} / {sg[1]:.3f} | {r['consider']} | "
-                      f"{r['bias_chi']:.2f} | {r['cpu']:.0f} |", flush=True)
+                      f"{r['chi0']:.2f} | {r['chi_c']:.2f} | {m[0]:+.3f} / {m[1]:+.3f} | {sg[0]:.3f} / {sg[1]:.3f} | "
+                      f"{r['consider']} | {r['bias_chi']:.2f} | {r['cpu']:.0f} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -34,11 +34,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from gnssatt.attitude.solution import attitude_from_baselines
+from gnssatt.attitude.solution import attitude_from_baselines, euler_and_sigma
 from gnssatt.gnss import rotations as rot
 
 __all__ = ["KAPPA_H", "KAPPA_V", "DEFAULT_PCO_SIGMA_MM", "DEFAULT_PCV_RMS_MM", "antenna_frame_variance_m2",
-           "baseline_consider_body_m2", "consider_theta_rad2"]
+           "baseline_consider_body_m2", "consider_theta_rad2", "attitude_consider"]
 
 KAPPA_H = 0.84
 KAPPA_V = 1.34
@@ -113,3 +113,14 @@ def consider_theta_rad2(q_body_from_ecef: np.ndarray, b_ecef_m: np.ndarray, C_bo
         P[:, 3 * j:3 * j + 3, 3 * j:3 * j + 3] = np.swapaxes(R, -1, -2) @ C_body_m2[j] @ R
     _, P_th = attitude_from_baselines(b_ecef_m, P, b_body_m, "quest" if method == "ml" else method)
     return P_th
+
+
+def attitude_consider(platform, baselines: list[tuple[str, str]], signals: list[str], settings, q_body_from_ecef,
+                      b_ecef_m: np.ndarray, b_body_m: np.ndarray, R_body_from_ref: np.ndarray):
+    """(P_theta term (n, 3, 3) rad^2, its yaw / pitch / roll sigmas (n, 3) deg, summary.json "antenna_consider")
+    for the attitude epochs of process(): baseline_consider_body_m2 through consider_theta_rad2."""
+    C_body, info = baseline_consider_body_m2(platform, baselines, signals, settings.calibration)
+    P_c = consider_theta_rad2(q_body_from_ecef, b_ecef_m, C_body, b_body_m, settings.attitude_method)
+    _, _, _, cy, cp, cr = euler_and_sigma(R_body_from_ref, P_c)
+    info["attitude_sigma_deg_median"] = [float(np.median(x)) if x.size else None for x in (cy, cp, cr)]
+    return P_c, np.stack([cy, cp, cr], 1), info

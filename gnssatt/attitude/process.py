@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gnssatt.attitude.antenna_consider import baseline_consider_body_m2, consider_theta_rad2
+from gnssatt.attitude.antenna_consider import attitude_consider
 from gnssatt.attitude.filter import FilterResult, run_filter
 from gnssatt.attitude.geometry import EpochGeometry, compute_geometry, platform_state_from_sp3
 from gnssatt.attitude.observations import PlatformObs, build_platform_obs, glonass_channels
@@ -355,16 +355,11 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
         R_b_ref = R_be @ np.swapaxes(R_ref_from_ecef[ep], -1, -2)
         # the antennas' unmodelled phase-centre offsets: a consider term (gnssatt.attitude.antenna_consider); the
         # estimate q_e is computed without it and stays as it is
-        C_body, consider = baseline_consider_body_m2(plat, baselines, list(pobs.signals), settings.calibration)
-        P_c = consider_theta_rad2(q_e, fr.b_ecef_m[ep], C_body, body, settings.attitude_method)
+        P_c, sol.sigma_consider_euler_deg, sol.antenna_consider = attitude_consider(
+            plat, baselines, list(pobs.signals), settings, q_e, fr.b_ecef_m[ep], body, R_b_ref)
         yaw, pitch, roll, sy, sp, sr = euler_and_sigma(R_b_ref, P_th + P_c)
-        _, _, _, cy, cp, cr = euler_and_sigma(R_b_ref, P_c)
-        sol.sigma_consider_euler_deg = np.stack([cy, cp, cr], 1)
-        consider["attitude_sigma_deg_median_yaw_pitch_roll"] = [float(np.median(x)) if x.size else None
-                                                               for x in (cy, cp, cr)]
-        sol.antenna_consider = consider
         if fr.smoother_data is not None and fr.smoother_data.get("covariance") is not None:
-            fr.smoother_data["covariance"]["antenna_consider_deg"] = consider["attitude_sigma_deg_median_yaw_pitch_roll"]
+            fr.smoother_data["covariance"]["antenna_consider_deg"] = sol.antenna_consider["attitude_sigma_deg_median"]
         sol.att_epochs = ep
         sol.q_body_from_ecef = rot.quat_normalize(q_e)
         sol.q_body_from_gcrf = q_i

@@ -115,3 +115,34 @@ def test_constants_against_the_simulator_pattern_family():
     s = np.array(off).std(0) / r
     assert abs(r / 10.0 / ob.PCV_RMS_PER_PEAK_TO_PEAK - 1) < 0.05
     assert abs(0.5 * (s[0] + s[1]) / KAPPA_H - 1) < 0.05 and abs(s[2] / KAPPA_V - 1) < 0.05, s
+
+
+def test_process_adds_the_term_and_moves_no_estimate(realistic_pass, tmp_path):
+    """The realistic pass as simulated (declared PCO / PCV) against the same files declaring 0: identical
+    quaternions and fixes, larger tilt sigmas by the reported term (variances add), summary.json entries."""
+    import shutil
+
+    from gnssatt.attitude.process import load_inputs, process
+    from gnssatt.attitude.settings import AttitudeSettings
+
+    from .conftest import set_files
+
+    zero = tmp_path / "zero"
+    shutil.copytree(realistic_pass, zero)
+    pj = json.loads((zero / "platform.json").read_text())
+    for a in pj["antennas"].values():
+        a["pco_sigma_mm"], a["pcv_rms_mm"] = 0.0, 0.0
+    (zero / "platform.json").write_text(json.dumps(pj))
+    st = AttitudeSettings.preset("seed000", mode="dynamic", smoother=True)
+    sol = process(load_inputs(set_files(realistic_pass)), st)
+    sol0 = process(load_inputs(set_files(zero)), st)
+    assert np.array_equal(sol.q_body_from_ecef, sol0.q_body_from_ecef)
+    assert np.array_equal(sol.att_fixed, sol0.att_fixed)
+    f = sol.att_fixed
+    np.testing.assert_allclose(sol.sigma_euler_deg[f] ** 2,
+                               sol0.sigma_euler_deg[f] ** 2 + sol.sigma_consider_euler_deg[f] ** 2, rtol=1e-6)
+    assert np.all(sol0.sigma_consider_euler_deg == 0)
+    med = sol.summary["antenna_consider"]["attitude_sigma_deg_median"]
+    assert sol.summary["smoother"]["covariance"]["antenna_consider_deg"] == med
+    # pco 1.5 mm, pcv 2.1 / 2.7 mm on ~1.1 m baselines: vertical ~3.6 mm differential -> ~0.2 deg of tilt
+    assert 0.1 < med[1] < 0.3 and 0.1 < med[2] < 0.3, med
