@@ -7,7 +7,7 @@ consider term of summary.json (antenna_consider: median sigmas) and the pass mea
 (one draw of the constant error: its mean over seeds is 1 for an honest consider term).
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_smoother_chi2.py [--passes clean,realistic,hard,slew]
-        [--seed 0] [--runs forward,forward-adaptive,plain,adaptive,acceleration] [--sets DIR (keep the simulated sets)]
+        [--seed 0] [--runs kinematic,forward,forward-adaptive,plain,adaptive,acceleration] [--sets DIR (keep the simulated sets)]
 
 Prints a markdown table; writes nothing into docs/BENCHMARKS.md (its section is hand-written).
 """
@@ -29,7 +29,7 @@ import numpy as np  # noqa: E402
 from bench._report import machine_line  # noqa: E402
 from bench.bench_attitude import files_of  # noqa: E402
 
-RUNS = {"forward": {}, "forward-adaptive": {"adaptive_omega_noise": True}, "plain": {"smoother": True},
+RUNS = {"kinematic": {"mode": "kinematic"}, "forward": {}, "forward-adaptive": {"adaptive_omega_noise": True}, "plain": {"smoother": True},
         "adaptive": {"smoother": True, "smoother_adaptive_noise": True},
         "acceleration": {"smoother": True, "smoother_adaptive_noise": True, "angular_acceleration_state": True}}
 
