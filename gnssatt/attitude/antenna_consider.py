@@ -36,6 +36,7 @@ import numpy as np
 
 from gnssatt.attitude.solution import attitude_from_baselines, euler_and_sigma
 from gnssatt.gnss import rotations as rot
+from gnssatt.gnss.geometry import R_antenna_from_body
 
 __all__ = ["KAPPA_H", "KAPPA_V", "DEFAULT_PCO_SIGMA_MM", "DEFAULT_PCV_RMS_MM", "antenna_frame_variance_m2",
            "baseline_consider_body_m2", "consider_theta_rad2", "attitude_consider"]
@@ -66,15 +67,6 @@ def antenna_frame_variance_m2(antenna, signals: list[str], with_pcv: bool = True
     return np.array([h, h, v]) * 1e-6
 
 
-def _R_ant_from_body(boresight_body: np.ndarray) -> np.ndarray:
-    """Antenna frame of CONVENTIONS.md: z along boresight, x along body x projected (body y if parallel)."""
-    z = boresight_body / np.linalg.norm(boresight_body)
-    ref = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 1 - 1e-9 else np.array([0.0, 1.0, 0.0])
-    x = ref - z * (ref @ z)
-    x /= np.linalg.norm(x)
-    return np.stack([x, np.cross(z, x), z])
-
-
 def baseline_consider_body_m2(platform, baselines: list[tuple[str, str]], signals: list[str],
                               calibration=None) -> tuple[np.ndarray, dict]:
     """((n_bl, 3, 3) body-frame covariance of each phase-centre baseline about the body one, info) (module doc)."""
@@ -90,7 +82,7 @@ def baseline_consider_body_m2(platform, baselines: list[tuple[str, str]], signal
         if not with_pcv:
             removed.append(f"{a}>{b}: PCV map (offsets kept)")
         for ant in (platform.antennas[a], platform.antennas[b]):
-            R = _R_ant_from_body(ant.boresight_body)
+            R = R_antenna_from_body(ant.boresight_body)
             out[j] += R.T @ np.diag(antenna_frame_variance_m2(ant, signals, with_pcv)) @ R
     declared = {k: {"pco_sigma_mm": v.pco_sigma_mm, "pcv_rms_mm": v.pcv_rms_mm} for k, v in platform.antennas.items()}
     defaulted = [k for k, v in declared.items() if v["pco_sigma_mm"] is None and v["pcv_rms_mm"] is None]
