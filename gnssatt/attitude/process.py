@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gnssatt.attitude.antenna_consider import attitude_consider
 from gnssatt.attitude.filter import FilterResult, run_filter
 from gnssatt.attitude.geometry import EpochGeometry, compute_geometry, platform_state_from_sp3
 from gnssatt.attitude.observations import PlatformObs, build_platform_obs, glonass_channels
@@ -67,6 +68,9 @@ class AttitudeSolution:
     # the platform kind's defaults applied (gnssatt.attitude.platform_defaults): [{"setting", "value", "reason"}]
     platform_defaults: list = field(default_factory=list)
     summary: dict = field(default_factory=dict)
+    # summary.json "antenna_consider": the unmodelled phase-centre term in sigma_euler_deg (antenna_consider.py)
+    antenna_consider: dict | None = None
+    sigma_consider_euler_deg: np.ndarray | None = None   # (n, 3): the part of sigma_euler_deg that term makes
 
     @property
     def time(self) -> GpsTime | None:
@@ -349,7 +353,13 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
         R_bi = R_be @ np.swapaxes(R_gcrf_ecef, -1, -2)
         q_i = rot.dcm_to_quat(R_bi)
         R_b_ref = R_be @ np.swapaxes(R_ref_from_ecef[ep], -1, -2)
-        yaw, pitch, roll, sy, sp, sr = euler_and_sigma(R_b_ref, P_th)
+        # the antennas' unmodelled phase-centre offsets: a consider term (gnssatt.attitude.antenna_consider); the
+        # estimate q_e is computed without it and stays as it is
+        P_c, sol.sigma_consider_euler_deg, sol.antenna_consider = attitude_consider(
+            plat, baselines, list(pobs.signals), settings, q_e, fr.b_ecef_m[ep], body, R_b_ref)
+        yaw, pitch, roll, sy, sp, sr = euler_and_sigma(R_b_ref, P_th + P_c)
+        if fr.smoother_data is not None and fr.smoother_data.get("covariance") is not None:
+            fr.smoother_data["covariance"]["antenna_consider_deg"] = sol.antenna_consider["attitude_sigma_deg_median"]
         sol.att_epochs = ep
         sol.q_body_from_ecef = rot.quat_normalize(q_e)
         sol.q_body_from_gcrf = q_i
@@ -360,4 +370,6 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     prog(0.95, "statistics")
     from gnssatt.attitude.statistics import summarize
     sol.summary = summarize(sol, R_ref_from_ecef, orbit_src)
+    if getattr(sol, "antenna_consider", None) is not None:
+        sol.summary["antenna_consider"] = sol.antenna_consider
     return sol

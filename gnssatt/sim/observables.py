@@ -54,6 +54,11 @@ def antenna_frame(boresight_body: np.ndarray) -> np.ndarray:
     return np.stack([x, y, z])
 
 
+#: expected RMS (over el >= 0, solid-angle weighted, about its mean) of a pcv_grid_mm pattern per mm of its
+#: peak-to-peak: 0.2327 from 4000 draws (tests/attitude/test_antenna_consider.py re-draws it)
+PCV_RMS_PER_PEAK_TO_PEAK = 0.2327
+
+
 def pcv_grid_mm(rng: np.random.Generator, peak_to_peak_mm: float) -> np.ndarray:
     """A smooth random PCV pattern (len(PCV_EL_DEG), len(PCV_AZ_DEG)) in mm, peak-to-peak over el >= 0 as asked.
 

@@ -1,8 +1,8 @@
 """`platform.json`: the platform's antennas in the body frame, checked against ../shared/CONVENTIONS.md.
 
-Implements: CONVENTIONS.md "Inputs: an observation set" (name, kind, antennas with position_m and
-boresight, master, baselines defaulting to master-to-each-other-antenna, observation_files defaulting
-to the RINEX MARKER NAME).
+Implements: CONVENTIONS.md "Inputs: an observation set" (name, kind, antennas with position_m, boresight
+and the optional declared pco_sigma_mm / pcv_rms_mm, master, baselines defaulting to master-to-each-other-antenna,
+observation_files defaulting to the RINEX MARKER NAME).
 """
 from __future__ import annotations
 
@@ -25,6 +25,10 @@ class Antenna:
     id: str
     position_body_m: np.ndarray  # (3,)
     boresight_body: np.ndarray  # (3,) unit vector
+    # declared uncertainty of the phase centre (CONVENTIONS.md): None = not declared; a number (mm) for every
+    # signal or {signal: mm}
+    pco_sigma_mm: float | dict | None = None
+    pcv_rms_mm: float | dict | None = None
 
 
 @dataclass
@@ -52,6 +56,17 @@ def _vec3(name: str, where: str, value) -> np.ndarray:
     return np.asarray(value, dtype=np.float64)
 
 
+def _sigma_mm(name: str, where: str, value):
+    """A declared sigma: None, a non-negative number, or {signal: non-negative number}."""
+    def ok(v):
+        return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0
+    if value is None or ok(value):
+        return None if value is None else float(value)
+    if isinstance(value, dict) and value and all(isinstance(k, str) and ok(v) for k, v in value.items()):
+        return {k: float(v) for k, v in value.items()}
+    raise _err(name, f"{where} as a non-negative number (mm) or an object signal -> mm", json.dumps(value)[:100])
+
+
 def parse_platform(text: str | bytes, name: str = "platform.json") -> Platform:
     """The Platform described by a platform.json text; ParseError naming the field at fault otherwise."""
     try:
@@ -76,7 +91,8 @@ def parse_platform(text: str | bytes, name: str = "platform.json") -> Platform:
         norm = float(np.linalg.norm(bore))
         if norm < 1e-9:
             raise _err(name, f'antennas["{ant_id}"].boresight to be a non-zero vector', str(bore.tolist()))
-        antennas[str(ant_id)] = Antenna(str(ant_id), pos, bore / norm)
+        unc = {k: _sigma_mm(name, f'antennas["{ant_id}"].{k}', spec.get(k)) for k in ("pco_sigma_mm", "pcv_rms_mm")}
+        antennas[str(ant_id)] = Antenna(str(ant_id), pos, bore / norm, **unc)
     master = doc.get("master", next(iter(antennas)))
     if master not in antennas:
         raise _err(name, f'"master" to name one of the antennas {sorted(antennas)}', repr(master))
