@@ -22,6 +22,8 @@ over fixed epochs, the max rotation error.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_lengths.py [--minutes 106] [--write]
         [--passes clean,slew] [--runs "forward, rigid update"]      (one pass / one run: print only)
+        [--true-maps]       (the simulator's differential PCV maps, truth/pcv, applied as a calibrated platform's
+                             settings.calibration.pcv_maps: print only)
 """
 from __future__ import annotations
 
@@ -71,6 +73,17 @@ def phase_centre_lengths_m(d: Path, baselines: list) -> np.ndarray:
         return np.array(A["arp_true_body_m"]) + np.array(A["R_ant_from_body"]).T @ np.array(A["pco_ant_m"][f])
 
     return np.array([np.mean([np.linalg.norm(pc(b, f) - pc(a, f)) for f in ("L1", "L2")]) for a, b in baselines])
+
+
+def true_maps(d: Path) -> dict:
+    """(first, second, signal) -> the simulator's differential PCV map of the set d (truth/pcv, CONVENTIONS layout on
+    the grid nodes; exact with parallel antenna frames), as settings.calibration.pcv_maps of a calibrated platform."""
+    out = {}
+    for p in sorted((d / "truth" / "pcv").glob("*.json")):
+        doc = json.loads(p.read_text())
+        out[(doc["pair"][0], doc["pair"][1], doc["frequency"])] = {
+            k: doc[k] for k in ("platform", "pair", "frequency", "azimuth_deg", "elevation_deg", "values_mm")}
+    return out
 
 
 def run(d: Path, cfg: dict) -> list[dict]:
@@ -137,11 +150,13 @@ def main() -> None:
     ap.add_argument("--validation-only", action="store_true", help="only the length-validation table (all passes)")
     ap.add_argument("--passes", default=",".join(PASSES), help="comma-separated subset of " + ",".join(PASSES))
     ap.add_argument("--runs", default=None, help="one run name of RUNS (print only, no validation table)")
+    ap.add_argument("--true-maps", action="store_true", help="apply the simulator's PCV maps (print only)")
     args = ap.parse_args()
     passes = args.passes.split(",")
     runs = RUNS if args.runs is None else {args.runs: RUNS[args.runs]}
-    if args.write and (len(passes) < len(PASSES) or args.runs is not None or args.minutes != 106.0):
-        ap.error("--write needs every pass and run at 106 min")
+    if args.write and (len(passes) < len(PASSES) or args.runs is not None or args.minutes != 106.0
+                       or args.true_maps):
+        ap.error("--write needs every pass and run at 106 min, without --true-maps")
     from gnssatt.sim import simulate_scenario
 
     lines = [f"Machine: {machine_line()}. One BLAS thread. Simulator seed {SEED}, {args.minutes:.0f} min at 1 Hz, "
@@ -169,9 +184,10 @@ def main() -> None:
                 val_lines += validation_rows(d, label)
             if args.validation_only:
                 continue
+            maps = {"calibration": {"pcv_maps": true_maps(d)}} if args.true_maps else {}
             for name, cfg in runs.items():
-                for r in run(d, cfg):
-                    lines.append(row(label, name, r))
+                for r in run(d, {**cfg, **maps}):
+                    lines.append(row(label, name + (", true PCV maps" if maps else ""), r))
                     print(lines[-1], flush=True)
     lines += ["", "Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_lengths.py --write`."]
     val_lines[0] = f"Machine: {machine_line()}. " + val_lines[0]
