@@ -33,7 +33,8 @@ def test_boxplus_inverts_boxminus_and_measures_length_and_arc():
 
 def test_body_boxplus_inverts_body_boxminus_and_moves_a_rigid_body_rigidly():
     """Two baselines of one body: boxplus_body(b0, boxminus_body(b1, b0)) = b1 for bodies turned by up to ~0.1 rad with
-    non-rigid moves besides (the fixed point converges as the angle: the filter's moves are mrad); a pure rotation of the body halved in the tangent space is a rotation of the body (the
+    non-rigid moves besides (the fixed point converges as the angle: the filter's moves are mrad); a pure rotation
+    of the body halved in the tangent space is a rotation of the body (the
     angle between the baselines and their lengths kept to 1e-12), where the per-baseline boxplus changes the angle at
     second order (> 1e-7 rad for a 5 mrad turn)."""
     rng = np.random.default_rng(7)
