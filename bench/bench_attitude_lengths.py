@@ -95,7 +95,8 @@ def true_maps(d: Path, with_offsets: bool = False) -> dict:
         if with_offsets:
             A, E = np.meshgrid(np.asarray(doc["azimuth_deg"], float), np.asarray(doc["elevation_deg"], float))
             b_mean = truth["baselines"][key[:2]]["mean_m"]
-            out[key]["values_mm"] = np.round(truth_map_mm(truth, key, b_mean, A, E), 6).tolist()
+            bore = json.loads((d / "platform.json").read_text())["antennas"][key[0]]["boresight"]
+            out[key]["values_mm"] = np.round(truth_map_mm(truth, key, b_mean, A, E, bore), 6).tolist()
     return out
 
 
