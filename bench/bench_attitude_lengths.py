@@ -22,6 +22,11 @@ over fixed epochs, the max rotation error.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_lengths.py [--minutes 106] [--write]
         [--passes clean,slew] [--runs "forward, rigid update"]      (one pass / one run: print only)
+        [--true-maps]       (the simulator's differential PCV maps, truth/pcv, applied as a calibrated platform's
+                             settings.calibration.pcv_maps: print only)
+        [--true-baselines]  (with --true-maps: also the phase-centre baselines, mean of L1 and L2, as
+                             settings.calibration.calibrated_baselines, and each frequency's offset from it in its
+                             map: a platform calibrated exactly, CONVENTIONS.md split; print only)
 """
 from __future__ import annotations
 
@@ -71,6 +76,28 @@ def phase_centre_lengths_m(d: Path, baselines: list) -> np.ndarray:
         return np.array(A["arp_true_body_m"]) + np.array(A["R_ant_from_body"]).T @ np.array(A["pco_ant_m"][f])
 
     return np.array([np.mean([np.linalg.norm(pc(b, f) - pc(a, f)) for f in ("L1", "L2")]) for a, b in baselines])
+
+
+def true_maps(d: Path, with_offsets: bool = False) -> dict:
+    """(first, second, signal) -> the simulator's differential PCV map of the set d (truth/pcv, CONVENTIONS layout on
+    the grid nodes; exact with parallel antenna frames), as settings.calibration.pcv_maps of a calibrated platform.
+    with_offsets: each frequency's phase-centre offset from the mean of L1 and L2 folded into its map,
+    -g . (b_f - b_mean) (gnssatt.calibration.simulated.truth_map_mm: the offset/variation split of CONVENTIONS.md
+    with b_mean as the calibrated baseline)."""
+    from gnssatt.calibration.simulated import truth_map_mm, truth_of
+
+    truth = truth_of(d) if with_offsets else None
+    out = {}
+    for p in sorted((d / "truth" / "pcv").glob("*.json")):
+        doc = json.loads(p.read_text())
+        key = (doc["pair"][0], doc["pair"][1], doc["frequency"])
+        out[key] = {k: doc[k] for k in ("platform", "pair", "frequency", "azimuth_deg", "elevation_deg", "values_mm")}
+        if with_offsets:
+            A, E = np.meshgrid(np.asarray(doc["azimuth_deg"], float), np.asarray(doc["elevation_deg"], float))
+            b_mean = truth["baselines"][key[:2]]["mean_m"]
+            bore = json.loads((d / "platform.json").read_text())["antennas"][key[0]]["boresight"]
+            out[key]["values_mm"] = np.round(truth_map_mm(truth, key, b_mean, A, E, bore), 6).tolist()
+    return out
 
 
 def run(d: Path, cfg: dict) -> list[dict]:
@@ -137,11 +164,14 @@ def main() -> None:
     ap.add_argument("--validation-only", action="store_true", help="only the length-validation table (all passes)")
     ap.add_argument("--passes", default=",".join(PASSES), help="comma-separated subset of " + ",".join(PASSES))
     ap.add_argument("--runs", default=None, help="one run name of RUNS (print only, no validation table)")
+    ap.add_argument("--true-maps", action="store_true", help="apply the simulator's PCV maps (print only)")
+    ap.add_argument("--true-baselines", action="store_true", help="with --true-maps: the phase-centre baselines too")
     args = ap.parse_args()
     passes = args.passes.split(",")
     runs = RUNS if args.runs is None else {args.runs: RUNS[args.runs]}
-    if args.write and (len(passes) < len(PASSES) or args.runs is not None or args.minutes != 106.0):
-        ap.error("--write needs every pass and run at 106 min")
+    if args.write and (len(passes) < len(PASSES) or args.runs is not None or args.minutes != 106.0
+                       or args.true_maps or args.true_baselines):
+        ap.error("--write needs every pass and run at 106 min, without --true-maps")
     from gnssatt.sim import simulate_scenario
 
     lines = [f"Machine: {machine_line()}. One BLAS thread. Simulator seed {SEED}, {args.minutes:.0f} min at 1 Hz, "
@@ -169,9 +199,15 @@ def main() -> None:
                 val_lines += validation_rows(d, label)
             if args.validation_only:
                 continue
+            maps = {"calibration": {"pcv_maps": true_maps(d, args.true_baselines)}} if args.true_maps else {}
+            if args.true_maps and args.true_baselines:
+                from gnssatt.calibration.simulated import truth_of
+                maps["calibration"]["calibrated_baselines"] = {k: v["mean_m"].tolist()
+                                                               for k, v in truth_of(d)["baselines"].items()}
+            tag = (", true PCV maps" if maps else "") + (" and baselines" if args.true_baselines and maps else "")
             for name, cfg in runs.items():
-                for r in run(d, cfg):
-                    lines.append(row(label, name, r))
+                for r in run(d, {**cfg, **maps}):
+                    lines.append(row(label, name + tag, r))
                     print(lines[-1], flush=True)
     lines += ["", "Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_lengths.py --write`."]
     val_lines[0] = f"Machine: {machine_line()}. " + val_lines[0]

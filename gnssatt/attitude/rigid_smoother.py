@@ -14,23 +14,30 @@ smoothed baseline by (1 - c^2) |d_t|^2 / (2 |b|) and the deficit is carried back
     delta = C_k d_k+1                  (omega [, alpha] linear as before)
     b_k|N = b_k|k [+] delta            length |b_k|k| + r . delta, direction turned by |delta across r| / |b_k|k|
 
-([+] and [-] are inverses: b [+] (c [-] b) = c.) The covariances are those of the errors at the forward estimates;
+([+] and [-] are inverses: b [+] (c [-] b) = c.) As in the forward update (gnssatt.attitude.rigid_update), the
+baselines of one body are moved together: [+] applies the common rotation phi of delta (least squares over the
+baselines) exactly, exp(phi), after each baseline's remainder delta_j - phi x b_j by the per-baseline [+] above, and
+[-] is its inverse (phi by a fixed-point iteration); per baseline on its own the common rotation is a second-order
+shear of the body that the recursion carries back through every earlier epoch (measured on the clean 106-min pass:
+the angle between the two baselines +0.12 deg at the start of the run, -0.09 at its end, and a smoothed yaw mean of
++0.03 deg over the first 20 minutes; with the body rotation the angle is one number, -0.003 deg).
+The covariances are those of the errors at the forward estimates;
 P_k+1|N, at b_k+1|N, is turned to b_k+1|k's direction before the step and P_k|N from b_k|k's to b_k|N's after it,
 as the forward filter turns P with the estimate (gnssatt.attitude.rigid_update).
 
 Implements: the RTS smoother on a manifold (Rauch, Tung & Striebel 1965 with the box-plus / box-minus operators of
 Hertzberg, Wagner, Frese & Schroeder 2013, "Integrating generic sensor fusion algorithms with sound state
-representations through encapsulation of manifolds", Inf. Fusion 14(1), sec. 3-4), here on R^3 x (S^2 x R+)^n,
+representations through encapsulation of manifolds", Inf. Fusion 14(1), sec. 3-4), here on R^3 x SO(3)-moved (S^2 x R+)^n,
 consistent with the forward filter's multiplicative reset (Markley 2003; Sola 2017 sec. 7.2).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from gnssatt.attitude.rigid_update import rotation_between
+from gnssatt.attitude.rigid_update import common_rotation, rotation_between, rotation_exp
 from gnssatt.attitude.rts_links import rts_links
 
-__all__ = ["boxminus", "boxplus", "rts_smooth_rigid"]
+__all__ = ["boxminus", "boxplus", "boxminus_body", "boxplus_body", "rts_smooth_rigid"]
 
 
 def boxminus(b1_m: np.ndarray, b0_m: np.ndarray) -> np.ndarray:
@@ -60,15 +67,42 @@ def boxplus(b0_m: np.ndarray, d_m: np.ndarray) -> np.ndarray:
     return (n0 + dr) * (np.cos(ang) * u0 + np.sin(ang) * e)
 
 
-def _turn(P: np.ndarray, b_from_m: np.ndarray, b_to_m: np.ndarray, r0: int) -> np.ndarray:
-    """P (m, m) with each baseline's rows and columns (3 from r0 on per baseline) turned by the rotation that takes
-    the direction of b_from_m (n_bl, 3) to that of b_to_m (n_bl, 3)."""
+def boxplus_body(b0_m: np.ndarray, d_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """((n, 3) baselines, (3, 3) R): the baselines b0_m (n, 3) of one body moved by d_m (n, 3), m: the common rotation
+    of d (gnssatt.attitude.rigid_update.common_rotation) applied exactly, R = exp(phi), after each baseline's
+    remainder d_j - phi x b0_j by boxplus (module doc)."""
+    phi = common_rotation(b0_m, d_m)
+    R = rotation_exp(phi)
+    return boxplus(b0_m, d_m - np.cross(phi, b0_m)) @ R.T, R
+
+
+def boxminus_body(b1_m: np.ndarray, b0_m: np.ndarray, iterations: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """((n, 3) d, (3, 3) R): the inverse of boxplus_body, boxplus_body(b0_m, d) = (b1_m, R): phi such that the
+    remainder e = boxminus(R(phi)^T b1, b0) has no common rotation (fixed-point iteration, converging as |phi|),
+    d = phi x b0 + e."""
+    phi = np.zeros(3)
+    for _ in range(iterations):
+        R = rotation_exp(phi)
+        e = boxminus(b1_m @ R, b0_m)
+        psi = common_rotation(b0_m, e)
+        phi = phi + psi
+        if float(psi @ psi) < 1e-30:
+            break
+    R = rotation_exp(phi)
+    e = boxminus(b1_m @ R, b0_m)
+    return np.cross(phi, b0_m) + e, R
+
+
+def _turn(P: np.ndarray, b_from_m: np.ndarray, b_to_m: np.ndarray, r0: int, R: np.ndarray) -> np.ndarray:
+    """P (m, m) with each baseline's rows and columns (3 from r0 on per baseline) turned with the body: by R (the
+    body rotation from b_from_m (n_bl, 3) to b_to_m (n_bl, 3)), then by the rotation that takes R's image of each
+    direction of b_from_m to that of b_to_m."""
     T = np.eye(P.shape[0])
     for j in range(b_from_m.shape[0]):
-        u0 = b_from_m[j] / np.linalg.norm(b_from_m[j])
+        u0 = R @ b_from_m[j] / np.linalg.norm(b_from_m[j])
         u1 = b_to_m[j] / np.linalg.norm(b_to_m[j])
         if u0 @ u1 > -0.5:
-            T[r0 + 3 * j:r0 + 3 * j + 3, r0 + 3 * j:r0 + 3 * j + 3] = rotation_between(u0, u1)
+            T[r0 + 3 * j:r0 + 3 * j + 3, r0 + 3 * j:r0 + 3 * j + 3] = rotation_between(u0, u1) @ R
     return T @ P @ T.T
 
 
@@ -81,13 +115,13 @@ def rts_smooth_rigid(x_post: np.ndarray, P_post: np.ndarray, x_prior: np.ndarray
     for k, C in rts_links(x_post, P_post, x_prior, P_prior, Phi, start):
         j = k + 1
         bs_j, bp_j = xs[j, r0:].reshape(n_bl, 3), x_prior[j, r0:].reshape(n_bl, 3)
-        d = np.concatenate([xs[j, :r0] - x_prior[j, :r0], boxminus(bs_j, bp_j).ravel()])
-        delta = C @ d
+        d_b, R_ps = boxminus_body(bs_j, bp_j)
+        delta = C @ np.concatenate([xs[j, :r0] - x_prior[j, :r0], d_b.ravel()])
         bf_k = x_post[k, r0:].reshape(n_bl, 3)
-        b_new = boxplus(bf_k, delta[r0:].reshape(n_bl, 3))
+        b_new, R_fs = boxplus_body(bf_k, delta[r0:].reshape(n_bl, 3))
         xs[k, :r0] = x_post[k, :r0] + delta[:r0]
         xs[k, r0:] = b_new.ravel()
-        Pk = P_post[k] + C @ (_turn(Ps[j], bs_j, bp_j, r0) - P_prior[j]) @ C.T
-        Pk = _turn(Pk, bf_k, b_new, r0)
+        Pk = P_post[k] + C @ (_turn(Ps[j], bs_j, bp_j, r0, R_ps.T) - P_prior[j]) @ C.T
+        Pk = _turn(Pk, bf_k, b_new, r0, R_fs)
         Ps[k] = 0.5 * (Pk + Pk.T)
     return xs, Ps

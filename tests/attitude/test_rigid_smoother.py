@@ -9,7 +9,8 @@ import json
 import numpy as np
 
 from gnssatt.attitude.process import load_inputs, process
-from gnssatt.attitude.rigid_smoother import boxminus, boxplus, rts_smooth_rigid
+from gnssatt.attitude.rigid_smoother import boxminus, boxminus_body, boxplus, boxplus_body, rts_smooth_rigid
+from gnssatt.attitude.rigid_update import rotation_exp
 from gnssatt.attitude.settings import ALL_PHASES, AttitudeSettings
 from gnssatt.attitude.smoother import rts_smooth
 from tests.attitude.conftest import set_files
@@ -28,6 +29,31 @@ def test_boxplus_inverts_boxminus_and_measures_length_and_arc():
     assert np.allclose(radial, n1 - n0, atol=1e-12)                                   # the length difference
     assert np.allclose(np.linalg.norm(d - radial[:, None] * u0, axis=1), n0 * ang, atol=1e-12)   # |b0| x the arc
     assert np.allclose(boxminus(b0, b0), 0.0, atol=1e-15) and np.allclose(boxplus(b0, 0 * b0), b0, atol=1e-15)
+
+
+def test_body_boxplus_inverts_body_boxminus_and_moves_a_rigid_body_rigidly():
+    """Two baselines of one body: boxplus_body(b0, boxminus_body(b1, b0)) = b1 for bodies turned by up to ~0.1 rad with
+    non-rigid moves besides (the fixed point converges as the angle: the filter's moves are mrad); a pure rotation
+    of the body halved in the tangent space is a rotation of the body (the
+    angle between the baselines and their lengths kept to 1e-12), where the per-baseline boxplus changes the angle at
+    second order (> 1e-7 rad for a 5 mrad turn)."""
+    rng = np.random.default_rng(7)
+    b0 = np.array([[1.04653, -0.07191, 0.0], [0.0, 1.13969, 0.0]])
+    for s in (1e-4, 1e-3, 1e-2, 0.05):
+        b1 = (b0 + 1e-2 * s * rng.normal(size=b0.shape)) @ rotation_exp(s * rng.normal(size=3)).T
+        d, R_m = boxminus_body(b1, b0)
+        b2, R_p = boxplus_body(b0, d)
+        assert np.abs(b2 - b1).max() < 1e-10 and np.abs(R_m - R_p).max() < 1e-9
+
+    def angle(B):
+        return np.arccos(B[0] @ B[1] / np.linalg.norm(B[0]) / np.linalg.norm(B[1]))
+
+    b1 = b0 @ rotation_exp(np.array([3e-3, -3e-3, 2e-3])).T
+    half, _ = boxplus_body(b0, 0.5 * boxminus_body(b1, b0)[0])
+    assert abs(angle(half) - angle(b0)) < 1e-12
+    assert np.allclose(np.linalg.norm(half, axis=1), np.linalg.norm(b0, axis=1), atol=1e-12)
+    per_baseline = boxplus(b0, 0.5 * boxminus(b1, b0))
+    assert abs(angle(per_baseline) - angle(b0)) > 1e-7
 
 
 def _rigid_track(n, rng, step_m=2e-3, sr=1e-8, st=1e-6, q=4e-6):
