@@ -11,8 +11,8 @@ antennas, L1 C/A + L2 P(Y), 1 Hz), clean ({"pcv": false, "pco": false, "multipat
   hashed as the blob store does), CPU (the plot process it forks included) and wall time, median of --runs runs, and CPU per stage (the pipeline's
   StageClock line of the job log);
 - service (realistic pass, both modes): upload to products through the real service as `make demo` runs it (API +
-  one worker, embedded SQLite + Huey, default settings): HTTP upload of the set, job submitted, polled to
-  `succeeded`, products listed; wall time split into upload, submit, queue pick-up, run, seen-succeeded, CPU of
+  one worker, embedded SQLite + Huey, default settings): HTTP upload of the set, job submitted, followed to
+  `succeeded` by its Server-Sent Events as the CLI does, products listed; wall time split into upload, submit, queue pick-up, run, seen-succeeded, CPU of
   the API and worker processes, and the job's stage line from the worker log (--no-service skips it);
 - RTKLIB: pyrtklib postpos, moving-base L1+L2 (bench_attitude_rtklib.rtklib_movingbase_options), one run per
   baseline (GPS-2>GPS-0, GPS-2>GPS-1) on the same RINEX files, CPU and wall, median of --runs runs.
@@ -169,8 +169,9 @@ class AttitudeService:
                 raise RuntimeError(f"worker did not start:\n{self.svc.logs_text()}")
             time.sleep(0.2)
 
-    def run(self, d: Path, mode: str, poll_s: float = 0.1) -> dict:
-        """Upload the set over HTTP, submit the attitude job, poll to `succeeded`, list the products: wall time of
+    def run(self, d: Path, mode: str, poll_s: float | None = None) -> dict:
+        """Upload the set over HTTP, submit the attitude job, follow it to `succeeded` (its event stream, as the CLI
+        does; poll_s: GET the job every poll_s s instead), list the products: wall time of
         each part (client clock; queue pick-up and run from the job's created/started/finished times) and CPU
         of the API and worker processes; the job's own stage timings from the worker's log."""
         import httpx
@@ -189,13 +190,7 @@ class AttitudeService:
             job.raise_for_status()
             jid = job.json()["id"]
             t_sub = time.perf_counter()
-            polls = 0
-            while True:
-                j = c.get(f"/v1/jobs/{jid}").json()
-                polls += 1
-                if j["state"] in ("succeeded", "failed", "cancelled"):
-                    break
-                time.sleep(poll_s)
+            j, polls = follow_job(c, jid, poll_s)
             t_done = time.perf_counter()
             if j["state"] != "succeeded":
                 raise RuntimeError(f"service run failed: {j}\n{self.svc.logs_text()}")
@@ -214,6 +209,32 @@ class AttitudeService:
 
     def shutdown(self) -> None:
         self.svc.shutdown()
+
+
+def follow_job(c, jid: str, poll_s: float | None = None) -> tuple[dict, int]:
+    """(the job once it has ended, events or polls seen): its Server-Sent Events (GET /v1/jobs/{id}/events, what
+    `gnssatt submit` follows), or GET /v1/jobs/{id} every poll_s s."""
+    import json
+
+    n = 0
+    if poll_s is None:
+        with c.stream("GET", f"/v1/jobs/{jid}/events") as resp:
+            resp.raise_for_status()
+            event = None
+            for line in resp.iter_lines():
+                if line.startswith("event:"):
+                    event = line[6:].strip()
+                elif line.startswith("data:"):
+                    n += 1
+                    if event == "end":
+                        return json.loads(line[5:]), n
+        raise RuntimeError(f"the event stream of job {jid} ended without an end event")
+    while True:
+        j = c.get(f"/v1/jobs/{jid}").json()
+        n += 1
+        if j["state"] in ("succeeded", "failed", "cancelled"):
+            return j, n
+        time.sleep(poll_s)
 
 
 def run_service_jobs(d: Path, mode: str, runs: int, work: Path) -> list[dict]:
@@ -297,8 +318,8 @@ def main() -> None:
     if service:
         lines += ["", "Upload to products through the real service (`make demo`'s setup: API + one worker, embedded "
                   "SQLite + Huey, default settings; bench.bench_attitude_speed.AttitudeService): the set "
-                  f"({service[0]['upload_mb']:.1f} MB) uploaded over HTTP, the attitude job submitted, polled every "
-                  "0.1 s to `succeeded`, the product list fetched. Wall s (client clock; pick-up and run from the "
+                  f"({service[0]['upload_mb']:.1f} MB) uploaded over HTTP, the attitude job submitted, followed to "
+                  "`succeeded` by its event stream (as `gnssatt submit` does), the product list fetched. Wall s (client clock; pick-up and run from the "
                   "job's created/started/finished times) and CPU s of the API process and of the worker with its "
                   "fork server and job children. Median of "
                   f"{args.runs} runs after one warm-up upload + job.", "",

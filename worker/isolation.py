@@ -22,6 +22,7 @@ import multiprocessing
 import os
 import resource
 import signal
+import sys
 import threading
 import time
 from typing import Any, Callable
@@ -95,16 +96,31 @@ def _ready() -> None:
     """A child that does nothing: it starts once the fork server has finished its imports."""
 
 
+def main_module_preload() -> tuple[str, ...]:
+    """The worker's main module as the fork server should preload it. multiprocessing runs the parent's main
+    module again in every child of the fork server, as __mp_main__ (`python -m client.cli worker`: the module
+    client.cli; the `gnssatt` console script: its file, "__main__" in the preload list); imported once in the
+    fork server, that re-run finds its imports (the CLI's HTTP client, ~80 ms per job child) already loaded.
+    Nothing when the main module is a package's __main__ or interactive, which multiprocessing does not re-run."""
+    main = sys.modules.get("__main__")
+    name = getattr(getattr(main, "__spec__", None), "name", None)
+    if name:
+        return () if name == "__main__" or name.endswith(".__main__") else (name,)
+    return ("__main__",) if getattr(main, "__file__", None) else ()
+
+
 def start_fork_server(preload: tuple[str, ...] = FORK_SERVER_PRELOAD) -> None:
-    """Start the fork server (once per process) and wait until it has imported `preload` and can fork: the
-    worker calls it first, before any thread; run_budgeted calls it too, so a child's start watchdog never
-    counts the fork server's own start (~20 s: the science imports and kernels)."""
+    """Start the fork server (once per process) and wait until it has imported `preload` (and the worker's main
+    module, main_module_preload) and can fork: the worker calls it first, before any thread; run_budgeted calls
+    it too, so a child's start watchdog never counts the fork server's own start (~20 s: the science imports and
+    kernels)."""
     global _fork_server_ready
     with _fork_server_lock:
         if _fork_server_ready:
             return
         mp = multiprocessing.get_context("forkserver")
-        mp.set_forkserver_preload(list(preload))  # no effect once a fork server runs in this process
+        # no effect once a fork server runs in this process
+        mp.set_forkserver_preload(list(preload) + [m for m in main_module_preload() if m not in preload])
         proc = mp.Process(target=_ready, name="fork-server-ready", daemon=True)
         proc.start()
         proc.join()
@@ -166,6 +182,18 @@ def _child_main(settings: Settings, worker_name: str, target: Callable[[Runtime,
         conn.close()
 
 
+def _reap_later(proc) -> None:
+    """A child that has sent its result exits on its own (tearing down a few hundred MB takes ~40 ms): the job is
+    published meanwhile; a thread waits for it and kills it if it is still there after 10 s."""
+    def wait() -> None:
+        proc.join(timeout=10)
+        if proc.is_alive():
+            proc.kill()
+            proc.join(timeout=10)
+
+    threading.Thread(target=wait, name=f"reap-{proc.name}", daemon=True).start()
+
+
 def run_budgeted(rt: Runtime, ctx, target: Callable[[Runtime, dict], dict], what: str = "job") -> dict[str, Any]:
     """Run target(child_runtime, names) in a child process under the budget; its returned dict, or raise
     JobCancelled / LeaseLost / JobBudgetExceeded / ChildFailed (the target's own error) / RuntimeError.
@@ -183,7 +211,7 @@ def run_budgeted(rt: Runtime, ctx, target: Callable[[Runtime, dict], dict], what
     proc.start()
     send.close()
     peak = 0
-    started = False
+    started = finished = False
     try:
         while True:
             if recv.poll(POLL_S):
@@ -194,11 +222,13 @@ def run_budgeted(rt: Runtime, ctx, target: Callable[[Runtime, dict], dict], what
                 if message is not None and message[0] == "started":
                     started = True
                     continue
+                if message is not None and message[0] == "ok":
+                    finished = True
+                    _reap_later(proc)
+                    return message[1]
                 proc.join(timeout=10)
                 if message is None:
                     break
-                if message[0] == "ok":
-                    return message[1]
                 _, problem, permanent, trace = message
                 ctx.log(trace)
                 raise ChildFailed(problem, permanent)
@@ -225,7 +255,7 @@ def run_budgeted(rt: Runtime, ctx, target: Callable[[Runtime, dict], dict], what
         raise RuntimeError(f"the {what}'s process ended without a result ({how}); the machine may be short of "
                            "memory")
     finally:
-        if proc.is_alive():
+        if not finished and proc.is_alive():
             proc.kill()
             proc.join(timeout=10)
         recv.close()

@@ -4,6 +4,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import time
 from typing import Annotated
 
 from fastapi import APIRouter, Query, Request, Response
@@ -158,6 +159,20 @@ def cancel_job(job_id: str, team: TeamDep, session: SessionDep) -> JobPublic:
     return to_public(job)
 
 
+#: a job's event stream reads the job every SSE_POLL_S; every SSE_FINAL_POLL_S once its progress is at least
+#: SSE_FINAL_FROM (its last stretch: products and plots), for at most SSE_FINAL_FOR_S, so a client sees the end
+#: ~25 ms after it on average instead of ~125 ms, at 20 reads a second for a few seconds of a job only; the
+#: key is re-checked every KEY_RECHECK_S
+SSE_POLL_S, SSE_FINAL_POLL_S, SSE_FINAL_FROM, SSE_FINAL_FOR_S, KEY_RECHECK_S = 0.25, 0.05, 0.9, 10.0, 1.0
+
+
+def sse_poll_s(doc: dict, final_for_s: float) -> float:
+    """Seconds until the event stream reads a job again: `doc` its public JSON, `final_for_s` how long the stream
+    has seen it running in its last stretch."""
+    final = doc.get("state") == "running" and doc.get("progress", 0.0) >= SSE_FINAL_FROM
+    return SSE_FINAL_POLL_S if final and final_for_s < SSE_FINAL_FOR_S else SSE_POLL_S
+
+
 @router.get("/{job_id}/events", responses={**ERRORS, 200: {"content": {"text/event-stream": {}},
                                                           "description": "Server-Sent Events"}},
             response_class=StreamingResponse, summary="Follow a job's progress (Server-Sent Events)")
@@ -179,12 +194,16 @@ async def job_events(job_id: str, request: Request, team: TeamDep, session: Sess
     async def stream():
         last = None
         idle = 0.0
-        polls = 0
+        key_checked = -1e9
+        final_since = None
         while True:
             if await request.is_disconnected():
                 return
-            doc = await run_in_threadpool(snapshot, polls % 4 == 0)  # the key is re-checked every second
-            polls += 1
+            now = time.monotonic()
+            check_key = now - key_checked >= KEY_RECHECK_S
+            if check_key:
+                key_checked = now
+            doc = await run_in_threadpool(snapshot, check_key)
             if doc is None:
                 return
             if doc.get("revoked"):
@@ -198,8 +217,11 @@ async def job_events(job_id: str, request: Request, team: TeamDep, session: Sess
             if doc["state"] in TERMINAL:
                 yield f"event: end\ndata: {json.dumps(doc)}\n\n"
                 return
-            await asyncio.sleep(0.25)
-            idle += 0.25
+            if final_since is None and doc["state"] == "running" and doc["progress"] >= SSE_FINAL_FROM:
+                final_since = now
+            wait_s = sse_poll_s(doc, 0.0 if final_since is None else now - final_since)
+            await asyncio.sleep(wait_s)
+            idle += wait_s
             if idle >= 15:
                 idle = 0.0
                 yield ": keep-alive\n\n"

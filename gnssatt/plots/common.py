@@ -125,7 +125,7 @@ def read_csv_table(data: "str | bytes | Table | Iterable[Mapping[str, Any]] | No
     if data is None:
         return {}
     if isinstance(data, dict):
-        return {str(k): np.asarray(v) for k, v in data.items()}
+        return {str(k): np.asanyarray(v) for k, v in data.items()}   # asany: a CodedStrings column keeps its categories
     if isinstance(data, bytes):
         data = data.decode("utf-8")
     if isinstance(data, str):

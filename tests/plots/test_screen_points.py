@@ -102,6 +102,23 @@ def test_coded_strings_carry_what_categories_computes():
     assert categories(col[1:])[0] == ["G17", "G05", "G09"]           # a view sorts again, same answer
 
 
+def test_a_table_handed_to_the_plots_keeps_its_coded_columns(monkeypatch):
+    """attitude_plots reads the job's column tables through read_csv_table: a CodedStrings column must come out
+    as itself (its categories carried), not as a plain copy the plots would sort again (~6e5 residual rows)."""
+    from gnssatt.plots import common
+
+    col = coded_strings(["G05", "G02"], np.array([1, 0, 1]))
+    table = common.read_csv_table({"sat": col, "x": [1.0, 2.0, 3.0]})
+    assert table["sat"] is col and table["x"].tolist() == [1.0, 2.0, 3.0]
+
+    def no_sorting(values):
+        raise AssertionError("categories sorted a coded column")
+
+    monkeypatch.setattr(common, "_categories", no_sorting)
+    levels, codes = common.categories(table["sat"])
+    assert levels == ["G02", "G05"] and codes.tolist() == [0, 1, 0]
+
+
 def test_warm_up_loads_the_kernels_the_plots_call():
     from gnssatt.plots import common
 

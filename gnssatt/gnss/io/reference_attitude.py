@@ -5,6 +5,7 @@ quaternions frame->body, GPS time in ISO 8601 without zone).
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,8 +64,8 @@ def read_reference_attitude(text: str | bytes, name: str = "reference_attitude.c
         frame = cells[col["frame"]].upper()
         if frame not in ("GCRF", "ECEF"):
             raise ParseError(name, line_no, "frame GCRF or ECEF", cells[col["frame"]])
-        qn = float(np.linalg.norm(q))
-        if not np.all(np.isfinite(q)) or abs(qn - 1.0) > NORM_TOLERANCE:
+        qn = math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])   # plain floats: ~10 us/row less
+        if not all(map(math.isfinite, q)) or abs(qn - 1.0) > NORM_TOLERANCE:
             raise ParseError(name, line_no, f"a unit quaternion (|q| = 1 within {NORM_TOLERANCE:g})",
                              f"|q| = {qn:.9f}")
         if prev is not None and t_key <= prev:
