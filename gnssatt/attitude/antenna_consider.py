@@ -14,7 +14,7 @@ delta is the ECEF baseline error R^T delta; "ml" uses QUEST's G). Per antenna, i
 
     C_ant = diag(h, h, v) / n_sig,  h = pco_sigma^2 + (KAPPA_H pcv_rms)^2,  v = pco_sigma^2 + (KAPPA_V pcv_rms)^2
 
-pco_sigma_mm and pcv_rms_mm from platform.json (CONVENTIONS.md "Inputs: an observation set", per antenna, the
+pco_sigma_mm and pcv_rms_mm from platform.json (docs/formats/platform_antenna_uncertainty.md, per antenna, the
 declared uncertainty), n_sig the signals in use (their offsets taken independent, equally weighted). KAPPA_H / V:
 the offset-like part of a smooth random PCV pattern of RMS pcv_rms over the upper hemisphere, per axis: the
 least-squares fit of [1, e_x, e_y, e_z] (the clock and an offset's signature) over the sky above a 10 deg mask,

@@ -25,8 +25,8 @@ class Antenna:
     id: str
     position_body_m: np.ndarray  # (3,)
     boresight_body: np.ndarray  # (3,) unit vector
-    # declared uncertainty of the phase centre (CONVENTIONS.md): None = not declared; a number (mm) for every
-    # signal or {signal: mm}
+    # declared uncertainty of the phase centre (docs/formats/platform_antenna_uncertainty.md): None = not declared;
+    # a number (mm) for every signal or {signal: mm}
     pco_sigma_mm: float | dict | None = None
     pcv_rms_mm: float | dict | None = None
 
