@@ -564,8 +564,9 @@ def _arcs_and_integers(p: SimParams, trk: np.ndarray, cn0_f: np.ndarray, gap: np
 def _declared_phase_centre(p, sigs) -> dict:
     """platform.json's declared phase-centre uncertainty of every antenna
     (docs/formats/platform_antenna_uncertainty.md): the spec the simulator draws from, not the drawn values -
-    pco_sigma_mm = the PCO scatter per axis, pcv_rms_mm per signal = the expected RMS over the upper hemisphere of pcv_grid_mm's pattern (observables.PCV_RMS_PER_PEAK_TO_PEAK x the peak-to-peak x
-    the RMS of its uniform(0.8, 1) scale, x l2_pcv_factor on L2)."""
+    pco_sigma_mm = the PCO scatter per axis, pcv_rms_mm per signal = the expected RMS over the upper hemisphere
+    of pcv_grid_mm's pattern (observables.PCV_RMS_PER_PEAK_TO_PEAK x the peak-to-peak x the RMS of its
+    uniform(0.8, 1) scale, x l2_pcv_factor on L2)."""
     scale_rms = float(np.sqrt((1.0 - 0.8 ** 3) / (3 * 0.2)))
     pcv = {f: round(ob.PCV_RMS_PER_PEAK_TO_PEAK * p.pcv_peak_to_peak_mm * scale_rms
                     * (p.l2_pcv_factor if f == "L2" else 1.0), 3) if p.pcv else 0.0 for f in sigs}
