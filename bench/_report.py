@@ -42,3 +42,16 @@ def replace_section(path: Path, title: str, body: str) -> None:
     else:
         text = text.rstrip() + "\n\n" + block
     path.write_text(text.rstrip() + "\n")
+
+
+def prepend_to_section(path: Path, title: str, body: str) -> None:
+    """Put `body` first in the `## title` section of a markdown file, keeping what the section held below it
+    (a dated history of hand-written figures); a new section at the end if there is none."""
+    text = path.read_text() if path.exists() else "# Benchmarks\n"
+    heading = re.compile(rf"^## {re.escape(title)}\n\n?", re.M)
+    m = heading.search(text)
+    if m is None:
+        text = text.rstrip() + f"\n\n## {title}\n\n{body.strip()}\n"
+    else:
+        text = text[:m.end()] + body.strip() + "\n\n" + text[m.end():]
+    path.write_text(text.rstrip() + "\n")

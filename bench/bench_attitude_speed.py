@@ -19,6 +19,8 @@ antennas, L1 C/A + L2 P(Y), 1 Hz), clean ({"pcv": false, "pco": false, "multipat
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_speed.py [--runs 3] [--minutes 106]
         [--no-rtklib] [--no-service] [--write]
+
+--write puts the figures first in docs/BENCHMARKS.md "Attitude job speed", keeping the section's earlier figures.
 """
 from __future__ import annotations
 
@@ -35,7 +37,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from bench._report import machine_line, replace_section  # noqa: E402
+from bench._report import machine_line, prepend_to_section  # noqa: E402
 from worker.forked import cpu_s  # noqa: E402
 
 SEED = 0
@@ -337,7 +339,8 @@ def main() -> None:
     text = "\n".join(lines)
     print(text)
     if args.write:
-        replace_section(ROOT / "docs" / "BENCHMARKS.md", "Attitude job speed", text)
+        # first in the section, above the dated hand-written figures and their history (which it used to replace)
+        prepend_to_section(ROOT / "docs" / "BENCHMARKS.md", "Attitude job speed", text)
 
 
 if __name__ == "__main__":
