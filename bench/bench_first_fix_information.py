@@ -35,14 +35,11 @@ import numpy as np  # noqa: E402
 
 from bench._report import machine_line, replace_section  # noqa: E402
 from bench.bench_attitude import CLEAN, SLEWS, files_of  # noqa: E402
+from gnssatt.attitude.solution import skew  # noqa: E402
+from gnssatt.gnss.constants import C_M_S  # noqa: E402
 
-C_M_S = 299792458.0
 SETTINGS = {"smoother": True, "smoother_adaptive_noise": True, "angular_acceleration_state": True}
 BATCH_WINDOW_S = 30.0
-
-
-def skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
 
 
 def white_phase_sigma_m(d: Path, signals: list[str]) -> dict:

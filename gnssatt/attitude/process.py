@@ -370,6 +370,6 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     prog(0.95, "statistics")
     from gnssatt.attitude.statistics import summarize
     sol.summary = summarize(sol, R_ref_from_ecef, orbit_src)
-    if getattr(sol, "antenna_consider", None) is not None:
+    if sol.antenna_consider is not None:
         sol.summary["antenna_consider"] = sol.antenna_consider
     return sol

@@ -33,7 +33,9 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["common_rotation", "rotation_between", "rotation_exp", "rigid_retract", "skew"]
+from gnssatt.attitude.solution import skew
+
+__all__ = ["common_rotation", "rotation_between", "rotation_exp", "rigid_retract"]
 
 
 def rotation_between(u0: np.ndarray, u1: np.ndarray) -> np.ndarray:
@@ -44,13 +46,10 @@ def rotation_between(u0: np.ndarray, u1: np.ndarray) -> np.ndarray:
     return np.eye(3) + vx + vx @ vx / (1.0 + c)
 
 
-def skew(v: np.ndarray) -> np.ndarray:
-    """(3, 3) cross-product matrix [v]x: [v]x w = v x w."""
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-
-
 def rotation_exp(phi: np.ndarray) -> np.ndarray:
-    """(3, 3) rotation by the rotation vector phi (rad; Rodrigues' formula, the exponential map of SO(3))."""
+    """(3, 3) rotation by the rotation vector phi (rad; Rodrigues' formula, the exponential map of SO(3)): the
+    transpose of rotations.quat_to_dcm(rotations.quat_from_rotvec(phi)) (their frame rotation), written out here
+    because the filter and the rigid smoother call it per epoch (~11 us against ~39 us through the quaternion)."""
     a = float(np.sqrt(phi @ phi))
     K = skew(phi)
     if a < 1e-8:
@@ -62,7 +61,7 @@ def common_rotation(b0_m: np.ndarray, d_m: np.ndarray) -> np.ndarray:
     """(3,) rotation vector phi (rad) of the least-squares common rotation of the baselines b0_m (n, 3) that explains
     their moves d_m (n, 3) to first order: min sum_j |d_j - phi x b0_j|^2 (the body rotation; with one baseline, or
     parallel ones, the minimum-norm solution: no turn about the baseline)."""
-    S = np.stack([skew(b) for b in b0_m])                      # phi x b = -[b]x phi
+    S = skew(np.asarray(b0_m, float))                          # phi x b = -[b]x phi
     N = np.einsum("jki,jkl->il", S, S)
     rhs = -np.einsum("jki,jk->i", S, d_m)
     return np.linalg.lstsq(N, rhs, rcond=1e-10)[0]
