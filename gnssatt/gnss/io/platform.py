@@ -1,8 +1,9 @@
 """`platform.json`: the platform's antennas in the body frame, checked against ../shared/CONVENTIONS.md.
 
-Implements: CONVENTIONS.md "Inputs: an observation set" (name, kind, antennas with position_m, boresight
-and the optional declared pco_sigma_mm / pcv_rms_mm, master, baselines defaulting to master-to-each-other-antenna,
-observation_files defaulting to the RINEX MARKER NAME).
+Implements: CONVENTIONS.md "Inputs: an observation set" (name, kind, antennas with position_m and
+boresight, master, baselines defaulting to master-to-each-other-antenna, observation_files defaulting
+to the RINEX MARKER NAME) and docs/formats/platform_antenna_uncertainty.md (an antenna's optional declared
+pco_sigma_mm / pcv_rms_mm).
 """
 from __future__ import annotations
 
