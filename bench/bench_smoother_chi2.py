@@ -97,8 +97,9 @@ def main() -> None:
                       f"{r['chi0']:.2f} | {r['chi_c']:.2f} | {m[0]:+.3f} / {m[1]:+.3f} | {sg[0]:.3f} / {sg[1]:.3f} | "
                       f"{r['consider']} | {r['bias_chi']:.2f} | {r['cpu']:.0f} |", flush=True)
                 if r["em"]:
+                    its = r["em"]["iterations"]
                     print("    noise_em: " + "; ".join(f"s {h['floor_scale']:.3f} r {h['ratio']:.3f} "
-                                                       f"n_eff {h['effective_links']:.0f}" for h in r["em"]["iterations"])
+                                                       f"n_eff {h['effective_links']:.0f}" for h in its)
                           + f" -> floor x {r['em']['floor_scale']:.3f}", flush=True)
 
 

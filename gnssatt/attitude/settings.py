@@ -182,9 +182,9 @@ class SmootherSettings:
     accel_window_s: float = _f(5.0, "Adaptive noise: alpha from the smoothed omega over +- this (s).", gt=0, le=3600)
     accel_noise_k: float = _f(3.0, "Adaptive noise: |alpha| first shrunk by this x its pass median.", ge=0, le=100)
     noise_em_iterations: int = _f(0, "Adaptive noise: up to this many more iterations (filter runs), each "
-                                     "with the floor x the ratio of the smoothed omega increments to their predicted covariance "
-                                     "(maximum likelihood, gnssatt.attitude.process_noise_em); 0: the configured "
-                                     "floor.", ge=0, le=10)
+                                     "with the floor x the ratio of the smoothed omega increments to their "
+                                     "predicted covariance (maximum likelihood, gnssatt.attitude.process_noise_em); "
+                                     "0: the configured floor.", ge=0, le=10)
     noise_em_bound: float = _f(10.0, "Adaptive noise with noise_em_iterations: the estimated floor stays within "
                                      "[1 / this, this] x noise_floor.", ge=1, le=1000)
     quiet_jerk_share: float = _f(1.0, "Adaptive noise with angular_acceleration_state: the second pass's angular-jerk "

@@ -161,3 +161,14 @@ def test_estimated_floor_on_the_pitch_up():
     t = np.asarray(sol.pobs.time - sol.pobs.time[0], float)[sol.att_epochs]
     late = f & (t > t[int(np.argmax(f))] + 30.0)
     assert ang[late].max() < 0.3, ang[late].max()
+
+
+def test_floor_moves_only_where_the_data_reject_it():
+    """2 sampling sigmas (1 / sqrt(n_eff) in log) and at least MIN_EFFECTIVE_LINKS: a ratio of 0.45 from 6 effective
+    links (the acceleration state's slews) is no evidence, from 400 (the clean pass) it is."""
+    from gnssatt.attitude.process_noise_em import MIN_EFFECTIVE_LINKS, _significant
+
+    assert not _significant(0.45, 6.0) and MIN_EFFECTIVE_LINKS > 6.0
+    assert _significant(0.45, 400.0) and _significant(0.19, 12.0)
+    assert not _significant(0.92, 400.0)          # |log 0.92| = 0.083 < 2 / 20
+    assert _significant(0.88, 400.0)
