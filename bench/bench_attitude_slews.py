@@ -37,6 +37,10 @@ RUNS = {"smoother, adaptive noise": {"smoother": True, "smoother_adaptive_noise"
                                          "angular_acceleration_state": True},
         "+ quiet jerk share 0.04": {"smoother": True, "smoother_adaptive_noise": True,
                                     "angular_acceleration_state": True, "smoother_quiet_jerk_share": 0.04}}
+#: not in the default table (--runs): the floor of the adaptive noise estimated from the pass (process_noise_em)
+EXTRA_RUNS = {"+ noise_em 4": {"smoother": True, "smoother_adaptive_noise": True, "smoother_noise_em_iterations": 4},
+              "+ acceleration, noise_em 4": {"smoother": True, "smoother_adaptive_noise": True,
+                                             "angular_acceleration_state": True, "smoother_noise_em_iterations": 4}}
 
 
 def figures(d: Path, inputs, cfg: dict) -> dict:
@@ -123,7 +127,11 @@ def main() -> None:
     ap.add_argument("--write", action="store_true")
     ap.add_argument("--passes", action="store_true", help="also the four 106-minute passes")
     ap.add_argument("--minutes", type=float, default=106.0, help="length of those passes")
+    ap.add_argument("--runs", default=None, help="slews only, print only: ';'-separated names of RUNS / EXTRA_RUNS")
     args = ap.parse_args()
+    runs = RUNS if args.runs is None else {n: {**RUNS, **EXTRA_RUNS}[n] for n in args.runs.split(";")}
+    if args.runs is not None and (args.write or args.passes):
+        ap.error("--runs is for the slews, without --write / --passes")
     from gnssatt.attitude.process import load_inputs
     from gnssatt.sim import simulate_scenario
 
@@ -139,14 +147,14 @@ def main() -> None:
              "| slew | seed | settings | max error deg (s after fix) | max after 30 s | sigma at first fix deg | "
              "chi-square first 10 / rest | per dof from the first |",
              "|---|---|---|---|---|---|---|---|"]
-    summary = {name: [] for name in RUNS}
+    summary = {name: [] for name in runs}
     with tempfile.TemporaryDirectory() as tmp:
         for label, over in SLEWS.items():
             for seed in seeds:
                 d = Path(tmp) / f"{label.split()[0].replace('/', '')}_{seed}"
                 simulate_scenario("slew", d, seed=seed, overrides={**over, **CLEAN})
                 inputs = load_inputs(files_of(d))
-                for name, cfg in RUNS.items():
+                for name, cfg in runs.items():
                     r = figures(d, inputs, cfg)
                     summary[name].append(r)
                     lines.append(f"| {label} | {seed} | {name} | {r['max']:.2f} ({r['at_s']:.0f} s) | {r['late']:.2f} "
@@ -167,7 +175,7 @@ def main() -> None:
         pass_lines = kept_passes(ROOT / "docs" / "BENCHMARKS.md")
     lines += pass_lines
     lines += ["", "Run: `OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_slews.py --passes --write`."]
-    print("\n".join(lines[-len(RUNS) - 2:]))
+    print("\n".join(lines[-len(runs) - 2:]))
     if args.write:
         replace_section(ROOT / "docs" / "BENCHMARKS.md", "Slews from the first fixed epoch", "\n".join(lines))
 

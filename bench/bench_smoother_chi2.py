@@ -31,7 +31,10 @@ from bench.bench_attitude import files_of  # noqa: E402
 
 RUNS = {"kinematic": {"mode": "kinematic"}, "forward": {}, "forward-adaptive": {"adaptive_omega_noise": True}, "plain": {"smoother": True},
         "adaptive": {"smoother": True, "smoother_adaptive_noise": True},
-        "acceleration": {"smoother": True, "smoother_adaptive_noise": True, "angular_acceleration_state": True}}
+        "acceleration": {"smoother": True, "smoother_adaptive_noise": True, "angular_acceleration_state": True},
+        "adaptive-em": {"smoother": True, "smoother_adaptive_noise": True, "smoother_noise_em_iterations": 4},
+        "acceleration-em": {"smoother": True, "smoother_adaptive_noise": True, "angular_acceleration_state": True,
+                            "smoother_noise_em_iterations": 4}}
 
 
 def chi2_row(d: Path, inputs, cfg: dict) -> dict:
@@ -59,7 +62,7 @@ def chi2_row(d: Path, inputs, cfg: dict) -> dict:
             "consider": np.round(cons, 3).tolist(),
             "wrong": f"{sc['wrong_constraints']} of {sc['constraints']}", "std": de[sol.att_fixed].std(0),
             "chi": chi, "chi_c": chi_c, "chi0": chi0, "mean": e.mean(0), "sigma_med": np.median(s, 0),
-            "cpu": cpu}
+            "cpu": cpu, "em": ((sol.summary.get("smoother") or {}).get("process_noise") or {}).get("noise_em")}
 
 
 def main() -> None:
@@ -93,6 +96,11 @@ def main() -> None:
                 print(f"| {label} | {name} | {r['wrong']} | {sd[0]:.4f} / {sd[1]:.4f} / {sd[2]:.4f} | {r['chi']:.2f} | "
                       f"{r['chi0']:.2f} | {r['chi_c']:.2f} | {m[0]:+.3f} / {m[1]:+.3f} | {sg[0]:.3f} / {sg[1]:.3f} | "
                       f"{r['consider']} | {r['bias_chi']:.2f} | {r['cpu']:.0f} |", flush=True)
+                if r["em"]:
+                    its = r["em"]["iterations"]
+                    print("    noise_em: " + "; ".join(f"s {h['floor_scale']:.3f} r {h['ratio']:.3f} "
+                                                       f"n_eff {h['effective_links']:.0f}" for h in its)
+                          + f" -> floor x {r['em']['floor_scale']:.3f}", flush=True)
 
 
 if __name__ == "__main__":

@@ -310,11 +310,13 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     if two_pass:
         # smoother_adaptive_noise: the omega random walk per epoch from the smoothed first pass, then the whole
         # filter again with it (gnssatt/attitude/smoother.py adaptive_noise_profile); products from the second pass
-        from gnssatt.attitude.smoother import adaptive_noise_profile
-        q_omega, info = adaptive_noise_profile(fr, settings)
-        fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
-                        progress=lambda f: prog(0.15 + span * (1 + f)), q_omega=q_omega,
-                        noise0=fr.smoother_data["noise_state"])
+        from gnssatt.attitude.process_noise_em import floor_passes
+        noise0 = fr.smoother_data["noise_state"]
+
+        def rerun(q_omega):
+            return run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
+                              progress=lambda f: prog(0.15 + span * (1 + f)), q_omega=q_omega, noise0=noise0)
+        fr, info = floor_passes(fr, rerun, settings)
         fr.smoother_data["adaptive_noise"] = info
     if fr.smoother_data is not None:
         from gnssatt.attitude.smoother import smooth_filter_result

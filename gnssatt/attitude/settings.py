@@ -181,6 +181,12 @@ class SmootherSettings:
     noise_window_s: float = _f(20.0, "The largest alpha within +- this sets an epoch's noise (s).", gt=0, le=3600)
     accel_window_s: float = _f(5.0, "Adaptive noise: alpha from the smoothed omega over +- this (s).", gt=0, le=3600)
     accel_noise_k: float = _f(3.0, "Adaptive noise: |alpha| first shrunk by this x its pass median.", ge=0, le=100)
+    noise_em_iterations: int = _f(0, "Adaptive noise: up to this many more iterations (filter runs), each "
+                                     "with the floor x the ratio of the smoothed omega increments to their "
+                                     "predicted covariance (maximum likelihood, gnssatt.attitude.process_noise_em); "
+                                     "0: the configured floor.", ge=0, le=10)
+    noise_em_bound: float = _f(10.0, "Adaptive noise with noise_em_iterations: the estimated floor stays within "
+                                     "[1 / this, this] x noise_floor.", ge=1, le=1000)
     quiet_jerk_share: float = _f(1.0, "Adaptive noise with angular_acceleration_state: the second pass's angular-jerk "
                                       "rate x this x sqrt(the epoch's omega rate / its quiet level), at most the "
                                       "configured rate; 1: the configured rate everywhere.", gt=0, le=1)
@@ -225,7 +231,8 @@ GROUPS: dict[str, type] = {"table1": Table1Noise, "table2": Table2Editing, "ambi
 _RENAMED = {"smoother": "enabled", "smoother_adaptive_noise": "adaptive_noise", "smoother_noise_floor": "noise_floor",
             "smoother_noise_gain": "noise_gain", "smoother_noise_window_s": "noise_window_s",
             "smoother_accel_window_s": "accel_window_s", "smoother_accel_noise_k": "accel_noise_k",
-            "smoother_quiet_jerk_share": "quiet_jerk_share",
+            "smoother_quiet_jerk_share": "quiet_jerk_share", "smoother_noise_em_iterations": "noise_em_iterations",
+            "smoother_noise_em_bound": "noise_em_bound",
             "adaptive_omega_noise": "enabled", "adaptive_omega_threshold": "threshold",
             "adaptive_omega_mix_at": "mix_at", "adaptive_omega_sigma_acc_deg_s2": "sigma_acc_deg_s2",
             "adaptive_omega_sigma_deg_s": "sigma_omega_raised_deg_s", "adaptive_omega_hold_epochs": "hold_epochs",

@@ -132,19 +132,20 @@ def fixed_runs(fr) -> tuple[np.ndarray, np.ndarray]:
     return fixed_all, start
 
 
-def adaptive_noise_profile(fr, settings) -> tuple[np.ndarray, dict]:
+def adaptive_noise_profile(fr, settings, floor_scale: float = 1.0, with_runs: bool = False):
     """(q_omega (n_ep, 3, 3) rad^2/s^3, info) for the second forward pass of settings.smoothing.adaptive_noise
     (docs/attitude.md "Adaptive process noise of the smoother"): the omega random walk per epoch from the angular
     acceleration of fr's RTS-smoothed omega over its all-fixed runs (acceleration_noise_rate: floor x Table 1 +
     gain alpha alpha^T dt, the largest alpha within +-window); Table 1's rate outside the runs (float epochs, and
     so everything up to the first fix; the second pass starts its noise estimator from the first's, run_filter
-    noise0). info: summary.json."""
+    noise0). info: summary.json. floor_scale: the floor x this (settings.smoothing.noise_em,
+    gnssatt.attitude.process_noise_em); with_runs: also return the epochs given the profile (n_ep,) bool."""
     sd = fr.smoother_data
     q1 = float(sd["q_omega"])
     fixed_all, start = fixed_runs(fr)
     xs, _ = backward_pass(sd, start, fr.fixed.shape[1], settings)
     t_s = np.cumsum(np.nan_to_num(sd["dt_s"]))
-    Qw = acceleration_noise_rate(xs[:, 0:3], t_s, start, settings.smoothing.noise_floor * q1,
+    Qw = acceleration_noise_rate(xs[:, 0:3], t_s, start, floor_scale * settings.smoothing.noise_floor * q1,
                                  settings.smoothing.noise_gain, settings.smoothing.accel_window_s,
                                  settings.smoothing.noise_window_s, settings.smoothing.accel_noise_k)
     run = fixed_all & np.isfinite(xs[:, 0:3]).all(1)
@@ -152,11 +153,11 @@ def adaptive_noise_profile(fr, settings) -> tuple[np.ndarray, dict]:
     sig = np.degrees(np.sqrt(np.linalg.eigvalsh(Qw)[:, -1]))
     info = {"method": "omega random walk per epoch from the smoothed angular acceleration of a first pass (Table 1), "
                       "then the whole filter run again with it and smoothed",
-            "floor_sigma_omega_deg_s": float(np.degrees(np.sqrt(settings.smoothing.noise_floor * q1))),
+            "floor_sigma_omega_deg_s": float(np.degrees(np.sqrt(floor_scale * settings.smoothing.noise_floor * q1))),
             "max_sigma_omega_deg_s": float(sig[run].max()) if run.any() else None,
             "epochs_above_table1": int(np.sum(run & (sig > np.degrees(np.sqrt(q1)) * (1 + 1e-9)))),
             "epochs_at_table1_outside_fixed_runs": int(np.sum(~run))}
-    return Qw, info
+    return (Qw, info, run) if with_runs else (Qw, info)
 
 
 def acceleration_noise_rate(omega: np.ndarray, t_s: np.ndarray, start: np.ndarray, q_floor: float, gain: float,

@@ -37,6 +37,7 @@ DIMENSIONLESS = {
     "noise_gain": "a factor on alpha alpha^T dt, which carries the units",
     "accel_noise_k": "a multiple of a median",
     "quiet_jerk_share": "a share of a configured rate",
+    "noise_em_bound": "a factor on the configured floor",
     "threshold": "a log-likelihood ratio",
     "mix_at": "a log-likelihood ratio",
     "kappa": "a multiple of sqrt(2 mu) of a chi-square statistic",
