@@ -3,8 +3,9 @@ retraction per epoch and the smoother's backward recursion in the baselines' tan
 
 Each does in one call what ~30 (forward) or ~150 (backward, per epoch) numpy calls on 3-vectors did: the readable
 numpy versions took 0.2 ms per epoch forward and ~0.7 ms per backward step (the rigid smoother cost 4-5x the
-linear one; docs/BENCHMARKS.md "Rigid update: compiled kernels"). The least-squares common rotation is numpy's
-lstsq (LAPACK gelsd, the same routine, rcond 1e-10) on the 3 x 3 normal equations.
+linear one; docs/BENCHMARKS.md "Rigid update: compiled kernels"). The least-squares common rotation solves its
+3 x 3 normal equations by the adjugate, or by numpy's lstsq (rcond 1e-10, as the reference) when they are
+singular (one baseline, or parallel ones).
 
 Specification: gnssatt.attitude.rigid_update.rigid_retract_reference (the retraction: Markley 2003; Sola 2017 sec.
 7.2) and gnssatt.attitude.rigid_smoother.rts_smooth_rigid_reference (the RTS step with box-plus / box-minus,
@@ -16,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["rigid_retract_kernel", "rts_rigid_kernel"]
+__all__ = ["rigid_retract_kernel", "rts_rigid_kernel", "warm_up"]
 
 
 @njit(cache=True, nogil=True)
@@ -72,7 +73,26 @@ def _common_rotation(B0, D):
             for c in range(3):
                 N[r, c] -= b[r] * b[c]
         rhs += _cross(b, D[j])
-    return np.linalg.lstsq(N, rhs, 1e-10)[0]
+    return _solve_normal(N, rhs)
+
+
+@njit(cache=True, nogil=True)
+def _solve_normal(N, rhs):
+    """N^-1 rhs of the symmetric 3 x 3 N by its adjugate (Cramer) where det N > 1e-9 trace^3 (two baselines at an
+    angle: ~1e-2), else np.linalg.lstsq with rcond 1e-10 as the reference (one baseline or parallel ones: rank 2).
+    lstsq (gelsd, an SVD with its workspace) was most of the kernels' time."""
+    a, b, c, d, e, f = N[0, 0], N[0, 1], N[0, 2], N[1, 1], N[1, 2], N[2, 2]
+    c00, c01, c02 = d * f - e * e, c * e - b * f, b * e - c * d
+    c11, c12, c22 = a * f - c * c, b * c - a * e, a * d - b * b
+    det = a * c00 + b * c01 + c * c02
+    tr = a + d + f
+    if not det > 1e-9 * tr * tr * tr:
+        return np.linalg.lstsq(N, rhs, 1e-10)[0]
+    out = np.empty(3)
+    out[0] = (c00 * rhs[0] + c01 * rhs[1] + c02 * rhs[2]) / det
+    out[1] = (c01 * rhs[0] + c11 * rhs[1] + c12 * rhs[2]) / det
+    out[2] = (c02 * rhs[0] + c12 * rhs[1] + c22 * rhs[2]) / det
+    return out
 
 
 @njit(cache=True, nogil=True)
@@ -245,3 +265,15 @@ def rts_rigid_kernel(x_post, P_post, x_prior, P_prior, C_all, linked, n_bl, xs, 
         Pk = P_post[k] + C @ (Pj - P_prior[j]) @ C.T
         Pk = _turn(Pk, bf_k, b_new, r0, R_fs)
         Ps[k] = 0.5 * (Pk + Pk.T)
+
+
+def warm_up() -> None:
+    """Compile (or load from the cache) both kernels once on tiny inputs of the filter's and smoother's types."""
+    x, P = np.zeros(6), np.eye(6)
+    x[3] = 1.0
+    rigid_retract_kernel(x, P, np.array([[1.0, 0.0, 0.0]]), np.array([[3, 4, 5]], np.int64), np.ones(1, np.bool_),
+                         np.zeros(1))
+    xs = np.zeros((2, 6))
+    xs[:, 3] = 1.0
+    Ps = np.repeat(np.eye(6)[None], 2, 0)
+    rts_rigid_kernel(xs.copy(), Ps.copy(), xs.copy(), Ps.copy(), Ps.copy(), np.array([True, False]), 1, xs, Ps)

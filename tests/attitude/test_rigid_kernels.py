@@ -1,6 +1,6 @@
 """The compiled rigid-update kernels (gnssatt.attitude.rigid_kernels) against their readable references
 (rigid_update.rigid_retract_reference, rigid_smoother.rts_smooth_rigid_reference): the same baselines to 1e-12 m
-and covariances to 1e-12 of their scale (rounding: the same operations in another order), the same links."""
+and covariances to 1e-12 of their scale (rounding: the same operations in another order), the same links; the one-baseline case (singular normal equations of the common rotation) included."""
 from __future__ import annotations
 
 import numpy as np
@@ -68,3 +68,14 @@ def test_backward_kernel_is_the_reference_with_cuts_and_gaps():
     ref = dict(rts_links(xf, Pf, xp, Pp, Phi, start))
     assert set(np.flatnonzero(linked)) == set(ref)
     assert max(np.abs(C[k] - ref[k]).max() for k in ref) < 1e-12
+
+
+def test_backward_kernel_is_the_reference_with_one_baseline():
+    """One baseline: the common rotation's normal equations are singular (no turn about b), the kernel takes
+    lstsq's minimum-norm solution as the reference does."""
+    xf, Pf, xp, Pp, Phi, start = _body_track(120, np.random.default_rng(9))
+    sub = (xf[:, :6], Pf[:, :6, :6], xp[:, :6], Pp[:, :6, :6], Phi[:, :6, :6], start)
+    xs1, Ps1 = rts_smooth_rigid(*sub, 1)
+    xs2, Ps2 = rts_smooth_rigid_reference(*sub, 1)
+    assert np.abs(xs1 - xs2).max() < 1e-12 and np.abs(Ps1 - Ps2).max() < 1e-12 * np.abs(Pf).max()
+    assert np.abs(xs1 - xf[:, :6]).max() > 1e-5
