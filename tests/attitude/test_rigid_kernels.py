@@ -79,3 +79,19 @@ def test_backward_kernel_is_the_reference_with_one_baseline():
     xs2, Ps2 = rts_smooth_rigid_reference(*sub, 1)
     assert np.abs(xs1 - xs2).max() < 1e-12 and np.abs(Ps1 - Ps2).max() < 1e-12 * np.abs(Pf).max()
     assert np.abs(xs1 - xf[:, :6]).max() > 1e-5
+
+
+def test_warm_up_compiles_the_signatures_the_filter_and_smoother_use():
+    """warm_up (the worker's start) compiles one signature of each kernel, the one process() calls (C-contiguous
+    float64 states, int64 indices, bool masks): a filter run with the smoother adds none."""
+    from gnssatt.attitude import rigid_kernels as RK
+
+    RK.warm_up()
+    sig = (list(RK.rigid_retract_kernel.signatures), list(RK.rts_rigid_kernel.signatures))
+    xf, Pf, xp, Pp, Phi, start = _body_track(20, np.random.default_rng(1))
+    rts_smooth_rigid(xf, Pf, xp, Pp, Phi, start, 2)
+    x, P = np.zeros(9), np.eye(9)
+    x[3:] = B0.ravel()
+    rigid_retract(x, P, B0, np.array([[3, 4, 5], [6, 7, 8]]), np.ones(2, bool))
+    assert len(sig[0]) == 1 and len(sig[1]) == 1
+    assert (list(RK.rigid_retract_kernel.signatures), list(RK.rts_rigid_kernel.signatures)) == sig
