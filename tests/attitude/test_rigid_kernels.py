@@ -1,6 +1,7 @@
 """The compiled rigid-update kernels (gnssatt.attitude.rigid_kernels) against their readable references
 (rigid_update.rigid_retract_reference, rigid_smoother.rts_smooth_rigid_reference): the same baselines to 1e-12 m
-and covariances to 1e-12 of their scale (rounding: the same operations in another order), the same links; the one-baseline case (singular normal equations of the common rotation) included."""
+and covariances to 1e-12 of their scale (rounding: the same operations in another order), the same links; the
+one-baseline case (singular normal equations of the common rotation) included."""
 from __future__ import annotations
 
 import numpy as np
