@@ -18,7 +18,7 @@ antennas, L1 C/A + L2 P(Y), 1 Hz), clean ({"pcv": false, "pco": false, "multipat
   baseline (GPS-2>GPS-0, GPS-2>GPS-1) on the same RINEX files, CPU and wall, median of --runs runs.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_speed.py [--runs 3] [--minutes 106]
-        [--no-rtklib] [--no-service] [--write]
+        [--no-rtklib] [--no-service] [--baseline-update additive|rigid] [--write]
 
 --write puts the figures first in docs/BENCHMARKS.md "Attitude job speed", keeping the section's earlier figures.
 """
@@ -54,8 +54,9 @@ def files_of(d: Path) -> list[tuple[str, str, Path]]:
                     ("reference_attitude.csv", "reference_attitude", d / "reference_attitude.csv")]
 
 
-def run_job(d: Path, mode: str, work: Path) -> dict:
-    """One attitude job through its pipeline; CPU/wall of the whole job and of run_filter."""
+def run_job(d: Path, mode: str, work: Path, settings: dict | None = None) -> dict:
+    """One attitude job through its pipeline (settings: job fields on top of the defaults, e.g. baseline_update);
+    CPU/wall of the whole job and of run_filter."""
     import gnssatt.attitude.process as P
     from bench.local_jobs import files_set, job_context
     from worker.jobs.attitude import AttitudeConfig
@@ -74,7 +75,7 @@ def run_job(d: Path, mode: str, work: Path) -> dict:
     P.run_filter = timed
     try:
         t0, c0 = time.perf_counter(), cpu_s()
-        run(ctx, AttitudeConfig(mode=mode))
+        run(ctx, AttitudeConfig(mode=mode, **(settings or {})))
         wall, cpu = time.perf_counter() - t0, cpu_s() - c0
     finally:
         P.run_filter = orig
@@ -257,7 +258,10 @@ def main() -> None:
     ap.add_argument("--no-rtklib", action="store_true")
     ap.add_argument("--no-service", action="store_true", help="skip the upload-to-products runs through the service")
     ap.add_argument("--write", action="store_true")
+    ap.add_argument("--baseline-update", choices=("additive", "rigid"), default=None,
+                    help="the job's baseline_update (dynamic mode; default: the settings' default)")
     args = ap.parse_args()
+    job_settings = {} if args.baseline_update is None else {"baseline_update": args.baseline_update}
     from gnssatt.sim import simulate_scenario
 
     med = lambda rows, key: float(np.median([r[key] for r in rows]))  # noqa: E731
@@ -269,7 +273,8 @@ def main() -> None:
             simulate_scenario("earth-pointing", d, seed=SEED,
                               overrides={"duration_s": args.minutes * 60.0, **PASSES[label]})
             for mode in MODES:
-                rows = [run_job(d, mode, Path(tmp) / f"work_{label}_{mode}_{i}") for i in range(args.runs)]
+                rows = [run_job(d, mode, Path(tmp) / f"work_{label}_{mode}_{i}", job_settings)
+                        for i in range(args.runs)]
                 r = {"pass": label, "mode": mode, "epochs": rows[0]["epochs"],
                      **{k: med(rows, k) for k in ("filter_cpu_s", "job_cpu_s", "job_wall_s")},
                      "products": rows[0]["products"],
@@ -296,7 +301,8 @@ def main() -> None:
              f"{load_after[0]:.1f} at the end (2 cores shared with other work: wall times are inflated by the "
              "load, CPU times much less). Simulator seed 0, preset `earth-pointing`, "
              f"{args.minutes:.0f} min at 1 Hz, three antennas (two baselines), L1 C/A + L2 P(Y). "
-             f"Median of {args.runs} runs.", "",
+             f"Median of {args.runs} runs"
+             + ("." if args.baseline_update is None else f"; `baseline_update: {args.baseline_update}`."), "",
              "| pass | mode | epochs | filter CPU s | filter epochs/s (CPU) | job CPU s | job wall s | "
              "RTKLIB postpos, 2 baselines, CPU / wall s | job CPU / RTKLIB CPU |", "|---|---|---|---|---|---|---|---|---|"]
     for r in table:

@@ -85,6 +85,7 @@ def _warm_up_kernels() -> None:
     try:
         from gnssatt.attitude.kernels import warm_up as warm_up_attitude
         from gnssatt.attitude.qc_kernels import warm_up as warm_up_qc
+        from gnssatt.attitude.rigid_kernels import warm_up as warm_up_rigid
         from gnssatt.attitude.update_kernels import warm_up as warm_up_update
         from gnssatt.csv_text import warm_up as warm_up_csv
         from gnssatt.estimation.ekf_kernels import warm_up as warm_up_ekf
@@ -97,6 +98,7 @@ def _warm_up_kernels() -> None:
         warm_up_attitude()
         warm_up_qc()
         warm_up_update()
+        warm_up_rigid()
         warm_up_csv()
         warm_up_plots()
         print(f"filter kernels ready in {time.perf_counter() - t0:.1f} s", flush=True)

@@ -34,10 +34,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from gnssatt.attitude.rigid_kernels import rts_rigid_kernel
 from gnssatt.attitude.rigid_update import common_rotation, rotation_between, rotation_exp
 from gnssatt.attitude.rts_links import rts_links
 
-__all__ = ["boxminus", "boxplus", "boxminus_body", "boxplus_body", "rts_smooth_rigid"]
+__all__ = ["boxminus", "boxplus", "boxminus_body", "boxplus_body", "rts_smooth_rigid", "rts_smooth_rigid_reference",
+           "rts_gains"]
+
+#: epochs per batched solve of the gains (bounds the temporaries: 4096 x m x m floats, m <= 3 + 3 + 3 n_bl)
+GAIN_CHUNK = 4096
 
 
 def boxminus(b1_m: np.ndarray, b0_m: np.ndarray) -> np.ndarray:
@@ -106,8 +111,47 @@ def _turn(P: np.ndarray, b_from_m: np.ndarray, b_to_m: np.ndarray, r0: int, R: n
     return T @ P @ T.T
 
 
+def rts_gains(x_post: np.ndarray, P_post: np.ndarray, x_prior: np.ndarray, P_prior: np.ndarray, Phi: np.ndarray,
+              start: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(linked (n,) bool, C (n, m, m)): the links and gains of gnssatt.attitude.rts_links (k links to k+1 unless
+    start[k+1], non-finite inputs at k or k+1, or a singular P_k+1|k; C_k = P_k|k Phi_k+1^T P_k+1|k^-1, 0 where
+    not linked), solved in batches (they need only the forward filter's records)."""
+    n = x_post.shape[0]
+    fin_post = np.isfinite(x_post).all(1) & np.isfinite(P_post).all((1, 2))
+    fin_prior = np.isfinite(x_prior).all(1) & np.isfinite(P_prior).all((1, 2)) & np.isfinite(Phi).all((1, 2))
+    linked = np.zeros(n, bool)
+    linked[:-1] = ~start[1:] & fin_post[:-1] & fin_post[1:] & fin_prior[1:]
+    C = np.zeros(P_post.shape)
+    ks = np.flatnonzero(linked)
+    for c0 in range(0, ks.size, GAIN_CHUNK):
+        k = ks[c0:c0 + GAIN_CHUNK]
+        try:
+            C[k] = np.linalg.solve(P_prior[k + 1], Phi[k + 1] @ P_post[k]).transpose(0, 2, 1)
+        except np.linalg.LinAlgError:                  # a singular prior in the batch: one by one
+            for kk in k:
+                try:
+                    C[kk] = np.linalg.solve(P_prior[kk + 1], Phi[kk + 1] @ P_post[kk]).T
+                except np.linalg.LinAlgError:
+                    linked[kk] = False
+    return linked, C
+
+
 def rts_smooth_rigid(x_post: np.ndarray, P_post: np.ndarray, x_prior: np.ndarray, P_prior: np.ndarray,
                      Phi: np.ndarray, start: np.ndarray, n_bl: int):
+    """rts_smooth_rigid_reference (same arguments and result) with the gains solved in batches (rts_gains) and the
+    backward loop compiled (gnssatt.attitude.rigid_kernels.rts_rigid_kernel: ~150 numpy calls per epoch in the
+    reference)."""
+    linked, C = rts_gains(x_post, P_post, x_prior, P_prior, Phi, start)
+    xs = np.ascontiguousarray(x_post, dtype=np.float64).copy()
+    Ps = np.ascontiguousarray(P_post, dtype=np.float64).copy()
+    rts_rigid_kernel(np.ascontiguousarray(x_post, dtype=np.float64), np.ascontiguousarray(P_post, dtype=np.float64),
+                     np.ascontiguousarray(x_prior, dtype=np.float64), np.ascontiguousarray(P_prior, dtype=np.float64),
+                     C, linked, int(n_bl), xs, Ps)
+    return xs, Ps
+
+
+def rts_smooth_rigid_reference(x_post: np.ndarray, P_post: np.ndarray, x_prior: np.ndarray, P_prior: np.ndarray,
+                               Phi: np.ndarray, start: np.ndarray, n_bl: int):
     """(x_k|N (n, m), P_k|N (n, m, m)) as gnssatt.attitude.smoother.rts_smooth (same arguments, same segments and
     cuts), the last 3 n_bl states being rigid baselines smoothed in their tangent space (module doc)."""
     r0 = x_post.shape[1] - 3 * n_bl

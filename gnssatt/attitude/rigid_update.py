@@ -33,9 +33,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from gnssatt.attitude.rigid_kernels import rigid_retract_kernel
 from gnssatt.attitude.solution import skew
 
-__all__ = ["common_rotation", "rotation_between", "rotation_exp", "rigid_retract"]
+__all__ = ["common_rotation", "rotation_between", "rotation_exp", "rigid_retract", "rigid_retract_reference"]
 
 
 def rotation_between(u0: np.ndarray, u1: np.ndarray) -> np.ndarray:
@@ -69,6 +70,16 @@ def common_rotation(b0_m: np.ndarray, d_m: np.ndarray) -> np.ndarray:
 
 def rigid_retract(x: np.ndarray, P: np.ndarray, b_prior_m: np.ndarray, b_idx: np.ndarray,
                   active: np.ndarray) -> np.ndarray:
+    """rigid_retract_reference (same arguments, in place, same return) by the compiled kernel
+    (gnssatt.attitude.rigid_kernels.rigid_retract_kernel: one call where the reference makes ~30 numpy calls)."""
+    out = np.zeros(b_idx.shape[0])
+    rigid_retract_kernel(x, P, np.ascontiguousarray(b_prior_m, dtype=np.float64),
+                         np.ascontiguousarray(b_idx, dtype=np.int64), np.ascontiguousarray(active, dtype=np.bool_), out)
+    return out
+
+
+def rigid_retract_reference(x: np.ndarray, P: np.ndarray, b_prior_m: np.ndarray, b_idx: np.ndarray,
+                            active: np.ndarray) -> np.ndarray:
     """In place: the active baselines (b_idx (n_bl, 3) their state indices, b_prior_m (n_bl, 3) before the update)
     moved by the common rotation of their additive moves applied exactly (exp of common_rotation) and each one's
     remainder (what the common rotation leaves, first order), the length changed by the move's part along b only,
