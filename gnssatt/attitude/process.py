@@ -244,8 +244,33 @@ def single_baseline_attitude_fn(b_body_m: np.ndarray, R_ref_from_ecef: np.ndarra
     return attitude_fn
 
 
-def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -> AttitudeSolution:
-    """AttitudeSolution of the whole pass. progress(fraction, stage) is called often (cancellation point)."""
+def _filter_passes(pobs, geom, bl_idx, body, boresight, settings: AttitudeSettings, R0, attitude_fn, prog):
+    """FilterResult of the pass: run_filter, a second pass with the adaptive omega noise when the settings ask for
+    it (dynamic mode), then the RTS smoother when they ask for it."""
+    two_pass = settings.mode == "dynamic" and settings.smoothing.adaptive_noise
+    span = 0.375 if two_pass else 0.75
+    fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
+                    progress=lambda f: prog(0.15 + span * f))
+    if two_pass:
+        # smoother_adaptive_noise: the omega random walk per epoch from the smoothed first pass, then the whole
+        # filter again with it (gnssatt/attitude/smoother.py adaptive_noise_profile); products from the second pass
+        from gnssatt.attitude.smoother import adaptive_noise_profile
+        q_omega, info = adaptive_noise_profile(fr, settings)
+        fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
+                        progress=lambda f: prog(0.15 + span * (1 + f)), q_omega=q_omega,
+                        noise0=fr.smoother_data["noise_state"])
+        fr.smoother_data["adaptive_noise"] = info
+    if fr.smoother_data is not None:
+        from gnssatt.attitude.smoother import smooth_filter_result
+        smooth_filter_result(fr, settings)
+    return fr
+
+
+def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None, background=None) -> AttitudeSolution:
+    """AttitudeSolution of the whole pass. progress(fraction, stage) is called often (cancellation point).
+    background: None, or a callable fn -> handle (result(), cancel()) running fn meanwhile elsewhere (the worker's
+    worker.forked.Forked): most of the satellite geometry is then computed while the filter runs
+    (gnssatt.attitude.geometry.compute_geometry)."""
     def prog(f, stage=None):
         if progress is not None:
             progress(f, stage)
@@ -278,7 +303,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     prog(0.10, "satellite geometry")
     sat_state, orbit_src = _sat_state(inputs, systems)
     observed = np.isfinite(pobs.code_m).any(axis=(0, 3))
-    geom = compute_geometry(pobs.time, pobs.sats, observed, sat_state, r_p, v_p, psrc)
+    geom = compute_geometry(pobs.time, pobs.sats, observed, sat_state, r_p, v_p, psrc, background=background)
     R_ref_from_ecef = _R_ref_from_ecef(plat.kind, r_p, v_p)                      # (n_ep, 3, 3)
     # initial attitude
     k0 = int(np.argmax(np.isfinite(r_p).all(-1)))
@@ -303,22 +328,12 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     elif settings.calibration.pcv_maps:
         attitude_fn = single_baseline_attitude_fn(body[0], R_ref_from_ecef)
     prog(0.15, "filtering")
-    two_pass = settings.mode == "dynamic" and settings.smoothing.adaptive_noise
-    span = 0.375 if two_pass else 0.75
-    fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
-                    progress=lambda f: prog(0.15 + span * f))
-    if two_pass:
-        # smoother_adaptive_noise: the omega random walk per epoch from the smoothed first pass, then the whole
-        # filter again with it (gnssatt/attitude/smoother.py adaptive_noise_profile); products from the second pass
-        from gnssatt.attitude.smoother import adaptive_noise_profile
-        q_omega, info = adaptive_noise_profile(fr, settings)
-        fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
-                        progress=lambda f: prog(0.15 + span * (1 + f)), q_omega=q_omega,
-                        noise0=fr.smoother_data["noise_state"])
-        fr.smoother_data["adaptive_noise"] = info
-    if fr.smoother_data is not None:
-        from gnssatt.attitude.smoother import smooth_filter_result
-        smooth_filter_result(fr, settings)
+    try:
+        fr = _filter_passes(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn, prog)
+    except BaseException:
+        geom.cancel()                 # the geometry's background part, if it is still running
+        raise
+    geom.complete()
     prog(0.92, "attitude")
     sol = AttitudeSolution(settings, inputs, pobs, geom, fr, baselines, body, platform_defaults=defaults_applied)
     # ---- baselines table ----

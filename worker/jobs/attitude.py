@@ -260,8 +260,12 @@ def run(ctx: JobContext, config) -> None:
             last[0] = now
             ctx.progress(0.05 + 0.85 * fraction, stage)
 
+    from worker.forked import Forked
+
     try:
-        sol = process(inputs, settings, progress)
+        # most of the satellite geometry in a forked child while the filter runs (the first ~2 s of a job are
+        # serial otherwise, and the worker has two cores)
+        sol = process(inputs, settings, progress, background=Forked)
     except InputProblem as exc:
         raise JobInputError(exc.title, exc.detail, file=exc.file, field=exc.field) from exc
     clock.mark("product texts")
