@@ -83,12 +83,67 @@ class AttitudeSolution:
         return write_products(self, out_dir)
 
 
-def load_inputs(files: list[tuple[str, str, Path]]) -> AttitudeInputs:
-    """Parse a set given as (name, kind, path) with kinds rinex_obs, rinex_nav, sp3, platform, reference_attitude."""
-    from gnssatt.gnss.io.platform import match_observation_files, parse_platform
-    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+def _start_obs_reading(obs_files: dict, background=None):
+    """A callable giving ({name: RinexObs}, {name: exception}) of the observation files {name: path}, each parsed
+    once. background (see process): all files but the first are parsed by it meanwhile (the three files of a
+    three-antenna set take ~0.4 s one after the other), the first here at once, and the callable collects them (if
+    the background fails they are parsed then, here). Without it all are parsed here at once."""
     from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+
+    def read_all(items) -> tuple[dict, dict]:
+        parsed, failed = {}, {}
+        for fname, fpath in items:
+            try:
+                parsed[fname] = read_rinex_obs(fpath, name=fname)
+            except Exception as exc:  # noqa: BLE001 - a bad file is reported when an antenna needs it
+                failed[fname] = exc
+        return parsed, failed
+
+    items = list(obs_files.items())
+    if background is None or len(items) < 2:
+        done = read_all(items)
+        return lambda: done
+    handle = background(lambda: read_all(items[1:]))
+    try:
+        first = read_all(items[:1])
+    except BaseException:
+        handle.cancel()
+        raise
+
+    def collect() -> tuple[dict, dict]:
+        try:
+            rest = handle.result()
+        except Exception:  # noqa: BLE001 - e.g. an exception that does not pickle: parse them here
+            rest = read_all(items[1:])
+        parsed, failed = {**first[0], **rest[0]}, {**first[1], **rest[1]}
+        return ({f: parsed[f] for f in obs_files if f in parsed}, {f: failed[f] for f in obs_files if f in failed})
+    return collect
+
+
+def _other_inputs(files: list[tuple[str, str, Path]]) -> dict:
+    """AttitudeInputs fields nav, gnss_sp3, platform_sp3, reference of the set's other files (the first of each)."""
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
     from gnssatt.gnss.io.sp3 import read_sp3
+
+    out = {"nav": None, "gnss_sp3": None, "platform_sp3": None, "reference": None}
+    for fname, kind, fpath in files:
+        if kind == "rinex_nav" and out["nav"] is None:
+            out["nav"] = read_rinex_nav(fpath, name=fname)
+        elif kind == "sp3":
+            sp3 = read_sp3(fpath, name=fname)
+            key = "gnss_sp3" if any(s[0] in "GJ" for s in sp3.sats) else "platform_sp3"
+            out[key] = out[key] or sp3
+        elif kind == "reference_attitude":
+            from gnssatt.gnss.io.reference_attitude import read_reference_attitude
+            out["reference"] = read_reference_attitude(Path(fpath).read_bytes(), name=fname)
+    return out
+
+
+def load_inputs(files: list[tuple[str, str, Path]], background=None) -> AttitudeInputs:
+    """Parse a set given as (name, kind, path) with kinds rinex_obs, rinex_nav, sp3, platform, reference_attitude.
+    background: see process (all observation files but one are parsed by it, _start_obs_reading, while the
+    other files are parsed here)."""
+    from gnssatt.gnss.io.platform import match_observation_files, parse_platform
 
     plat_files = [f for f in files if f[1] == "platform"]
     if not plat_files:
@@ -100,13 +155,15 @@ def load_inputs(files: list[tuple[str, str, Path]]) -> AttitudeInputs:
         raise InputProblem("Too few antennas", f"{name}: attitude needs at least two antennas (one baseline)",
                            file=name)
     obs_files = {f[0]: f[2] for f in files if f[1] == "rinex_obs"}
-    parsed, failed, markers = {}, {}, {}
-    for fname, fpath in obs_files.items():      # each file parsed once: the marker names come from the headers
-        try:
-            parsed[fname] = read_rinex_obs(fpath, name=fname)
-            markers[fname] = parsed[fname].header.marker_name
-        except Exception as exc:  # noqa: BLE001 - a bad file is reported when an antenna needs it, below
-            failed[fname], markers[fname] = exc, None
+    collect = _start_obs_reading(obs_files, background)
+    try:          # parsed meanwhile; a problem of these files is raised after those of the observation files
+        others, other_problem = _other_inputs(files), None
+    except Exception as exc:  # noqa: BLE001 - raised below, in the order of the checks without background
+        others, other_problem = None, exc
+    # each file parsed once: the marker names come from the headers; a bad file is reported when an antenna
+    # needs it
+    parsed, failed = collect()
+    markers = {f: parsed[f].header.marker_name if f in parsed else None for f in obs_files}
     mapping = match_observation_files(platform, markers, name=name)
     needed = {a for bl in platform.baselines for a in bl}
     obs = {}
@@ -115,19 +172,9 @@ def load_inputs(files: list[tuple[str, str, Path]]) -> AttitudeInputs:
             if mapping[ant] in failed:
                 raise failed[mapping[ant]]
             obs[ant] = parsed[mapping[ant]]
-    inputs = AttitudeInputs(platform, obs, {a: mapping[a] for a in obs})
-    for fname, kind, fpath in files:
-        if kind == "rinex_nav" and inputs.nav is None:
-            inputs.nav = read_rinex_nav(fpath, name=fname)
-        elif kind == "sp3":
-            sp3 = read_sp3(fpath, name=fname)
-            if any(s[0] in "GJ" for s in sp3.sats):
-                inputs.gnss_sp3 = inputs.gnss_sp3 or sp3
-            else:
-                inputs.platform_sp3 = inputs.platform_sp3 or sp3
-        elif kind == "reference_attitude":
-            from gnssatt.gnss.io.reference_attitude import read_reference_attitude
-            inputs.reference = read_reference_attitude(Path(fpath).read_bytes(), name=fname)
+    if other_problem is not None:
+        raise other_problem
+    inputs = AttitudeInputs(platform, obs, {a: mapping[a] for a in obs}, **others)
     if inputs.nav is None and inputs.gnss_sp3 is None:
         raise InputProblem("No GNSS orbits", "the set needs a RINEX navigation file or an SP3 of the GNSS "
                            "satellites", field="rinex_nav")
