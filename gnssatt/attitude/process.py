@@ -83,12 +83,67 @@ class AttitudeSolution:
         return write_products(self, out_dir)
 
 
-def load_inputs(files: list[tuple[str, str, Path]]) -> AttitudeInputs:
-    """Parse a set given as (name, kind, path) with kinds rinex_obs, rinex_nav, sp3, platform, reference_attitude."""
-    from gnssatt.gnss.io.platform import match_observation_files, parse_platform
-    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
+def _start_obs_reading(obs_files: dict, background=None):
+    """A callable giving ({name: RinexObs}, {name: exception}) of the observation files {name: path}, each parsed
+    once. background (see process): all files but the first are parsed by it meanwhile (the three files of a
+    three-antenna set take ~0.4 s one after the other), the first here at once, and the callable collects them (if
+    the background fails they are parsed then, here). Without it all are parsed here at once."""
     from gnssatt.gnss.io.rinex_obs import read_rinex_obs
+
+    def read_all(items) -> tuple[dict, dict]:
+        parsed, failed = {}, {}
+        for fname, fpath in items:
+            try:
+                parsed[fname] = read_rinex_obs(fpath, name=fname)
+            except Exception as exc:  # noqa: BLE001 - a bad file is reported when an antenna needs it
+                failed[fname] = exc
+        return parsed, failed
+
+    items = list(obs_files.items())
+    if background is None or len(items) < 2:
+        done = read_all(items)
+        return lambda: done
+    handle = background(lambda: read_all(items[1:]))
+    try:
+        first = read_all(items[:1])
+    except BaseException:
+        handle.cancel()
+        raise
+
+    def collect() -> tuple[dict, dict]:
+        try:
+            rest = handle.result()
+        except Exception:  # noqa: BLE001 - e.g. an exception that does not pickle: parse them here
+            rest = read_all(items[1:])
+        parsed, failed = {**first[0], **rest[0]}, {**first[1], **rest[1]}
+        return ({f: parsed[f] for f in obs_files if f in parsed}, {f: failed[f] for f in obs_files if f in failed})
+    return collect
+
+
+def _other_inputs(files: list[tuple[str, str, Path]]) -> dict:
+    """AttitudeInputs fields nav, gnss_sp3, platform_sp3, reference of the set's other files (the first of each)."""
+    from gnssatt.gnss.io.rinex_nav import read_rinex_nav
     from gnssatt.gnss.io.sp3 import read_sp3
+
+    out = {"nav": None, "gnss_sp3": None, "platform_sp3": None, "reference": None}
+    for fname, kind, fpath in files:
+        if kind == "rinex_nav" and out["nav"] is None:
+            out["nav"] = read_rinex_nav(fpath, name=fname)
+        elif kind == "sp3":
+            sp3 = read_sp3(fpath, name=fname)
+            key = "gnss_sp3" if any(s[0] in "GJ" for s in sp3.sats) else "platform_sp3"
+            out[key] = out[key] or sp3
+        elif kind == "reference_attitude":
+            from gnssatt.gnss.io.reference_attitude import read_reference_attitude
+            out["reference"] = read_reference_attitude(Path(fpath).read_bytes(), name=fname)
+    return out
+
+
+def load_inputs(files: list[tuple[str, str, Path]], background=None) -> AttitudeInputs:
+    """Parse a set given as (name, kind, path) with kinds rinex_obs, rinex_nav, sp3, platform, reference_attitude.
+    background: see process (all observation files but one are parsed by it, _start_obs_reading, while the
+    other files are parsed here)."""
+    from gnssatt.gnss.io.platform import match_observation_files, parse_platform
 
     plat_files = [f for f in files if f[1] == "platform"]
     if not plat_files:
@@ -100,13 +155,15 @@ def load_inputs(files: list[tuple[str, str, Path]]) -> AttitudeInputs:
         raise InputProblem("Too few antennas", f"{name}: attitude needs at least two antennas (one baseline)",
                            file=name)
     obs_files = {f[0]: f[2] for f in files if f[1] == "rinex_obs"}
-    parsed, failed, markers = {}, {}, {}
-    for fname, fpath in obs_files.items():      # each file parsed once: the marker names come from the headers
-        try:
-            parsed[fname] = read_rinex_obs(fpath, name=fname)
-            markers[fname] = parsed[fname].header.marker_name
-        except Exception as exc:  # noqa: BLE001 - a bad file is reported when an antenna needs it, below
-            failed[fname], markers[fname] = exc, None
+    collect = _start_obs_reading(obs_files, background)
+    try:          # parsed meanwhile; a problem of these files is raised after those of the observation files
+        others, other_problem = _other_inputs(files), None
+    except Exception as exc:  # noqa: BLE001 - raised below, in the order of the checks without background
+        others, other_problem = None, exc
+    # each file parsed once: the marker names come from the headers; a bad file is reported when an antenna
+    # needs it
+    parsed, failed = collect()
+    markers = {f: parsed[f].header.marker_name if f in parsed else None for f in obs_files}
     mapping = match_observation_files(platform, markers, name=name)
     needed = {a for bl in platform.baselines for a in bl}
     obs = {}
@@ -115,19 +172,9 @@ def load_inputs(files: list[tuple[str, str, Path]]) -> AttitudeInputs:
             if mapping[ant] in failed:
                 raise failed[mapping[ant]]
             obs[ant] = parsed[mapping[ant]]
-    inputs = AttitudeInputs(platform, obs, {a: mapping[a] for a in obs})
-    for fname, kind, fpath in files:
-        if kind == "rinex_nav" and inputs.nav is None:
-            inputs.nav = read_rinex_nav(fpath, name=fname)
-        elif kind == "sp3":
-            sp3 = read_sp3(fpath, name=fname)
-            if any(s[0] in "GJ" for s in sp3.sats):
-                inputs.gnss_sp3 = inputs.gnss_sp3 or sp3
-            else:
-                inputs.platform_sp3 = inputs.platform_sp3 or sp3
-        elif kind == "reference_attitude":
-            from gnssatt.gnss.io.reference_attitude import read_reference_attitude
-            inputs.reference = read_reference_attitude(Path(fpath).read_bytes(), name=fname)
+    if other_problem is not None:
+        raise other_problem
+    inputs = AttitudeInputs(platform, obs, {a: mapping[a] for a in obs}, **others)
     if inputs.nav is None and inputs.gnss_sp3 is None:
         raise InputProblem("No GNSS orbits", "the set needs a RINEX navigation file or an SP3 of the GNSS "
                            "satellites", field="rinex_nav")
@@ -244,8 +291,35 @@ def single_baseline_attitude_fn(b_body_m: np.ndarray, R_ref_from_ecef: np.ndarra
     return attitude_fn
 
 
-def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -> AttitudeSolution:
-    """AttitudeSolution of the whole pass. progress(fraction, stage) is called often (cancellation point)."""
+def _filter_passes(pobs, geom, bl_idx, body, boresight, settings: AttitudeSettings, R0, attitude_fn, prog):
+    """FilterResult of the pass: run_filter, a second pass with the adaptive omega noise when the settings ask for
+    it (dynamic mode), then the RTS smoother when they ask for it."""
+    two_pass = settings.mode == "dynamic" and settings.smoothing.adaptive_noise
+    span = 0.375 if two_pass else 0.75
+    fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
+                    progress=lambda f: prog(0.15 + span * f))
+    if two_pass:
+        # smoother_adaptive_noise: the omega random walk per epoch from the smoothed first pass, then the whole
+        # filter again with it (gnssatt/attitude/smoother.py adaptive_noise_profile); products from the second pass
+        from gnssatt.attitude.process_noise_em import floor_passes
+        noise0 = fr.smoother_data["noise_state"]
+
+        def rerun(q_omega):
+            return run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
+                              progress=lambda f: prog(0.15 + span * (1 + f)), q_omega=q_omega, noise0=noise0)
+        fr, info = floor_passes(fr, rerun, settings)
+        fr.smoother_data["adaptive_noise"] = info
+    if fr.smoother_data is not None:
+        from gnssatt.attitude.smoother import smooth_filter_result
+        smooth_filter_result(fr, settings)
+    return fr
+
+
+def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None, background=None) -> AttitudeSolution:
+    """AttitudeSolution of the whole pass. progress(fraction, stage) is called often (cancellation point).
+    background: None, or a callable fn -> handle (result(), cancel()) running fn meanwhile elsewhere (the worker's
+    worker.forked.Forked): most of the satellite geometry is then computed while the filter runs
+    (gnssatt.attitude.geometry.compute_geometry)."""
     def prog(f, stage=None):
         if progress is not None:
             progress(f, stage)
@@ -278,7 +352,7 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     prog(0.10, "satellite geometry")
     sat_state, orbit_src = _sat_state(inputs, systems)
     observed = np.isfinite(pobs.code_m).any(axis=(0, 3))
-    geom = compute_geometry(pobs.time, pobs.sats, observed, sat_state, r_p, v_p, psrc)
+    geom = compute_geometry(pobs.time, pobs.sats, observed, sat_state, r_p, v_p, psrc, background=background)
     R_ref_from_ecef = _R_ref_from_ecef(plat.kind, r_p, v_p)                      # (n_ep, 3, 3)
     # initial attitude
     k0 = int(np.argmax(np.isfinite(r_p).all(-1)))
@@ -303,24 +377,12 @@ def process(inputs: AttitudeInputs, settings: AttitudeSettings, progress=None) -
     elif settings.calibration.pcv_maps:
         attitude_fn = single_baseline_attitude_fn(body[0], R_ref_from_ecef)
     prog(0.15, "filtering")
-    two_pass = settings.mode == "dynamic" and settings.smoothing.adaptive_noise
-    span = 0.375 if two_pass else 0.75
-    fr = run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
-                    progress=lambda f: prog(0.15 + span * f))
-    if two_pass:
-        # smoother_adaptive_noise: the omega random walk per epoch from the smoothed first pass, then the whole
-        # filter again with it (gnssatt/attitude/smoother.py adaptive_noise_profile); products from the second pass
-        from gnssatt.attitude.process_noise_em import floor_passes
-        noise0 = fr.smoother_data["noise_state"]
-
-        def rerun(q_omega):
-            return run_filter(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn,
-                              progress=lambda f: prog(0.15 + span * (1 + f)), q_omega=q_omega, noise0=noise0)
-        fr, info = floor_passes(fr, rerun, settings)
-        fr.smoother_data["adaptive_noise"] = info
-    if fr.smoother_data is not None:
-        from gnssatt.attitude.smoother import smooth_filter_result
-        smooth_filter_result(fr, settings)
+    try:
+        fr = _filter_passes(pobs, geom, bl_idx, body, boresight, settings, R0, attitude_fn, prog)
+    except BaseException:
+        geom.cancel()                 # the geometry's background part, if it is still running
+        raise
+    geom.complete()
     prog(0.92, "attitude")
     sol = AttitudeSolution(settings, inputs, pobs, geom, fr, baselines, body, platform_defaults=defaults_applied)
     # ---- baselines table ----

@@ -25,6 +25,10 @@ SECONDS_PER_DAY = 86400  # int: whole-second arithmetic (gnssatt.gnss.constants.
 SECONDS_PER_WEEK = 604800
 # Days from 1970-01-01 to the GPS epoch 1980-01-06.
 _GPS_EPOCH_UNIX_DAYS = 3657
+#: GpsTime.iso: decimals -> the datetime64 unit that prints them; times below this bound (GPS seconds: ~year 2900)
+#: have four-digit years there too
+_DATETIME64_UNITS = {0: "s", 3: "ms", 6: "us"}       # (ns: int64 overflows after 2262)
+_ISO_FAST_MAX_S = 29_000_000_000
 
 
 def days_from_civil(year, month, day) -> np.ndarray:
@@ -145,6 +149,13 @@ class GpsTime:
         ticks = np.round(self.frac * scale).astype(np.int64)
         s = self.s + ticks // scale
         ticks = ticks % scale
+        if decimals in _DATETIME64_UNITS and np.all((s >= 0) & (s < _ISO_FAST_MAX_S)):
+            # the same text from numpy's datetime64 formatting (no leap seconds there either: GPS calendar
+            # arithmetic), ~10x faster than the loop below for the 6358 epochs of a 106-minute pass
+            unit = _DATETIME64_UNITS[decimals]
+            stamps = ((s + _GPS_EPOCH_UNIX_DAYS * SECONDS_PER_DAY) * scale + ticks).astype(f"datetime64[{unit}]")
+            text = np.datetime_as_string(stamps, unit=unit)
+            return str(text) if self.s.ndim == 0 else text.tolist()
         t = GpsTime(s)
         y, mo, d, hh, mi, ss = t.calendar()
         out = []

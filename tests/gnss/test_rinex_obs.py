@@ -527,3 +527,19 @@ def test_writer_is_deterministic(tmp_path):
     a = write_rinex_obs(tmp_path / "a.rnx", src)
     b = write_rinex_obs(tmp_path / "b.rnx", src)
     assert a == b == (tmp_path / "a.rnx").read_bytes()
+
+
+def test_slot_rows_of_buffer_is_the_per_line_matrix():
+    """The records' slot matrix gathered from the file buffer (the reader's path) equals the per-line ljust one:
+    short lines padded with blanks (not the newline or the next line), long lines cut, CRLF kept as text, a last
+    line without newline and shorter than the width."""
+    from gnssatt.gnss.io.rinex_obs import _slot_rows, _slot_rows_of_buffer, _split_lines
+
+    data = (b"HEADER\nG01  1.000\nG02" + b"9" * 60 + b"\n\nR03 12.5\r\nE04 last")
+    lines, starts, lens, buf = _split_lines((data, len(b"HEADER\n"), 1))
+    idx = np.array([0, 1, 2, 3, 4, 1])
+    for width in (3, 10, 35):
+        want = _slot_rows(lines, idx, 13, width)
+        got = _slot_rows_of_buffer(buf, starts, lens, idx, 13, width)
+        assert got.shape == want.shape and np.array_equal(got, want), width
+    assert _slot_rows_of_buffer(buf, starts, lens, np.array([], np.int64), 13, 10).shape == (0, 23)

@@ -155,3 +155,23 @@ def test_parse_leap_second_dat_refuses_bad_rows_and_missing_expiry():
     # a custom table changes the answer (the table argument is honoured)
     t = L.utc_to_gps(1973, 1, 1, table=tab)
     assert L.gps_minus_utc_s(t, table=tab) == 11 - 19
+
+
+def test_iso_datetime64_path_gives_the_loops_text(monkeypatch):
+    """GpsTime.iso with 0, 3 or 6 decimals formats through datetime64; the text is the per-epoch loop's: rounding
+    into the next second, minute and day (0.9995 s at 3 decimals), midnight, years up to ~2900, scalars as str."""
+    import numpy as np
+
+    import gnssatt.gnss.time as T
+
+    rng = np.random.default_rng(7)
+    s = np.concatenate([rng.integers(0, T._ISO_FAST_MAX_S, 5000), [0, 59, 86399, T._ISO_FAST_MAX_S - 1]])
+    frac = np.concatenate([rng.random(5000), [0.9995, 0.9999996, 0.0005, 0.0]])
+    t = T.GpsTime(s, frac)
+    fast = {d: t.iso(d) for d in (0, 3, 6)}
+    scalar = T.GpsTime(np.int64(86399), 0.9995).iso(3)
+    monkeypatch.setattr(T, "_DATETIME64_UNITS", {})          # the loop only
+    for d in (0, 3, 6):
+        assert fast[d] == t.iso(d), d
+    assert scalar == T.GpsTime(np.int64(86399), 0.9995).iso(3) == "1980-01-07T00:00:00.000"
+    assert isinstance(scalar, str)

@@ -238,10 +238,15 @@ def run(ctx: JobContext, config) -> None:
     clock = StageClock()
     clock.mark("reading files")
     ctx.progress(0.0, "reading files")
+    from worker.forked import Forked
+
     files = [(f.name, f.kind, f.path) for f in obs_set.files]
     settings = config.to_settings()
     try:
-        inputs = load_inputs(files)
+        # the first ~2 s of a job are serial otherwise, and the worker has two cores: all RINEX observation files
+        # but one are parsed in a forked child (load_inputs), and most of the satellite geometry is computed in
+        # another while the filter runs (process)
+        inputs = load_inputs(files, background=Forked)
     except InputProblem as exc:
         raise JobInputError(exc.title, exc.detail, file=exc.file, field=exc.field) from exc
     if config.pcv_map_ids:
@@ -261,7 +266,7 @@ def run(ctx: JobContext, config) -> None:
             ctx.progress(0.05 + 0.85 * fraction, stage)
 
     try:
-        sol = process(inputs, settings, progress)
+        sol = process(inputs, settings, progress, background=Forked)
     except InputProblem as exc:
         raise JobInputError(exc.title, exc.detail, file=exc.file, field=exc.field) from exc
     clock.mark("product texts")

@@ -39,6 +39,7 @@ def load_epoch(run: FilterRun, ep: EpochData) -> None:
     k = ep.k
     blk = run.blk
     if blk is None or k - blk.k0 >= blk.pa.shape[0]:
+        run.geom.ready(min(k + BLOCK_EPOCHS, run.n_ep))        # the geometry's background part, if any
         blk = run.blk = sd_block(run.pobs, run.geom, run.ia, run.ib, k, min(k + BLOCK_EPOCHS, run.n_ep),
                                  run.s.table2.elevation_mask_local_deg * DEG, run.sig_cn0)
         run.blk_lw = np.log(cn0_factor(blk.cn0))               # ln of the full C/N0 factor

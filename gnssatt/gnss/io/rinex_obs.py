@@ -269,6 +269,28 @@ def _slot_rows(lines: list[bytes], idx, lead: int, width: int) -> np.ndarray:
     return np.frombuffer(joined, dtype=np.uint8, count=len(idx) * row).reshape(-1, row)
 
 
+def _slot_rows_of_buffer(buf: np.ndarray, starts: np.ndarray, lens: np.ndarray, idx, lead: int,
+                         width: int) -> np.ndarray:
+    """_slot_rows of lines given as a buffer (_split_lines: line i is buf[starts[i]:starts[i] + lens[i]]): the
+    same matrix, gathered row by row from a sliding window over the buffer in one fancy index instead of one
+    bytes slice and ljust per line (~76k records per file of a 106-minute 1 Hz pass)."""
+    row = lead + width
+    idx = np.asarray(idx, np.int64)
+    out = np.empty((len(idx), row), np.uint8)
+    out[:, :lead] = 32
+    if len(idx) == 0:
+        return out
+    padded = np.concatenate((buf, np.full(width, 32, np.uint8)))      # a last line shorter than width
+    out[:, lead:] = np.lib.stride_tricks.sliding_window_view(padded, width)[starts[idx]]
+    short = np.flatnonzero(lens[idx] < width)
+    if short.size:                     # past each short line's end (its newline, the next line): blanks
+        cut = np.arange(width)[None, :] >= lens[idx][short][:, None]
+        block = out[short, lead:]
+        block[cut] = 32
+        out[short, lead:] = block
+    return out
+
+
 _U64 = np.dtype("<u8")
 _PACK_BITS = np.uint64(0x0102040810204080)  # (w * this) >> 56 packs the low bit of each of 8 bytes into 8 bits
 _LOW14 = np.uint64(0x3FFF)
@@ -920,7 +942,7 @@ def _v3_clock_offsets(lines: list[bytes], lens: np.ndarray, epoch_lines: np.ndar
 
 
 def _v3_records(hdr: ObsHeader, lines: list[bytes], lens: np.ndarray, obs_rows: np.ndarray,
-                rec_epoch: np.ndarray, name: str) -> _RecordRows:
+                rec_epoch: np.ndarray, name: str, buf_starts: tuple | None = None) -> _RecordRows:
     """_RecordRows of the observation records `obs_rows` (satellite id A1,I2.2, then m(F14.3,I1,I1)).
 
     Each record becomes a row of 16-byte slots (slot 0 = 13 blanks + 'G01', slot k = field k) decoded at once.
@@ -929,7 +951,8 @@ def _v3_records(hdr: ObsHeader, lines: list[bytes], lens: np.ndarray, obs_rows: 
     """
     n0 = hdr.n_header_lines
     max_n = max(len(v) for v in hdr.obs_types.values())
-    M = _slot_rows(lines, obs_rows, 13, 3 + 16 * max_n)
+    M = (_slot_rows(lines, obs_rows, 13, 3 + 16 * max_n) if buf_starts is None else
+         _slot_rows_of_buffer(buf_starts[0], buf_starts[1], lens, obs_rows, 13, 3 + 16 * max_n))
     sys_b = M[:, 13].copy()
     prn_ok = _DIG[M[:, 15]] & _DIG_OR_SP[M[:, 14]]
     sys_ok = np.isin(sys_b, np.frombuffer(_SYSTEMS.encode(), np.uint8))
@@ -1008,7 +1031,7 @@ def _read_body_v3(hdr: ObsHeader, body: tuple, name: str):
     ep_pos[obs_ep] = np.arange(len(obs_ep))
     epochs = _EpochRows(_times_from_fields(*fields[obs_ep].T, 1e7),
                         _v3_clock_offsets(lines, lens, ep_idx[obs_ep], name, n0), flag[obs_ep].astype(np.int8))
-    recs = _v3_records(hdr, lines, lens, obs_rows, ep_pos[owner], name)
+    recs = _v3_records(hdr, lines, lens, obs_rows, ep_pos[owner], name, (buf, starts))
 
     codes_all: list[str] = []
     for codes in hdr.obs_types.values():
