@@ -10,6 +10,7 @@ import hashlib
 import os
 import shutil
 import tempfile
+import threading
 from contextlib import contextmanager
 from pathlib import Path
 from typing import BinaryIO, Iterator
@@ -21,6 +22,7 @@ class BlobStore:
     def __init__(self, root: Path):
         self.root = Path(root)
         self.root.mkdir(parents=True, exist_ok=True)
+        self._held = threading.local()  # this thread's depth of shared holds (lock() is re-entrant for them)
 
     def path(self, sha256: str) -> Path:
         if len(sha256) != 64 or any(c not in "0123456789abcdef" for c in sha256):
@@ -69,6 +71,22 @@ class BlobStore:
         import io
         return self.put_stream(io.BytesIO(data))
 
+    def touch(self, sha256: str) -> bool:
+        """Restart a blob's grace period (under the shared lock); False when it is not there."""
+        with self.lock(exclusive=False):
+            try:
+                os.utime(self.path(sha256))
+                return True
+            except FileNotFoundError:
+                return False
+
+    def adding(self):
+        """Hold the shared lock from the first blob written until the rows pointing to them commit:
+        `with blobs.adding(): put...; session.commit()`. The janitor reads the references and deletes under
+        the exclusive lock, so it sees either no blob touched yet or the committed rows, however long the
+        upload takes between its first blob and its commit."""
+        return self.lock(exclusive=False)
+
     def _commit(self, tmp: Path, sha256: str) -> str:
         """Move `tmp` into place (or keep the copy already there) and touch it, under the store's shared lock:
         the janitor (core/janitor.py) deletes unreferenced blobs only under the exclusive lock and only when
@@ -92,12 +110,24 @@ class BlobStore:
     @contextmanager
     def lock(self, exclusive: bool) -> Iterator[None]:
         """The store-wide lock (flock on blobs/.lock): shared while blobs are added, exclusive while the
-        janitor deletes."""
+        janitor deletes. A shared hold inside one of the same thread takes no second flock."""
+        depth = getattr(self._held, "depth", 0)
+        if not exclusive and depth:
+            self._held.depth = depth + 1
+            try:
+                yield
+            finally:
+                self._held.depth = depth
+            return
         fd = os.open(self.root / ".lock", os.O_RDWR | os.O_CREAT, 0o644)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX if exclusive else fcntl.LOCK_SH)
+            if not exclusive:
+                self._held.depth = 1
             yield
         finally:
+            if not exclusive:
+                self._held.depth = 0
             os.close(fd)  # closing releases the lock
 
     def copy_to(self, sha256: str, dest: Path) -> Path:

@@ -6,9 +6,12 @@
   killed); removed once the job row says that attempt is over and the directory is a minute old.
 - `blobs/ab/cd/<sha256>`: a blob no row points to (set files, products, PCV maps, fan-out results and shared
   objects), untouched for the grace period plus the longest a job may run (GNSSATT_JOB_TIME_S: a running
-  job's products are referenced only once it succeeds). Deletion happens under the blob store's exclusive lock while every new
-  blob is touched under its shared lock (core/blobs.py), so an upload that re-uses an old blob either re-creates
-  it after the janitor removed it, or touches it first and the janitor leaves it alone.
+  job's products are referenced only once it succeeds). The janitor reads the references and deletes under the
+  blob store's exclusive lock, while an upload holds the shared lock from its first blob until its rows commit
+  (`BlobStore.adding`, core/blobs.py): an upload that re-uses an old blob either re-creates it after the
+  janitor removed it, or the janitor sees its committed rows and leaves the blob alone, however slow the upload.
+  A job's products are touched again under the shared lock as its success commits (worker/runner.py); one
+  whose blob went meanwhile (the job outran GNSSATT_JOB_TIME_S) fails the attempt instead of publishing it.
 
 The janitor alone deletes blobs. Deleting a job or a set (by its team) only drops the rows and `release`s their
 blobs: they are touched, so the grace period counts from the deletion (a download that read its row just before
@@ -133,9 +136,9 @@ def sweep_blobs(settings: Settings, Session: sessionmaker[Session], blobs: BlobS
                 continue
     if not old:
         return 0
-    refs = referenced_blobs(Session)
     removed = 0
-    with blobs.lock(exclusive=True):
+    with blobs.lock(exclusive=True):  # the references are read under it: see `BlobStore.adding`
+        refs = referenced_blobs(Session)
         for path in old:
             if path.name in refs:
                 continue

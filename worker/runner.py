@@ -139,7 +139,19 @@ def _finish(rt: Runtime, job_id: str, token: str, **values) -> bool:
 
 
 def _publish_success(rt: Runtime, job_id: str, token: str, ctx: JobContext) -> bool:
-    """Mark the job succeeded and insert its products, in one transaction guarded by the lease."""
+    """Mark the job succeeded and insert its products, in one transaction guarded by the lease, under the blob
+    store's shared lock with every product blob touched first (core/janitor.py: the janitor reads references and
+    deletes under the exclusive lock, so it sees either fresh blobs or the committed rows)."""
+    with rt.blobs.adding():
+        missing = [rec.name for rec in ctx.products.values() if not rt.blobs.touch(rec.sha256)]
+        if missing:
+            raise RuntimeError(f"the stored blobs of products {missing} were removed before the job finished: it "
+                               f"ran longer than GNSSATT_JOB_TIME_S plus the janitor's grace; raise "
+                               f"GNSSATT_JOB_TIME_S to the longest a job of this size runs")
+        return _insert_success(rt, job_id, token, ctx)
+
+
+def _insert_success(rt: Runtime, job_id: str, token: str, ctx: JobContext) -> bool:
     with rt.Session.begin() as s:
         res = s.execute(update(Job).where(Job.id == job_id, Job.lease_owner == token, Job.state == "running")
                         .values(state="succeeded", progress=1.0, stage="done", finished_at=utcnow(),

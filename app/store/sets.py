@@ -77,14 +77,16 @@ def validate_staged(staged: StagedUpload, settings: Settings,
 
 def store_set(session: Session, blobs: BlobStore, team_id: str, name: str | None,
               files: list[ValidatedFile], summary: dict) -> ObservationSet:
-    """Move the staged files into the blob store, then insert the set and its files in one transaction."""
-    for f in files:
-        blobs.put_file(f.path, f.sha256)
-    obs_set = ObservationSet(team_id=team_id, name=name, platform_name=summary.get("platform"),
-                             total_bytes=sum(f.size_bytes for f in files), summary=summary)
-    obs_set.files = [SetFile(name=f.name, kind=f.kind, sha256=f.sha256, size_bytes=f.size_bytes,
-                             summary=f.summary) for f in files]
-    session.add(obs_set)
-    session.commit()
+    """Move the staged files into the blob store, then insert the set and its files in one transaction, all
+    under the store's shared lock (`BlobStore.adding`: the janitor never takes a blob of a set committing)."""
+    with blobs.adding():
+        for f in files:
+            blobs.put_file(f.path, f.sha256)
+        obs_set = ObservationSet(team_id=team_id, name=name, platform_name=summary.get("platform"),
+                                 total_bytes=sum(f.size_bytes for f in files), summary=summary)
+        obs_set.files = [SetFile(name=f.name, kind=f.kind, sha256=f.sha256, size_bytes=f.size_bytes,
+                                 summary=f.summary) for f in files]
+        session.add(obs_set)
+        session.commit()
     session.refresh(obs_set)
     return obs_set

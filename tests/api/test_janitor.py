@@ -76,9 +76,10 @@ def test_unreferenced_blobs_go_after_the_grace_period_referenced_ones_never(api,
 
 def test_concurrent_uploads_reusing_blobs_never_lose_one(api, settings):
     """Upload, delete, age the blobs past the grace period and at once upload the same bytes again, while a
-    janitor with a 0.5 s grace sweeps in a loop: every stored set always has all its blobs (a re-used blob is
-    touched under the store's lock before its row commits, so the janitor either removed it first and the
-    upload wrote it anew, or leaves it)."""
+    janitor with a 0.5 s grace sweeps in a loop: every stored set always has all its blobs (the upload holds the
+    store's shared lock from its first blob to its commit and the janitor reads references under the exclusive
+    one, so the janitor either removed a blob first and the upload wrote it anew, or sees the row; this failed
+    once on a slow host when the references were read before the lock and the upload took > 0.5 s)."""
     rt = api.rt
     settings.janitor_grace_s = 0.0
     settings.job_time_s = 0.5
@@ -118,12 +119,10 @@ def test_concurrent_uploads_reusing_blobs_never_lose_one(api, settings):
     assert removed[1] > 0  # the janitor did remove the deleted sets' blobs meanwhile
 
 
-def _published_job(rt, team_id: str, payload: bytes) -> tuple[str, str]:
-    """A succeeded job with one product of `payload`, stored as a worker publishes it (blob first, then the
-    row); returns (job id, sha256)."""
+def _job_row(rt, team_id: str, sha: str, size: int) -> str:
+    """Commit a succeeded job with one product pointing to blob `sha`; returns the job id."""
     from core.models import Job, Product, utcnow
 
-    sha, size = rt.blobs.put_bytes(payload)
     with rt.Session.begin() as s:
         job = Job(team_id=team_id, type="selftest", config={}, set_ids=[], state="succeeded", progress=1.0,
                   created_at=utcnow(), finished_at=utcnow(), attempts=1, max_attempts=3, cancel_requested=False)
@@ -131,7 +130,15 @@ def _published_job(rt, team_id: str, payload: bytes) -> tuple[str, str]:
         s.flush()
         s.add(Product(job_id=job.id, attempt=1, name="out.txt", media_type="text/plain", sha256=sha,
                       size_bytes=size))
-        return job.id, sha
+        return job.id
+
+
+def _published_job(rt, team_id: str, payload: bytes) -> tuple[str, str]:
+    """A succeeded job with one product of `payload`, stored as a worker publishes it (blob first, then the
+    row, under the store's shared lock as worker/runner.py does); returns (job id, sha256)."""
+    with rt.blobs.adding():
+        sha, size = rt.blobs.put_bytes(payload)
+        return _job_row(rt, team_id, sha, size), sha
 
 
 def test_deleting_jobs_while_other_jobs_reuse_their_product_blobs_never_loses_one(api, settings):
@@ -185,9 +192,12 @@ def test_deleting_jobs_while_other_jobs_reuse_their_product_blobs_never_loses_on
     assert gone_before_reuse > 0  # the janitor did take released blobs, so the reuse raced real deletions
 
 
-def test_reuse_between_the_janitors_look_and_its_delete_keeps_the_blob(api, settings, monkeypatch):
-    """The worst moment, forced: a deleted job's blob is past its grace, the janitor has read the references
-    (none), and just then another job publishes the same bytes and its row; the janitor must not remove it."""
+def test_a_commit_slower_than_the_grace_period_keeps_its_blobs(api, settings):
+    """The worst moment, forced: a deleted job's blob is far past its grace; another job has just written the
+    same bytes again and holds the store's shared lock, but its row is not committed yet (a slow upload or a
+    slow database); the janitor sweeps with "now" so far ahead that the fresh touch looks old too. It must wait
+    for the commit and then see the row (it reads the references under its exclusive lock), so the blob stays,
+    however long the writer took between its blob and its row."""
     from core.models import Job
 
     rt = api.rt
@@ -198,19 +208,41 @@ def test_reuse_between_the_janitors_look_and_its_delete_keeps_the_blob(api, sett
     old_job, sha = _published_job(rt, team_id, payload)
     assert api.delete(f"/v1/jobs/{old_job}").status_code == 204
     _age(rt.blobs.path(sha), 100 * HOUR)
-    looked = janitor.referenced_blobs
-    reused = []
+    touched, go_on, new_job, swept = threading.Event(), threading.Event(), [], []
 
-    def look_then_reuse(Session):
-        refs = looked(Session)
-        assert sha not in refs
-        reused.append(_published_job(rt, team_id, payload)[0])
-        return refs
+    def slow_writer():
+        with rt.blobs.adding():
+            sha_again, size = rt.blobs.put_bytes(payload)
+            touched.set()
+            go_on.wait(10)
+            new_job.append(_job_row(rt, team_id, sha_again, size))
 
-    monkeypatch.setattr(janitor, "referenced_blobs", look_then_reuse)
-    assert janitor.sweep_blobs(settings, rt.Session, rt.blobs, time.time()) == 0
-    assert rt.blobs.exists(sha) and reused
-    monkeypatch.setattr(janitor, "referenced_blobs", looked)
+    def janitor_run():
+        swept.append(janitor.sweep_blobs(settings, rt.Session, rt.blobs, time.time() + 100 * HOUR))
+
+    writer = threading.Thread(target=slow_writer, daemon=True)
+    writer.start()
+    assert touched.wait(10)
+    sweeper = threading.Thread(target=janitor_run, daemon=True)
+    sweeper.start()
+    sweeper.join(timeout=0.5)
+    assert sweeper.is_alive() and not swept  # it waits for the writer's commit
+    go_on.set()
+    writer.join(timeout=10)
+    sweeper.join(timeout=10)
+    assert swept == [0] and rt.blobs.exists(sha) and new_job
     janitor.sweep(settings, rt.Session, rt.blobs, now=time.time() + 100 * HOUR)
     assert rt.blobs.exists(sha)  # referenced now: never removed
-    assert api.get(f"/v1/jobs/{reused[0]}/products/out.txt").content == payload
+    assert api.get(f"/v1/jobs/{new_job[0]}/products/out.txt").content == payload
+
+
+def test_a_product_whose_blob_went_while_the_job_ran_fails_the_attempt(api, settings):
+    """A job that outran GNSSATT_JOB_TIME_S may find the janitor took a product's blob: it must not publish a
+    row pointing to nothing; the attempt fails with a message naming the product and the setting."""
+    from worker.runner import _publish_success
+
+    class _Ctx:
+        products = {"out.txt": type("Rec", (), {"name": "out.txt", "sha256": "0" * 64})()}
+
+    with pytest.raises(RuntimeError, match=r"out\.txt.*GNSSATT_JOB_TIME_S"):
+        _publish_success(api.rt, "0123456789abcdef", "token", _Ctx())
