@@ -35,7 +35,7 @@ import numpy as np  # noqa: E402
 
 from bench._report import machine_line, replace_section  # noqa: E402
 from bench.bench_attitude import CLEAN, SLEWS, files_of  # noqa: E402
-from gnssatt.attitude.solution import skew  # noqa: E402
+from gnssatt.gnss.rotations import skew  # noqa: E402
 from gnssatt.gnss.constants import C_M_S  # noqa: E402
 
 SETTINGS = {"smoother": True, "smoother_adaptive_noise": True, "angular_acceleration_state": True}

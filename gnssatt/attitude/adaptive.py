@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 
 from gnssatt.estimation.ekf_kernels import propagate_rotation_cov, rotation_rk4_stm_kernel
+from gnssatt.gnss.rotations import skew
 
 __all__ = ["ManoeuvreDetector"]
 
@@ -39,10 +40,6 @@ STRIDE = 3          # updates between the onsets of two alternatives
 MAX_AGE = 15        # updates an alternative lives (onsets up to 15 s back)
 P_MIN = 0.1         # posterior weight of the alternative below which the main filter is left alone
 MAX_GAP_S = 3.0     # a longer gap between updates restarts the models
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
 
 
 def _psd_part(D: np.ndarray) -> np.ndarray:
@@ -57,7 +54,7 @@ def rw_noise(b1: np.ndarray, q: float, dt: float) -> np.ndarray:
     nb = b1.shape[0]
     Q = np.zeros((3 + 3 * nb, 3 + 3 * nb))
     Q[0:3, 0:3] = np.eye(3) * q * dt
-    B = [-_skew(b) for b in b1]
+    B = [-skew(b) for b in b1]
     for j in range(nb):
         r = 3 + 3 * j
         Q[r:r + 3, 0:3] = B[j] * q * dt ** 2 / 2

@@ -17,6 +17,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from gnssatt.estimation.ekf_kernels import _skew3
+
 __all__ = ["rigid_retract_kernel", "rts_rigid_kernel", "warm_up"]
 
 
@@ -31,20 +33,10 @@ def _cross(a, b):
 
 
 @njit(cache=True, nogil=True)
-def _skew(v):
-    """[v x] (3, 3)."""
-    K = np.zeros((3, 3))
-    K[0, 1], K[0, 2] = -v[2], v[1]
-    K[1, 0], K[1, 2] = v[2], -v[0]
-    K[2, 0], K[2, 1] = -v[1], v[0]
-    return K
-
-
-@njit(cache=True, nogil=True)
 def _rotation_exp(phi):
     """rigid_update.rotation_exp: Rodrigues' formula, second order below 1e-8 rad."""
     a = np.sqrt(phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2])
-    K = _skew(phi)
+    K = _skew3(phi)
     K2 = K @ K
     if a < 1e-8:
         return np.eye(3) + K + 0.5 * K2
@@ -54,7 +46,7 @@ def _rotation_exp(phi):
 @njit(cache=True, nogil=True)
 def _rotation_between(u0, u1):
     """rigid_update.rotation_between: the rotation about u0 x u1 taking u0 to u1 (Rodrigues)."""
-    vx = _skew(_cross(u0, u1))
+    vx = _skew3(_cross(u0, u1))
     c = u0[0] * u1[0] + u0[1] * u1[1] + u0[2] * u1[2]
     return np.eye(3) + vx + vx @ vx / (1.0 + c)
 

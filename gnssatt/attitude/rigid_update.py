@@ -34,7 +34,7 @@ from __future__ import annotations
 import numpy as np
 
 from gnssatt.attitude.rigid_kernels import rigid_retract_kernel
-from gnssatt.attitude.solution import skew
+from gnssatt.gnss.rotations import skew
 
 __all__ = ["common_rotation", "rotation_between", "rotation_exp", "rigid_retract", "rigid_retract_reference"]
 

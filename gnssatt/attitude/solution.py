@@ -17,21 +17,14 @@ from __future__ import annotations
 import numpy as np
 
 from gnssatt.gnss import rotations as rot
+from gnssatt.gnss.rotations import skew
 
-__all__ = ["attitude_from_baselines", "attitude_ml", "attitude_quaternion", "euler_and_sigma", "baseline_az_el",
-           "skew"]
+__all__ = ["attitude_from_baselines", "attitude_ml", "attitude_quaternion", "euler_and_sigma", "baseline_az_el"]
 
 ML_ITERATIONS = 3       # Gauss-Newton steps from the QUEST start (the second already changes < 1e-9 rad)
 ML_BODY_SIGMA_M = 1e-3  # uncertainty of each body-frame baseline component (a priori / calibrated), added to the
                         # covariance: without it the dynamic filter's baselines, whose shape it knows to ~0.1 mm,
                         # are fitted to the body geometry in the directions where the two disagree (tested)
-
-
-def skew(v: np.ndarray) -> np.ndarray:
-    """[v x] (..., 3, 3) of vectors (..., 3)."""
-    z = np.zeros(v.shape[:-1])
-    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1), np.stack([v[..., 2], z, -v[..., 0]], -1),
-                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
 
 
 def attitude_from_baselines(b_ecef_m: np.ndarray, P_b_m2: np.ndarray, b_body_m: np.ndarray,

@@ -54,6 +54,8 @@ import numpy as np
 from numba import njit
 from scipy.stats import chi2 as _chi2
 
+from gnssatt.gnss.rotations import skew
+
 from gnssatt.estimation.lambda_search import (
     AmbiguitySearchError, check_covariance, decorrelate,
 )
@@ -397,10 +399,6 @@ def _sphere_dual_bound_nb(b0: float, b1: float, b2: float, metric_eig: np.ndarra
     return max(g, 0.0)
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-
-
 def _procrustes(B: np.ndarray, F: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """Rotation R (det +1) minimising sum_i w_i |b_i - R f_i|^2 (Wahba; Markley 1988 SVD). B, F: (q, 3)."""
     M = (B * weights[:, None]).T @ F                    # sum_i w_i b_i f_i^T
@@ -413,7 +411,7 @@ def _exp_so3(theta: np.ndarray) -> np.ndarray:
     ang = float(np.linalg.norm(theta))
     if ang == 0.0:
         return np.eye(3)
-    K = _skew(theta / ang)
+    K = skew(theta / ang)
     return np.eye(3) + math.sin(ang) * K + (1.0 - math.cos(ang)) * (K @ K)
 
 
@@ -430,7 +428,7 @@ def _gauss_newton_rotation(bh: np.ndarray, W: np.ndarray, F: np.ndarray, R: np.n
     for _ in range(iterations):
         RF = F @ R.T                                     # (q, 3) rows R f_i
         r = bh - RF.reshape(-1)
-        J = np.vstack([_skew(v) for v in RF])            # d r / d theta = [R f_i x]
+        J = np.vstack([skew(v) for v in RF])            # d r / d theta = [R f_i x]
         H = J.T @ W @ J
         g = J.T @ W @ r
         # Newton: the residual's curvature, r' = r + J theta - theta x (theta x R f_i) / 2 + ..., adds -M to
@@ -459,19 +457,11 @@ def _gauss_newton_rotation(bh: np.ndarray, W: np.ndarray, F: np.ndarray, R: np.n
     return c, R
 
 
-def _skew_batch(v: np.ndarray) -> np.ndarray:
-    """(..., 3) -> (..., 3, 3) cross-product matrices."""
-    S = np.zeros(v.shape + (3,))
-    S[..., 0, 1], S[..., 0, 2], S[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
-    S[..., 1, 0], S[..., 2, 0], S[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
-    return S
-
-
 def _exp_so3_batch(theta: np.ndarray) -> np.ndarray:
     """(k, 3) rotation vectors -> (k, 3, 3) rotation matrices (Rodrigues)."""
     ang = np.linalg.norm(theta, axis=1)
     safe = np.where(ang > 0.0, ang, 1.0)
-    K = _skew_batch(theta / safe[:, None])
+    K = skew(theta / safe[:, None])
     s, c = np.sin(ang)[:, None, None], (1.0 - np.cos(ang))[:, None, None]
     return np.eye(3) + s * K + c * (K @ K)
 
@@ -490,7 +480,7 @@ def _newton_rotation_batch(bh: np.ndarray, W: np.ndarray, F: np.ndarray, Rs: np.
     active = np.ones(len(Rs), bool)
     for _ in range(iterations):
         RF = np.einsum("kij,qj->kqi", Rs, F)                         # (k, q, 3)
-        J = _skew_batch(RF).reshape(len(Rs), 3 * q, 3)               # d r / d theta = [R f_i x]
+        J = skew(RF).reshape(len(Rs), 3 * q, 3)               # d r / d theta = [R f_i x]
         WJ = W @ J                                                    # (k, 3q, 3)
         H = np.einsum("kai,kaj->kij", J, WJ)
         g = np.einsum("kai,ka->ki", WJ, r)

@@ -19,8 +19,7 @@ from scipy.linalg.lapack import dpotrf as _potrf, dpotrs as _potrs
 
 from gnssatt.estimation.ekf_kernels import gather_AHt, gather_HA, joseph_combine, symmetric_plus_diag
 # the textbook numpy forms live in ekf_reference (the specification the kernels are tested against); re-exported
-from gnssatt.estimation.ekf_reference import (_skew, _skew_batch, joseph_update, rotation_rk4_stm,  # noqa: F401
-                                              sparse_rows_to_dense)
+from gnssatt.estimation.ekf_reference import joseph_update, rotation_rk4_stm, sparse_rows_to_dense  # noqa: F401
 
 __all__ = ["joseph_update", "joseph_update_sparse", "rk4_step", "rk4_integrate", "rotation_rk4_stm",
            "sparse_rows_to_dense"]

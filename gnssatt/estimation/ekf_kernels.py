@@ -87,7 +87,7 @@ def joseph_combine(AP, X, Y):
 
 @njit(cache=True, nogil=True)
 def _skew3(v):
-    """[v x] (3, 3), as gnssatt.estimation.ekf._skew."""
+    """[v x] (3, 3), as gnssatt.gnss.rotations.skew."""
     W = np.zeros((3, 3))
     W[0, 1], W[0, 2] = -v[2], v[1]
     W[1, 0], W[1, 2] = v[2], -v[0]

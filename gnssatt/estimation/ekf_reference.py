@@ -13,6 +13,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla
 
+from gnssatt.gnss.rotations import skew
+
 __all__ = ["sparse_rows_to_dense", "joseph_update", "rotation_rk4_stm", "propagate_rotation_covariance"]
 
 
@@ -69,7 +71,7 @@ def rotation_rk4_stm(b_m: np.ndarray, omega_rad_s: np.ndarray, dt_s: float, max_
     nb = b.shape[0]
     n = max(1, int(np.ceil(abs(dt_s) / max_step_s - 1e-12)))
     h = dt_s / n
-    W = _skew(w)
+    W = skew(w)
     # T = sum_k (hW)^k / k!, k = 0..4 (the RK4 polynomial of the linear step)
     hW = h * W
     hW2 = hW @ hW
@@ -84,7 +86,7 @@ def rotation_rk4_stm(b_m: np.ndarray, omega_rad_s: np.ndarray, dt_s: float, max_
         J1 = Phi_bw.copy()                    # d y / d omega accumulated over the previous sub-steps
         acc_J = np.einsum("ij,njk->nik", T, J1)  # d(T y0)/d omega through y0
         for k in range(1, 5):
-            Jk = -_skew_batch(yk) + np.einsum("ij,njk->nik", W, Jk)
+            Jk = -skew(yk) + np.einsum("ij,njk->nik", W, Jk)
             yk = yk @ W.T
             acc_J += coef[k] * Jk
         y = y @ T.T
@@ -94,18 +96,6 @@ def rotation_rk4_stm(b_m: np.ndarray, omega_rad_s: np.ndarray, dt_s: float, max_
 
 
 _ZEROS33 = np.zeros((3, 3))
-
-
-def _skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-
-
-def _skew_batch(v: np.ndarray) -> np.ndarray:
-    out = np.zeros((v.shape[0], 3, 3))
-    out[:, 0, 1], out[:, 0, 2] = -v[:, 2], v[:, 1]
-    out[:, 1, 0], out[:, 1, 2] = v[:, 2], -v[:, 0]
-    out[:, 2, 0], out[:, 2, 1] = -v[:, 1], v[:, 0]
-    return out
 
 
 def propagate_rotation_covariance(P: np.ndarray, w_idx: np.ndarray, b_idx: np.ndarray, Phi_bb: np.ndarray,
@@ -131,7 +121,7 @@ def propagate_rotation_covariance(P: np.ndarray, w_idx: np.ndarray, b_idx: np.nd
     P[:, sub] = P[:, sub] @ Phi.T
     Q = np.zeros((sub.size, sub.size))
     Q[0:3, 0:3] = Qw_rad2_s3 * dt_s
-    B = [-_skew(b1_m[j]) for j in range(n_b)]
+    B = [-skew(b1_m[j]) for j in range(n_b)]
     for j in range(n_b):
         r = 3 + 3 * j
         Q[r:r + 3, 0:3] = B[j] @ Qw_rad2_s3 * dt_s ** 2 / 2

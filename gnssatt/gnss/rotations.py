@@ -27,6 +27,15 @@ def _asq(q) -> np.ndarray:
     return np.asarray(q, dtype=np.float64)
 
 
+def skew(v) -> np.ndarray:
+    """[v x] (..., 3, 3) of vectors (..., 3): skew(a) @ b == np.cross(a, b)."""
+    v = np.asarray(v, dtype=np.float64)
+    S = np.zeros(v.shape + (3,))
+    S[..., 0, 1], S[..., 0, 2], S[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    S[..., 1, 0], S[..., 2, 0], S[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
+    return S
+
+
 def quat_normalize(q) -> np.ndarray:
     """Unit quaternions (..., 4) with w >= 0 (the canonical sign of CONVENTIONS.md)."""
     q = _asq(q)

@@ -31,8 +31,9 @@ import numpy as np
 
 from gnssatt.estimation.constrained_search import dd_operator
 from gnssatt.estimation.lambda_search import AmbiguitySearchError, mlambda
+from gnssatt.gnss.rotations import skew
 
-__all__ = ["EpochPhases", "SnapshotFit", "integer_corrected", "fit_attitude", "dof", "skew"]
+__all__ = ["EpochPhases", "SnapshotFit", "integer_corrected", "fit_attitude", "dof"]
 
 GN_ITERATIONS = 10         # at most this many Gauss-Newton steps ...
 GN_TOLERANCE_RAD = 1e-10   # ... stopping once a step is this small (2-3 steps from a prior within a few degrees)
@@ -70,14 +71,6 @@ class SnapshotFit:
     residual_cyc: np.ndarray      # (len(subset)-1, n-1) residual double differences
     subset: np.ndarray            # satellite indices used; ref first
     ref: int
-
-
-def skew(v: np.ndarray) -> np.ndarray:
-    """[v x] (..., 3, 3)."""
-    v = np.asarray(v, float)
-    z = np.zeros(v.shape[:-1])
-    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1), np.stack([v[..., 2], z, -v[..., 0]], -1),
-                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
 
 
 def dof(m: int, n: int) -> int:

@@ -8,24 +8,19 @@ from __future__ import annotations
 
 import numpy as np
 
+from gnssatt.gnss.rotations import skew
+
 __all__ = ["rotation_matrix", "rotvec_of", "perturb_body", "error_rotvec_body", "D_eq26", "LARGE_ANGLE_RAD"]
 
 #: rotation vectors longer than this are wrapped (2 pi - |eps|) by rotvec_of
 LARGE_ANGLE_RAD = np.pi
 
 
-def _skew(w: np.ndarray) -> np.ndarray:
-    w = np.asarray(w, dtype=np.float64)
-    z = np.zeros(w.shape[:-1])
-    return np.stack([np.stack([z, -w[..., 2], w[..., 1]], -1), np.stack([w[..., 2], z, -w[..., 0]], -1),
-                     np.stack([-w[..., 1], w[..., 0], z], -1)], -2)
-
-
 def rotation_matrix(rotvec_rad: np.ndarray) -> np.ndarray:
     """A = exp([w x]) (..., 3, 3), the active rotation by |w| about w (Rodrigues' formula)."""
     w = np.asarray(rotvec_rad, dtype=np.float64)
     angle = np.linalg.norm(w, axis=-1)[..., None, None]
-    K = _skew(w)
+    K = skew(w)
     small = angle < 1e-8
     a = np.where(small, 1.0, angle)
     s = np.where(small, 1.0 - angle ** 2 / 6.0, np.sin(a) / a)

@@ -3,8 +3,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from gnssatt.estimation.ekf import (_skew, _skew_batch, joseph_update, joseph_update_sparse, rk4_integrate,
+from gnssatt.estimation.ekf import (joseph_update, joseph_update_sparse, rk4_integrate,
                                    rotation_rk4_stm, sparse_rows_to_dense)
+from gnssatt.gnss.rotations import skew
 
 
 def _problem(rng, n=12, m=7, k=4):
@@ -54,11 +55,11 @@ def test_rotation_rk4_closed_form_equals_generic_rk4_with_variational_equations(
     b = rng.normal(size=(3, 3))
     w = rng.normal(size=3) * 0.05
     nb = b.shape[0]
-    Wx = _skew(w)
+    Wx = skew(w)
 
     def f(y):
         yb, pb, pw = y[:, :3], y[:, 3:12].reshape(nb, 3, 3), y[:, 12:21].reshape(nb, 3, 3)
-        return np.concatenate([yb @ Wx.T, (Wx @ pb).reshape(nb, 9), (Wx @ pw - _skew_batch(yb)).reshape(nb, 9)], 1)
+        return np.concatenate([yb @ Wx.T, (Wx @ pb).reshape(nb, 9), (Wx @ pw - skew(yb)).reshape(nb, 9)], 1)
 
     for dt in (1.0, 2.5, 0.3):
         y, pbb, pbw = rotation_rk4_stm(b, w, dt, 1.0)
@@ -76,7 +77,7 @@ def test_rotation_rk4_stm_matches_finite_differences_and_exact_rotation():
     # exact solution: rotation about w by |w| dt (active), Rodrigues
     th = np.linalg.norm(w)
     k = w / th
-    K = _skew(k)
+    K = skew(k)
     R = np.eye(3) + np.sin(th) * K + (1 - np.cos(th)) * K @ K
     assert np.allclose(y[0], R @ b[0], atol=1e-10)        # RK4 error ~ (w dt)^5 / 120
     eps = 1e-7

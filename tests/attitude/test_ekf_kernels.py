@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from gnssatt.estimation.ekf_reference import (_skew, propagate_rotation_covariance, rotation_rk4_stm,
+from gnssatt.estimation.ekf_reference import (propagate_rotation_covariance, rotation_rk4_stm,
                                               sparse_rows_to_dense)
+from gnssatt.gnss.rotations import skew
 from tests.attitude._kernel_calls import (call_gather_AHt, call_gather_HA, call_joseph_combine,
                                           call_propagate_rotation_cov, call_rotation_rk4_stm,
                                           call_symmetric_plus_diag, close)
@@ -92,7 +93,7 @@ def test_rotation_covariance_propagation_equals_numpy():
             Phi[np.ix_(b_idx[j], b_idx[j])], Phi[np.ix_(b_idx[j], np.arange(3))] = Pbb, Pbw[j]
         Qf = ref - Phi @ P @ Phi.T
         assert np.allclose(Qf, Qf.T, atol=1e-9) and np.allclose(Qf[:3, :3], Qw * dt, atol=1e-12)
-        B = -_skew(b1[0])
+        B = -skew(b1[0])
         assert np.allclose(Qf[b_idx[0]][:, :3], B @ Qw * dt ** 2 / 2, atol=1e-9)
 
 

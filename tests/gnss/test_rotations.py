@@ -201,3 +201,16 @@ def test_triad():
     np.testing.assert_allclose(rot.rotate(q, r1 / np.linalg.norm(r1)),
                                rot.rotate(q_true, r1 / np.linalg.norm(r1)), atol=1e-14)
     assert np.isnan(rot.triad(r1, 2 * r1, r1, 2 * r1)).all()
+
+
+def test_skew_is_the_cross_product_for_one_vector_and_for_stacks():
+    """skew(a) @ b == a x b (to rounding of two products of O(1) numbers) and skew(a) is antisymmetric, for one
+    vector and for a (4, 5, 3) stack; the one table every module's [v x] comes from."""
+    rng = np.random.default_rng(7)
+    a, b = rng.normal(size=(4, 5, 3)), rng.normal(size=(4, 5, 3))
+    S = rot.skew(a)
+    assert S.shape == (4, 5, 3, 3)
+    np.testing.assert_allclose(np.einsum("...ij,...j->...i", S, b), np.cross(a, b), atol=1e-14)
+    np.testing.assert_array_equal(S, -np.swapaxes(S, -1, -2))
+    np.testing.assert_allclose(rot.skew([1.0, 2.0, 3.0]) @ [4.0, 5.0, 6.0], np.cross([1, 2, 3], [4, 5, 6]),
+                               atol=1e-14)
