@@ -85,9 +85,10 @@ class LocalService:
         if wait:
             self.wait_ready()
 
-    def wait_ready(self, timeout_s: float = 30.0) -> None:
+    def wait_ready(self, timeout_s: float = 120.0) -> None:
         """Ready = OUR process says it is serving on the port (another test's server may have raced us to a
-        free port) and /readyz answers 200."""
+        free port) and /readyz answers 200. The limit only ends a wait for a server that will never come up: an
+        API starts in ~2-5 s on an idle 2-core machine, but took > 30 s at a load of 6-13 (helper runs)."""
         deadline = time.monotonic() + timeout_s
         marker = f"running on http://127.0.0.1:{self.port}"
         while time.monotonic() < deadline:

@@ -23,7 +23,9 @@ def _upload(client: httpx.Client, paths) -> dict:
     return resp.json()
 
 
-def _wait_job(client, job_id, timeout_s=60.0, states=TERMINAL) -> dict:
+def _wait_job(client, job_id, timeout_s=180.0, states=TERMINAL) -> dict:
+    """The job row once in `states`; the limit only ends a wait for a job that will never get there (these
+    jobs take seconds idle, but the worker start and first job took > 60 s at a load of 6-13)."""
     return wait_for(lambda: (j := client.get(f"/v1/jobs/{job_id}").json())["state"] in states and j,
                     timeout_s, what=f"job {job_id} in {states}")
 
