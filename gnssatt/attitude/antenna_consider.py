@@ -21,8 +21,10 @@ least-squares fit of [1, e_x, e_y, e_z] (the clock and an offset's signature) ov
 solid-angle weighted (what a pass averaging over the sky absorbs); 0.84 / 1.34 for the low-order pattern family of
 gnssatt/sim/observables.pcv_grid_mm (tests/attitude/test_antenna_consider.py recomputes them; 3.46 vertical would be
 a pattern made of the offset signature alone). C_body = R_b_a C_a R_a_b + R_b_b C_b R_b_b^T (two antennas
-independent). A calibrated baseline (calibration.calibrated_baselines) removes the baseline's term (it is the
-phase-centre vector); a PCV map of the baseline removes the PCV part (the offsets stay).
+independent); two baselines sharing an antenna share its term, with the sign of its place in each (a>b is b - a),
+so the attitude sees one antenna's offset once, not once per baseline. A calibrated baseline
+(calibration.calibrated_baselines) removes the baseline's term (it is the phase-centre vector); a PCV map of the
+baseline removes the PCV part (the offsets stay).
 
 Default where platform.json declares neither field: DEFAULT_PCO_SIGMA_MM 1.0, DEFAULT_PCV_RMS_MM 1.0 - the
 individual departure of a patch from its type: position differences of up to 1 cm up and below 4 mm horizontally
@@ -67,42 +69,59 @@ def antenna_frame_variance_m2(antenna, signals: list[str], with_pcv: bool = True
     return np.array([h, h, v]) * 1e-6
 
 
+def _antenna_body_m2(ant, signals: list[str], with_pcv: bool) -> np.ndarray:
+    """(3, 3) body-frame covariance (m^2) of one antenna's phase centre about its platform.json position."""
+    R = R_antenna_from_body(ant.boresight_body)
+    return R.T @ np.diag(antenna_frame_variance_m2(ant, signals, with_pcv)) @ R
+
+
 def baseline_consider_body_m2(platform, baselines: list[tuple[str, str]], signals: list[str],
                               calibration=None) -> tuple[np.ndarray, dict]:
-    """((n_bl, 3, 3) body-frame covariance of each phase-centre baseline about the body one, info) (module doc)."""
+    """((3 n_bl, 3 n_bl) body-frame covariance of the phase-centre baselines about the body ones, info) (module
+    doc). Baseline a>b is b - a, so its error is e_b - e_a: two baselines sharing an antenna are correlated,
+    cov(j, k) = sum over shared antennas s of sign_j(s) sign_k(s) C_s (sign -1 where s is first, +1 second); a
+    calibrated baseline has no row or column, a PCV map keeps only the offsets in that baseline's antennas."""
     cal_b = getattr(calibration, "calibrated_baselines", {}) or {}
     maps = getattr(calibration, "pcv_maps", {}) or {}
-    out = np.zeros((len(baselines), 3, 3))
-    removed = []
-    for j, (a, b) in enumerate(baselines):
+    n_bl = len(baselines)
+    out = np.zeros((3 * n_bl, 3 * n_bl))
+    removed, terms = [], []          # per baseline {antenna: (sign, with_pcv)}
+    for (a, b) in baselines:
         if (a, b) in cal_b:
             removed.append(f"{a}>{b}: calibrated baseline")
+            terms.append({})
             continue
         with_pcv = not any(x == a and y == b for (x, y, _f) in maps)
         if not with_pcv:
             removed.append(f"{a}>{b}: PCV map (offsets kept)")
-        for ant in (platform.antennas[a], platform.antennas[b]):
-            R = R_antenna_from_body(ant.boresight_body)
-            out[j] += R.T @ np.diag(antenna_frame_variance_m2(ant, signals, with_pcv)) @ R
+        terms.append({a: (-1.0, with_pcv), b: (1.0, with_pcv)})
+    for j in range(n_bl):
+        for k in range(n_bl):
+            for name in terms[j].keys() & terms[k].keys():   # the error both see: the PCV part only if neither maps it
+                (sj, pj), (sk, pk) = terms[j][name], terms[k][name]
+                out[3 * j:3 * j + 3, 3 * k:3 * k + 3] += sj * sk * _antenna_body_m2(
+                    platform.antennas[name], signals, pj and pk)
     declared = {k: {"pco_sigma_mm": v.pco_sigma_mm, "pcv_rms_mm": v.pcv_rms_mm} for k, v in platform.antennas.items()}
     defaulted = [k for k, v in declared.items() if v["pco_sigma_mm"] is None and v["pcv_rms_mm"] is None]
     info = {"method": "Schmidt consider: uncalibrated PCO and the offset-like part of the PCV (docs/attitude.md)",
             "declared": declared, "defaults_applied_to": defaulted,
             "default": {"pco_sigma_mm": DEFAULT_PCO_SIGMA_MM, "pcv_rms_mm": DEFAULT_PCV_RMS_MM},
             "kappa_h_v": [KAPPA_H, KAPPA_V], "removed": removed,
-            "baseline_sigma_mm": [np.sqrt(np.diag(c)).round(4).tolist() for c in out * 1e6]}
+            "baseline_sigma_mm": [np.sqrt(np.diag(out[3 * j:3 * j + 3, 3 * j:3 * j + 3]) * 1e6).round(4).tolist()
+                                  for j in range(n_bl)]}
     return out, info
 
 
 def consider_theta_rad2(q_body_from_ecef: np.ndarray, b_ecef_m: np.ndarray, C_body_m2: np.ndarray,
                         b_body_m: np.ndarray, method: str = "quest") -> np.ndarray:
     """(n, 3, 3) attitude covariance (rad^2, body small rotation) of the body baselines' covariance C_body_m2
-    (n_bl, 3, 3) for n epochs of estimated baselines b_ecef_m (n, n_bl, 3) (module doc)."""
+    (3 n_bl, 3 n_bl) for n epochs of estimated baselines b_ecef_m (n, n_bl, 3) (module doc)."""
     n, n_bl, _ = b_ecef_m.shape
     R = rot.quat_to_dcm(q_body_from_ecef)                                       # body <- ecef
-    P = np.zeros((n, 3 * n_bl, 3 * n_bl))
+    Rt_blocks = np.zeros((n, 3 * n_bl, 3 * n_bl))
     for j in range(n_bl):
-        P[:, 3 * j:3 * j + 3, 3 * j:3 * j + 3] = np.swapaxes(R, -1, -2) @ C_body_m2[j] @ R
+        Rt_blocks[:, 3 * j:3 * j + 3, 3 * j:3 * j + 3] = np.swapaxes(R, -1, -2)
+    P = Rt_blocks @ C_body_m2 @ np.swapaxes(Rt_blocks, -1, -2)
     _, P_th = attitude_from_baselines(b_ecef_m, P, b_body_m, "quest" if method == "ml" else method)
     return P_th
 

@@ -29,9 +29,17 @@ def _body(plat) -> np.ndarray:
     return np.array([plat.baseline_body_m(a, b) for a, b in plat.baselines])
 
 
-def test_attitude_term_matches_monte_carlo_of_perturbed_baselines():
+def _blk(C, j, k=None):
+    k = j if k is None else k
+    return C[3 * j:3 * j + 3, 3 * k:3 * k + 3]
+
+
+def test_attitude_term_matches_monte_carlo_of_perturbed_antennas():
     """G (R^T C R) G^T against the scatter of QUEST attitudes solved with the assumed body baselines from
-    observations of perturbed phase-centre baselines (4000 draws: the variances within 10 %, 2.2 % MC sigma)."""
+    observations of phase-centre baselines made of independently perturbed ANTENNAS (A is in both baselines, so its
+    error enters both: 4000 draws, the variances within 10 %, 2.2 % MC sigma)."""
+    from gnssatt.attitude.antenna_consider import _antenna_body_m2
+
     plat = _platform(pco_sigma_mm=1.5, pcv_rms_mm={"L1": 2.0, "L2": 2.6})
     C, _ = baseline_consider_body_m2(plat, plat.baselines, SIGNALS)
     body = _body(plat)
@@ -41,7 +49,10 @@ def test_attitude_term_matches_monte_carlo_of_perturbed_baselines():
     b_ecef = (R.T @ body.T).T[None]
     P = consider_theta_rad2(q_true[None], b_ecef, C, body)[0]
     n = 4000
-    d = np.stack([rng.multivariate_normal(np.zeros(3), C[j], n) for j in range(len(body))], 1)   # (n, n_bl, 3)
+    e = {name: rng.multivariate_normal(np.zeros(3), _antenna_body_m2(ant, SIGNALS, True), n)
+         for name, ant in plat.antennas.items()}                  # (n, 3) per antenna, body frame
+    d = np.stack([e[b] - e[a] for a, b in plat.baselines], 1)     # (n, n_bl, 3)
+    np.testing.assert_allclose(np.cov(d.reshape(n, -1).T), C, atol=0.08 * C.max())   # the cross blocks too
     obs = np.einsum("ij,nbj->nbi", R.T, body[None] + d)
     w = np.linalg.norm(body, axis=1) / np.linalg.norm(body, axis=1).sum()
     q, _ = rot.quest(np.broadcast_to(body, obs.shape), obs, np.broadcast_to(w, (n, len(body))))
@@ -50,8 +61,23 @@ def test_attitude_term_matches_monte_carlo_of_perturbed_baselines():
     emp = np.cov(th.T)
     np.testing.assert_allclose(np.diag(emp), np.diag(P), rtol=0.10)
     # the size: a tilt sigma ~ the vertical phase-centre sigma over the baseline length (~0.2 deg here)
-    sig_v = np.sqrt(C[0, 2, 2])
+    sig_v = np.sqrt(C[2, 2])
     assert 0.5 < np.degrees(np.sqrt(P[1, 1])) / np.degrees(sig_v / np.linalg.norm(body[0])) < 2.0
+
+
+def test_baselines_sharing_an_antenna_share_its_term_with_its_sign():
+    """A>B and A>C share A: their cross block is +C_A (A first in both); B>C against A>B shares B with opposite
+    places: -C_B; A>B and a disjoint baseline: zero."""
+    from gnssatt.attitude.antenna_consider import _antenna_body_m2
+
+    plat = _platform(pco_sigma_mm=1.5, pcv_rms_mm=2.0)
+    C_a = _antenna_body_m2(plat.antennas["A"], SIGNALS, True)
+    C, _ = baseline_consider_body_m2(plat, [("A", "B"), ("A", "C")], SIGNALS)
+    np.testing.assert_allclose(_blk(C, 0, 1), C_a, rtol=1e-12)
+    np.testing.assert_allclose(_blk(C, 0), 2 * C_a, rtol=1e-12)        # A and B alike here
+    C, _ = baseline_consider_body_m2(plat, [("A", "B"), ("B", "C")], SIGNALS)
+    np.testing.assert_allclose(_blk(C, 0, 1), -_antenna_body_m2(plat.antennas["B"], SIGNALS, True), rtol=1e-12)
+    assert np.all(np.linalg.eigvalsh(C) > -1e-18)                        # a covariance
 
 
 def test_body_covariance_from_the_declared_spec():
@@ -61,7 +87,7 @@ def test_body_covariance_from_the_declared_spec():
     C, info = baseline_consider_body_m2(plat, plat.baselines, SIGNALS)
     h = 2 * sum(1.5 ** 2 + (KAPPA_H * p) ** 2 for p in (2.0, 2.6)) / 4
     v = 2 * sum(1.5 ** 2 + (KAPPA_V * p) ** 2 for p in (2.0, 2.6)) / 4
-    np.testing.assert_allclose(np.diag(C[0]) * 1e6, [h, h, v], rtol=1e-12)
+    np.testing.assert_allclose(np.diag(_blk(C, 0)) * 1e6, [h, h, v], rtol=1e-12)
     assert info["defaults_applied_to"] == []
 
 
@@ -71,10 +97,12 @@ def test_vanishes_with_a_calibrated_baseline_and_keeps_only_offsets_with_a_pcv_m
     a, b = plat.baselines[0]
     cal = AntennaCalibration(calibrated_baselines={(a, b): [1.0, 0.0, 0.0]})
     C, info = baseline_consider_body_m2(plat, plat.baselines, SIGNALS, cal)
-    assert np.all(C[0] == 0) and np.array_equal(C[1], full[1]), info["removed"]
+    assert np.all(C[:3] == 0) and np.all(C[:, :3] == 0), info["removed"]
+    assert np.array_equal(_blk(C, 1), _blk(full, 1))
     maps = AntennaCalibration(pcv_maps={(a, b, "L1"): {}})
     C, _ = baseline_consider_body_m2(plat, plat.baselines, SIGNALS, maps)
-    np.testing.assert_allclose(np.diag(C[0]) * 1e6, [2 * 2 * 1.5 ** 2 / 4] * 3, rtol=1e-12)
+    np.testing.assert_allclose(np.diag(_blk(C, 0)) * 1e6, [2 * 2 * 1.5 ** 2 / 4] * 3, rtol=1e-12)
+    np.testing.assert_allclose(np.diag(_blk(C, 0, 1)) * 1e6, [2 * 1.5 ** 2 / 4] * 3, rtol=1e-12)  # shared A: offsets
     # declared zero (a clean simulated set): no term
     C, _ = baseline_consider_body_m2(_platform(pco_sigma_mm=0.0, pcv_rms_mm=0.0), plat.baselines, SIGNALS)
     assert np.all(C == 0)
@@ -84,7 +112,7 @@ def test_default_applies_where_nothing_is_declared():
     plat = _platform()
     C, info = baseline_consider_body_m2(plat, plat.baselines, ["G:L1"])
     v = 2 * (DEFAULT_PCO_SIGMA_MM ** 2 + (KAPPA_V * DEFAULT_PCV_RMS_MM) ** 2)
-    np.testing.assert_allclose(C[0, 2, 2] * 1e6, v, rtol=1e-12)
+    np.testing.assert_allclose(C[2, 2] * 1e6, v, rtol=1e-12)
     assert sorted(info["defaults_applied_to"]) == ["A", "B", "C"]
 
 
