@@ -17,6 +17,7 @@ import os
 import pickle
 import select
 import signal
+import sys
 import traceback
 from typing import Any, Callable
 
@@ -31,6 +32,22 @@ DEFAULT_TIMEOUT_S = 300.0
 
 class ForkedError(RuntimeError):
     """The forked function raised; the message holds its traceback."""
+
+
+def _die_with(parent_pid: int) -> None:
+    """In the child (Linux): be killed when the process that forked us ends (prctl PR_SET_PDEATHSIG), so a job
+    child killed by its worker (cancel, lost lease, time limit) leaves no plot or reading child running on.
+    Elsewhere a no-op: such a child still ends by itself when its work is done."""
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)   # 1 = PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent_pid:     # the parent died before the prctl took effect
+        os._exit(1)
 
 
 def _child(write_fd: int, fn: Callable[[], Any]) -> None:
@@ -61,9 +78,11 @@ class Forked:
         self._read_fd: int | None = None
         if hasattr(os, "fork"):
             read_fd, write_fd = os.pipe()
+            parent_pid = os.getpid()
             pid = os.fork()
             if pid == 0:               # the child
                 os.close(read_fd)
+                _die_with(parent_pid)
                 _child(write_fd, fn)
             os.close(write_fd)
             self._pid, self._read_fd = pid, read_fd

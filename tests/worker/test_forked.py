@@ -68,3 +68,44 @@ def test_a_child_that_dies_is_replaced_by_running_here():
         return 7
 
     assert Forked(dies_in_the_child).result() == 7
+
+
+def _start_a_long_child(queue) -> None:
+    """In a job-like process: start a forked child that would run 60 s, report its pid, then wait to be killed."""
+    forked = Forked(lambda: time.sleep(60))
+    queue.put(forked._pid)
+    time.sleep(120)
+
+
+def test_a_killed_job_process_takes_its_forked_child_with_it():
+    """A job child killed by its worker (cancel, lost lease, time limit) must not leave its plot or reading child
+    running on (it would hold a core for the rest of its work): the child dies with the process that forked it."""
+    import signal
+
+    ctx = multiprocessing.get_context("fork")
+    queue = ctx.Queue()
+    proc = ctx.Process(target=_start_a_long_child, args=(queue,), daemon=True)
+    proc.start()
+    grandchild = queue.get(timeout=60)
+    os.kill(grandchild, 0)                        # running
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.join(10)
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        try:
+            os.kill(grandchild, 0)
+        except ProcessLookupError:
+            return
+        if _is_zombie(grandchild):                # dead, its reaper (init) not yet there
+            return
+        time.sleep(0.05)
+    os.kill(grandchild, signal.SIGKILL)
+    pytest.fail(f"forked child {grandchild} still running 10 s after its parent was killed")
+
+
+def _is_zombie(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as fh:
+            return fh.read().rsplit(")", 1)[1].split()[0] == "Z"
+    except FileNotFoundError:
+        return True
