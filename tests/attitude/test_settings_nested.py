@@ -29,8 +29,9 @@ OLD_FLAT_DEFAULTS = {
     "new_amb_round_sigma_cyc": 0.08, "new_amb_round_frac_cyc": 0.2, "max_gap_s": 10.0,
     "innovation_gate_sigma": 8.0, "pcv_maps": {}, "pcv_empty_bins": "exclude", "calibrated_baselines": {},
 }
-#: group fields added after the restructuring (issue 21), with their defaults: today's behaviour
-NEW_GROUP_DEFAULTS = {"length_validation": "filter", "smoother_quiet_jerk_share": 1.0,
+#: group fields added after the restructuring (issue 21), with their defaults (length_validation: "both" since
+#: bench/bench_fix_validation.py showed "filter" alone letting wrong integers through)
+NEW_GROUP_DEFAULTS = {"length_validation": "both", "smoother_quiet_jerk_share": 1.0,
                       "smoother_noise_em_iterations": 0, "smoother_noise_em_bound": 10.0}
 OLD_TOP_DEFAULTS = {"mode": "dynamic", "signals": ["L1", "L2"], "systems": None, "rk4_step_s": 1.0,
                     "initial_attitude": "earth-pointing", "initial_q_body_from_ecef": None, "attitude_method": "quest"}
