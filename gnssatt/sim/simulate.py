@@ -561,16 +561,19 @@ def _arcs_and_integers(p: SimParams, trk: np.ndarray, cn0_f: np.ndarray, gap: np
     return arcs, n_arc, lli
 
 
-def _declared_phase_centre(p, sigs) -> dict:
-    """platform.json's declared phase-centre uncertainty of every antenna
+def _declared_phase_centre(p, sigs, antenna: str) -> dict:
+    """platform.json's declared phase-centre uncertainty of one antenna
     (docs/formats/platform_antenna_uncertainty.md): the spec the simulator draws from, not the drawn values -
-    pco_sigma_mm = the PCO scatter per axis, pcv_rms_mm per signal = the expected RMS over the upper hemisphere
-    of pcv_grid_mm's pattern (observables.PCV_RMS_PER_PEAK_TO_PEAK x the peak-to-peak x the RMS of its
-    uniform(0.8, 1) scale, x l2_pcv_factor on L2)."""
+    pco_sigma_mm = the PCO scatter per axis combined with the antenna's hidden fixed offset
+    (`antenna_offsets_mm`, the calibration preset's Table 3 shifts) as its per-axis RMS, pcv_rms_mm per signal =
+    the expected RMS over the upper hemisphere of pcv_grid_mm's pattern (observables.PCV_RMS_PER_PEAK_TO_PEAK x
+    the peak-to-peak x the RMS of its uniform(0.8, 1) scale, x l2_pcv_factor on L2)."""
     scale_rms = float(np.sqrt((1.0 - 0.8 ** 3) / (3 * 0.2)))
     pcv = {f: round(ob.PCV_RMS_PER_PEAK_TO_PEAK * p.pcv_peak_to_peak_mm * scale_rms
                     * (p.l2_pcv_factor if f == "L2" else 1.0), 3) if p.pcv else 0.0 for f in sigs}
-    return {"pco_sigma_mm": float(p.pco_scatter_mm) if p.pco else 0.0, "pcv_rms_mm": pcv}
+    scatter_mm = float(p.pco_scatter_mm) if p.pco else 0.0
+    hidden_ms_mm2 = float(np.mean(np.square(p.antenna_offsets_mm.get(antenna, [0.0, 0.0, 0.0]))))
+    return {"pco_sigma_mm": round(float(np.sqrt(scatter_mm ** 2 + hidden_ms_mm2)), 3), "pcv_rms_mm": pcv}
 
 
 def _write_platform_files(ctx: _SetContext, antennas: dict, obs_files: dict) -> None:
@@ -588,7 +591,7 @@ def _write_platform_files(ctx: _SetContext, antennas: dict, obs_files: dict) -> 
     ant_ids = list(p.antennas)
     pj = {"name": p.platform_name, "kind": p.kind,
           "antennas": {a: {"position_m": [float(v) for v in antennas[a]["pos"]],
-                           "boresight": [float(v) for v in antennas[a]["bore"]], **_declared_phase_centre(p, ctx.sigs)}
+                           "boresight": [float(v) for v in antennas[a]["bore"]], **_declared_phase_centre(p, ctx.sigs, a)}
                        for a in ant_ids},
           "master": p.master, "baselines": [[p.master, a] for a in ant_ids if a != p.master],
           "observation_files": obs_files}

@@ -174,3 +174,20 @@ def test_process_adds_the_term_and_moves_no_estimate(realistic_pass, tmp_path):
     assert sol.summary["smoother"]["covariance"]["antenna_consider_deg"] == med
     # pco 1.5 mm, pcv 2.1 / 2.7 mm on ~1.1 m baselines: vertical ~3.6 mm differential -> ~0.2 deg of tilt
     assert 0.1 < med[1] < 0.3 and 0.1 < med[2] < 0.3, med
+
+
+def test_simulated_platform_declares_what_the_simulator_hides(tmp_path):
+    """The calibration preset shifts GPS-0 and GPS-1 by seed 000 Table 3's offsets (8-10 mm); its platform.json
+    must declare a phase-centre sigma that covers them (per axis: sqrt(scatter^2 + the offset's mean square)), or
+    the consider term understates the attitude's error on such a set; GPS-2 (no offset) keeps the bare scatter."""
+    from gnssatt.sim import simulate_scenario
+    from gnssatt.sim.scenarios import CASSIOPE_TABLE3_OFFSETS_MM, make_params
+
+    p = make_params("calibration", {"duration_s": 60.0, "count": 1})
+    simulate_scenario("calibration", tmp_path / "cal", overrides={"duration_s": 60.0, "count": 1})
+    doc = json.loads(next((tmp_path / "cal").rglob("platform.json")).read_text())
+    scatter = float(p.pco_scatter_mm) if p.pco else 0.0
+    for name, off in CASSIOPE_TABLE3_OFFSETS_MM.items():
+        want = np.sqrt(scatter ** 2 + np.mean(np.square(off)))
+        assert doc["antennas"][name]["pco_sigma_mm"] == pytest.approx(want, abs=1e-3), name
+    assert doc["antennas"]["GPS-0"]["pco_sigma_mm"] > 5.0        # 2.10 / -7.86 / -5.68 mm: 5.7 mm RMS per axis
