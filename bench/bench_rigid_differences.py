@@ -11,7 +11,9 @@ chi-square of their 6 errors against the (unscaled) smoothed covariance, rigid a
 --onset (seeds --seeds, pitch manoeuvre): Table 1's forward filter, max error after the first 30 s of fixes and its
 epoch, 95th percentile, mean after 30 s, additive and rigid; and the peak over t = 60-90 s (the pitch-up's onset)
 with the retraction's two parts apart: the estimate additive with P turned (`turn_only`), the retraction without
-the turn (`no_turn`).
+the turn (`no_turn`); and the retraction with P <- J P J^T (`jacobian`), J = d(retraction)/d(x+) of the whole
+state by central differences (identity outside the baselines' rows; the coupling of the baselines through the
+common rotation included), against the code's per-baseline turn.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_rigid_differences.py --first-fix [--seeds 0-7]
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_rigid_differences.py --onset [--seeds 0-23]
@@ -84,10 +86,33 @@ def last_backward_pass(step, keep: dict):
         SM.backward_pass = orig
 
 
+def retraction_jacobian(b_m: np.ndarray, b_prior_m: np.ndarray, active: np.ndarray, h_m: float = 1e-6) -> np.ndarray:
+    """(3 n_bl, 3 n_bl) d(retracted baselines)/d(baselines after the additive update) at b_m (n_bl, 3) by central
+    differences of step h_m (baselines ~1 m: ~1e-9 relative truncation) of rigid_update.rigid_retract."""
+    from gnssatt.attitude.rigid_update import rigid_retract
+
+    n = b_prior_m.shape[0]
+    idx = np.arange(3 * n).reshape(n, 3)
+
+    def f(bvec):
+        x = bvec.copy()
+        rigid_retract(x, np.eye(3 * n), b_prior_m, idx, active)
+        return x
+
+    b = b_m.ravel()
+    J = np.empty((3 * n, 3 * n))
+    for i in range(3 * n):
+        e = np.zeros(3 * n)
+        e[i] = h_m
+        J[:, i] = (f(b + e) - f(b - e)) / (2.0 * h_m)
+    return J
+
+
 @contextlib.contextmanager
 def retraction(variant: str):
-    """The forward filter's rigid retraction as given ("rigid"), without its turn of P ("no_turn"), or only that
-    turn with the additive estimate ("turn_only") (gnssatt.attitude.boxes.measurement_update's reference to it)."""
+    """The forward filter's rigid retraction as given ("rigid"), without its turn of P ("no_turn"), only that
+    turn with the additive estimate ("turn_only"), or with P <- J P J^T ("jacobian", retraction_jacobian)
+    (gnssatt.attitude.boxes.measurement_update's reference to it)."""
     import gnssatt.attitude.boxes.measurement_update as MU
     from gnssatt.attitude.rigid_update import rigid_retract
 
@@ -103,7 +128,16 @@ def retraction(variant: str):
         x[:] = x0
         return out
 
-    MU.rigid_retract = {"rigid": rigid_retract, "no_turn": no_turn, "turn_only": turn_only}[variant]
+    def jacobian(x, P, b_prior, b_idx, active):
+        idx = b_idx.ravel()
+        J = retraction_jacobian(x[idx].reshape(-1, 3), b_prior, active)
+        out = rigid_retract(x, np.zeros_like(P), b_prior, b_idx, active)      # the estimate only
+        P[idx, :] = J @ P[idx, :]
+        P[:, idx] = P[:, idx] @ J.T
+        return out
+
+    MU.rigid_retract = {"rigid": rigid_retract, "no_turn": no_turn, "turn_only": turn_only,
+                        "jacobian": jacobian}[variant]
     try:
         yield
     finally:
@@ -156,14 +190,15 @@ def first_fix_line(d: Path, inputs) -> str:
 def onset_line(d: Path, inputs) -> str:
     out = []
     for name, update, variant in (("additive", "additive", "rigid"), ("rigid", "rigid", "rigid"),
-                                  ("turn_only", "rigid", "turn_only"), ("no_turn", "rigid", "no_turn")):
+                                  ("turn_only", "rigid", "turn_only"), ("no_turn", "rigid", "no_turn"),
+                                  ("jacobian", "rigid", "jacobian")):
         with retraction(variant):
             _, ang, fi, t = run(d, inputs, update, {})
         late = fi[t[fi] > t[fi[0]] + 30.0]
         onset = fi[(t[fi] > 60.0) & (t[fi] < 90.0)]
         km = late[np.argmax(ang[late])]
         s = f"{name}: onset peak {ang[onset].max():.3f}"
-        if name in ("additive", "rigid"):
+        if name in ("additive", "rigid", "jacobian"):
             s += (f" max after 30 s {ang[late].max():.3f} at t {t[km]:.0f} s p95 {np.percentile(ang[fi], 95):.3f} "
                   f"mean after 30 s {ang[late].mean():.4f}")
         out.append(s)
