@@ -17,6 +17,11 @@ common rotation included), against the code's per-baseline turn.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_rigid_differences.py --first-fix [--seeds 0-7]
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_rigid_differences.py --onset [--seeds 0-23]
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_rigid_differences.py --onset-sigmas [--seeds 7]
+
+--onset-sigmas: the forward filter's sigmas after each update through the pitch-up's onset, additive and rigid:
+length (along the estimate b) and across b (rms of the two axes), mm, mean over the baselines, and omega (deg/s,
+rms of the three axes), with the attitude error.
 """
 from __future__ import annotations
 
@@ -205,10 +210,59 @@ def onset_line(d: Path, inputs) -> str:
     return "\t".join(out)
 
 
+@contextlib.contextmanager
+def recorded_sigmas(rec: list):
+    """gnssatt.attitude.filter's measurement_update followed by a record (t, length sigma mm, across-b sigma mm,
+    omega sigma deg/s) once every baseline has been fixed."""
+    import gnssatt.attitude.filter as F
+
+    orig = F.measurement_update
+
+    def wrap(run_, ep):
+        orig(run_, ep)
+        if run_.dynamic and run_.ever_fixed.all():
+            x, P = run_.st.x, run_.st.P
+            rad, across = [], []
+            for ix in run_.b_idx:
+                u, B = x[ix] / np.linalg.norm(x[ix]), P[np.ix_(ix, ix)]
+                rad.append(u @ B @ u)
+                across.append((np.trace(B) - u @ B @ u) / 2.0)
+            rec.append((float(ep.t), 1e3 * np.mean(np.sqrt(rad)), 1e3 * np.mean(np.sqrt(across)),
+                        float(np.degrees(np.sqrt(np.trace(P[:3, :3]) / 3.0)))))
+
+    F.measurement_update = wrap
+    try:
+        yield
+    finally:
+        F.measurement_update = orig
+
+
+def onset_sigmas_lines(d: Path, inputs) -> list[str]:
+    """At t = 40-100 s: the attitude error and the recorded sigmas (recorded_sigmas) of additive and rigid
+    (the filter's epoch time ep.t is seconds from the first epoch, as run's t)."""
+    out = {}
+    for update in ("additive", "rigid"):
+        rec = []
+        with recorded_sigmas(rec):
+            _, ang, fi, t = run(d, inputs, update, {})
+        out[update] = ang, fi, t, np.array(rec)
+    lines = []
+    for tq in (40, 60, 65, 70, 72, 75, 78, 81, 85, 90, 100):
+        s = f"t {tq} s"
+        for update, (ang, fi, t, rec) in out.items():
+            i = fi[np.argmin(abs(t[fi] - tq))]
+            r = rec[np.argmin(abs(rec[:, 0] - tq))]
+            s += (f"\t{update}: error {ang[i]:.3f} deg (t {t[i]:.0f}), sigma length {r[1]:.4f} mm across {r[2]:.3f} "
+                  f"mm omega {r[3]:.5f} deg/s (t {r[0]:.0f})")
+        lines.append(s)
+    return lines
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--first-fix", action="store_true")
     ap.add_argument("--onset", action="store_true")
+    ap.add_argument("--onset-sigmas", action="store_true")
     ap.add_argument("--seeds", default="0-7", help="a-b or a,b,c")
     args = ap.parse_args()
     from gnssatt.attitude.process import load_inputs
@@ -216,14 +270,18 @@ def main() -> None:
 
     a, _, b = args.seeds.partition("-")
     seeds = range(int(a), int(b) + 1) if b else [int(s) for s in args.seeds.split(",")]
-    slews = ([(lb, o) for lb, o in SLEWS.items()] if args.first_fix else []) if not args.onset else \
-        [("pitch manoeuvre (11 min)", SLEWS["pitch manoeuvre (11 min)"])]
+    pitch = [("pitch manoeuvre (11 min)", SLEWS["pitch manoeuvre (11 min)"])]
+    slews = pitch if (args.onset or args.onset_sigmas) else list(SLEWS.items()) if args.first_fix else []
     with tempfile.TemporaryDirectory() as tmp:
         for label, over in slews:
             for seed in seeds:
                 d = Path(tmp) / f"{label[:3]}{seed}"
                 simulate_scenario("slew", d, seed=seed, overrides={**over, **CLEAN})
                 inputs = load_inputs(files_of(d))
+                if args.onset_sigmas:
+                    for line in onset_sigmas_lines(d, inputs):
+                        print(f"{label}\t{seed}\t{line}", flush=True)
+                    continue
                 line = onset_line(d, inputs) if args.onset else first_fix_line(d, inputs)
                 print(f"{label}\t{seed}\t{line}", flush=True)
 
