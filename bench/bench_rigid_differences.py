@@ -11,10 +11,17 @@ chi-square of their 6 errors against the (unscaled) smoothed covariance, rigid a
 --onset (seeds --seeds, pitch manoeuvre): Table 1's forward filter, max error after the first 30 s of fixes and its
 epoch, 95th percentile, mean after 30 s, additive and rigid; and the peak over t = 60-90 s (the pitch-up's onset)
 with the retraction's two parts apart: the estimate additive with P turned (`turn_only`), the retraction without
-the turn (`no_turn`).
+the turn (`no_turn`); and the retraction with P <- J P J^T (`jacobian`), J = d(retraction)/d(x+) of the whole
+state by central differences (identity outside the baselines' rows; the coupling of the baselines through the
+common rotation included), against the code's per-baseline turn.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_rigid_differences.py --first-fix [--seeds 0-7]
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_rigid_differences.py --onset [--seeds 0-23]
+    OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_rigid_differences.py --onset-sigmas [--seeds 7]
+
+--onset-sigmas: the forward filter's sigmas after each update through the pitch-up's onset, additive and rigid:
+length (along the estimate b) and across b (rms of the two axes), mm, mean over the baselines, and omega (deg/s,
+rms of the three axes), with the attitude error.
 """
 from __future__ import annotations
 
@@ -84,10 +91,33 @@ def last_backward_pass(step, keep: dict):
         SM.backward_pass = orig
 
 
+def retraction_jacobian(b_m: np.ndarray, b_prior_m: np.ndarray, active: np.ndarray, h_m: float = 1e-6) -> np.ndarray:
+    """(3 n_bl, 3 n_bl) d(retracted baselines)/d(baselines after the additive update) at b_m (n_bl, 3) by central
+    differences of step h_m (baselines ~1 m: ~1e-9 relative truncation) of rigid_update.rigid_retract."""
+    from gnssatt.attitude.rigid_update import rigid_retract
+
+    n = b_prior_m.shape[0]
+    idx = np.arange(3 * n).reshape(n, 3)
+
+    def f(bvec):
+        x = bvec.copy()
+        rigid_retract(x, np.eye(3 * n), b_prior_m, idx, active)
+        return x
+
+    b = b_m.ravel()
+    J = np.empty((3 * n, 3 * n))
+    for i in range(3 * n):
+        e = np.zeros(3 * n)
+        e[i] = h_m
+        J[:, i] = (f(b + e) - f(b - e)) / (2.0 * h_m)
+    return J
+
+
 @contextlib.contextmanager
 def retraction(variant: str):
-    """The forward filter's rigid retraction as given ("rigid"), without its turn of P ("no_turn"), or only that
-    turn with the additive estimate ("turn_only") (gnssatt.attitude.boxes.measurement_update's reference to it)."""
+    """The forward filter's rigid retraction as given ("rigid"), without its turn of P ("no_turn"), only that
+    turn with the additive estimate ("turn_only"), or with P <- J P J^T ("jacobian", retraction_jacobian)
+    (gnssatt.attitude.boxes.measurement_update's reference to it)."""
     import gnssatt.attitude.boxes.measurement_update as MU
     from gnssatt.attitude.rigid_update import rigid_retract
 
@@ -103,7 +133,16 @@ def retraction(variant: str):
         x[:] = x0
         return out
 
-    MU.rigid_retract = {"rigid": rigid_retract, "no_turn": no_turn, "turn_only": turn_only}[variant]
+    def jacobian(x, P, b_prior, b_idx, active):
+        idx = b_idx.ravel()
+        J = retraction_jacobian(x[idx].reshape(-1, 3), b_prior, active)
+        out = rigid_retract(x, np.zeros_like(P), b_prior, b_idx, active)      # the estimate only
+        P[idx, :] = J @ P[idx, :]
+        P[:, idx] = P[:, idx] @ J.T
+        return out
+
+    MU.rigid_retract = {"rigid": rigid_retract, "no_turn": no_turn, "turn_only": turn_only,
+                        "jacobian": jacobian}[variant]
     try:
         yield
     finally:
@@ -156,24 +195,74 @@ def first_fix_line(d: Path, inputs) -> str:
 def onset_line(d: Path, inputs) -> str:
     out = []
     for name, update, variant in (("additive", "additive", "rigid"), ("rigid", "rigid", "rigid"),
-                                  ("turn_only", "rigid", "turn_only"), ("no_turn", "rigid", "no_turn")):
+                                  ("turn_only", "rigid", "turn_only"), ("no_turn", "rigid", "no_turn"),
+                                  ("jacobian", "rigid", "jacobian")):
         with retraction(variant):
             _, ang, fi, t = run(d, inputs, update, {})
         late = fi[t[fi] > t[fi[0]] + 30.0]
         onset = fi[(t[fi] > 60.0) & (t[fi] < 90.0)]
         km = late[np.argmax(ang[late])]
         s = f"{name}: onset peak {ang[onset].max():.3f}"
-        if name in ("additive", "rigid"):
+        if name in ("additive", "rigid", "jacobian"):
             s += (f" max after 30 s {ang[late].max():.3f} at t {t[km]:.0f} s p95 {np.percentile(ang[fi], 95):.3f} "
                   f"mean after 30 s {ang[late].mean():.4f}")
         out.append(s)
     return "\t".join(out)
 
 
+@contextlib.contextmanager
+def recorded_sigmas(rec: list):
+    """gnssatt.attitude.filter's measurement_update followed by a record (t, length sigma mm, across-b sigma mm,
+    omega sigma deg/s) once every baseline has been fixed."""
+    import gnssatt.attitude.filter as F
+
+    orig = F.measurement_update
+
+    def wrap(run_, ep):
+        orig(run_, ep)
+        if run_.dynamic and run_.ever_fixed.all():
+            x, P = run_.st.x, run_.st.P
+            rad, across = [], []
+            for ix in run_.b_idx:
+                u, B = x[ix] / np.linalg.norm(x[ix]), P[np.ix_(ix, ix)]
+                rad.append(u @ B @ u)
+                across.append((np.trace(B) - u @ B @ u) / 2.0)
+            rec.append((float(ep.t), 1e3 * np.mean(np.sqrt(rad)), 1e3 * np.mean(np.sqrt(across)),
+                        float(np.degrees(np.sqrt(np.trace(P[:3, :3]) / 3.0)))))
+
+    F.measurement_update = wrap
+    try:
+        yield
+    finally:
+        F.measurement_update = orig
+
+
+def onset_sigmas_lines(d: Path, inputs) -> list[str]:
+    """At t = 40-100 s: the attitude error and the recorded sigmas (recorded_sigmas) of additive and rigid
+    (the filter's epoch time ep.t is seconds from the first epoch, as run's t)."""
+    out = {}
+    for update in ("additive", "rigid"):
+        rec = []
+        with recorded_sigmas(rec):
+            _, ang, fi, t = run(d, inputs, update, {})
+        out[update] = ang, fi, t, np.array(rec)
+    lines = []
+    for tq in (40, 60, 65, 70, 72, 75, 78, 81, 85, 90, 100):
+        s = f"t {tq} s"
+        for update, (ang, fi, t, rec) in out.items():
+            i = fi[np.argmin(abs(t[fi] - tq))]
+            r = rec[np.argmin(abs(rec[:, 0] - tq))]
+            s += (f"\t{update}: error {ang[i]:.3f} deg (t {t[i]:.0f}), sigma length {r[1]:.4f} mm across {r[2]:.3f} "
+                  f"mm omega {r[3]:.5f} deg/s (t {r[0]:.0f})")
+        lines.append(s)
+    return lines
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--first-fix", action="store_true")
     ap.add_argument("--onset", action="store_true")
+    ap.add_argument("--onset-sigmas", action="store_true")
     ap.add_argument("--seeds", default="0-7", help="a-b or a,b,c")
     args = ap.parse_args()
     from gnssatt.attitude.process import load_inputs
@@ -181,14 +270,18 @@ def main() -> None:
 
     a, _, b = args.seeds.partition("-")
     seeds = range(int(a), int(b) + 1) if b else [int(s) for s in args.seeds.split(",")]
-    slews = ([(lb, o) for lb, o in SLEWS.items()] if args.first_fix else []) if not args.onset else \
-        [("pitch manoeuvre (11 min)", SLEWS["pitch manoeuvre (11 min)"])]
+    pitch = [("pitch manoeuvre (11 min)", SLEWS["pitch manoeuvre (11 min)"])]
+    slews = pitch if (args.onset or args.onset_sigmas) else list(SLEWS.items()) if args.first_fix else []
     with tempfile.TemporaryDirectory() as tmp:
         for label, over in slews:
             for seed in seeds:
                 d = Path(tmp) / f"{label[:3]}{seed}"
                 simulate_scenario("slew", d, seed=seed, overrides={**over, **CLEAN})
                 inputs = load_inputs(files_of(d))
+                if args.onset_sigmas:
+                    for line in onset_sigmas_lines(d, inputs):
+                        print(f"{label}\t{seed}\t{line}", flush=True)
+                    continue
                 line = onset_line(d, inputs) if args.onset else first_fix_line(d, inputs)
                 print(f"{label}\t{seed}\t{line}", flush=True)
 

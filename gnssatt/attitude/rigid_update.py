@@ -22,6 +22,11 @@ angle between the two baselines of the clean 106-min pass drifted by -0.09 deg (
 stays within 0.01 deg of -0.003 deg after the first 5 minutes). So phi is applied exactly, b_j <- exp(phi) (b_j +
 db_j - phi x b_j) (the remainder, first order, added before the turn) with the length as above, and P's block of b_j
 turned by exp(phi) followed by the small turn that takes exp(phi) r to the new direction: the body's rotation.
+Against the first-order covariance of the retracted state, J P J^T with J = d(retraction)/d(b + db): J's length row
+is exactly the turn's (u1^T J = r^T on the baseline's own move, 0 on the others'); its across-b rows differ by terms
+of the order of phi (the exponential map's derivative, the coupling through phi), which change Table 1's filter on
+seed 000 Fig. 6's pitch-up by -0.001..+0.003 deg (docs/BENCHMARKS.md "Rigid update: the covariance turn against the
+retraction's Jacobian"), so the turn is kept.
 
 Implements: the reset step of the multiplicative EKF (Markley 2003, "Attitude error representations for Kalman
 filtering", J. Guid. Control Dyn. 26(2); Sola 2017, "Quaternion kinematics for the error-state Kalman filter",

@@ -277,10 +277,11 @@ class AttitudeSettings:
              "lengths drift by mm over an hour; 5e-4 keeps them within 0.07 mm on the clean 106-min pass); 0: off "
              "(m).", ge=0, le=1)
     baseline_update: Literal["additive", "rigid"] = _f(
-        "additive", "Dynamic mode: how the measurement update moves a fixed baseline. 'additive': b + db (its "
-                    "length grows by |db across b|^2 / 2|b| per epoch, mm over an hour); 'rigid': the direction of "
-                    "b + db with the length changed by the part of db along b only, and the covariance turned with "
-                    "it (gnssatt.attitude.rigid_update).")
+        "rigid", "Dynamic mode: how the measurement update moves a fixed baseline. 'rigid' (default): the "
+                 "baselines turned as one body by the update's common rotation, each length changed by the part of "
+                 "db along b only, and the covariance turned with them (gnssatt.attitude.rigid_update; lengths "
+                 "without drift); 'additive': b + db (its length grows by |db across b|^2 / 2|b| per epoch, mm over "
+                 "an hour).")
     angular_acceleration_state: bool = _f(
         False, "Dynamic mode: an angular acceleration (3 states, rad/s^2) after the angular velocity, a random walk "
                "of rate sigma_angular_jerk_deg_s3 (constant-acceleration model, gnssatt.attitude.angular_acceleration;"

@@ -119,12 +119,13 @@ def test_smoother_removes_the_lag_of_the_pitch_up(pitch_up):
     (max_f, lag_f, _), (max_s, lag_s, sol_s) = out[False], out[True]
     # the forward filter with Table 1's random walk lags the pitch-up (the paper: up to 1 deg)
     assert lag_f > 0.4 and max_f > 0.6, (lag_f, max_f)
-    # the smoother: lag and maximum error after convergence (measured 0.26 / 0.31 deg on this pass, forward filter
-    # 0.64 / 0.83 deg)
+    # the smoother: lag and maximum error after convergence (measured 0.19 / 0.24 deg on this pass with the rigid
+    # update, the default, forward filter 0.70 / 0.86 deg; `baseline_update: additive` 0.26 / 0.31 and 0.64 / 0.83:
+    # the rigid forward filter's higher lag peak at the onset, docs/attitude.md "Known limits")
     assert lag_s < 0.5 * lag_f and max_s < 0.4, (lag_s, max_s)
     # its sigmas are not optimistic after convergence: std(error / sigma) per angle not above 1.2 (measured
-    # 0.50 / 0.64 / 0.46: conservative, as the forward filter's on white-noise data, because the multipath model's
-    # share is kept at its filtered value; the forward filter's pitch 1.70 with its lag)
+    # 0.58 / 0.78 / 0.54: conservative, as the forward filter's on white-noise data, because the multipath model's
+    # share is kept at its filtered value; the forward filter's pitch 1.62 with its lag)
     _, de = attitude_errors_deg(d, sol_s)
     t = np.asarray(sol_s.pobs.time - sol_s.pobs.time[0], float)[sol_s.att_epochs]
     late = sol_s.att_fixed & (t > t[int(np.argmax(sol_s.att_fixed))] + 30.0)
@@ -227,10 +228,11 @@ def test_adaptive_noise_keeps_the_pitch_up_below_0_3_deg(pitch_up):
         late = f & (t > t0 + 30.0)
         out[key] = ang[late].max(), (de / sol.sigma_euler_deg)[late].std(axis=0), sol
     (max_s, _, sol_s), (max_a, z_a, sol_a) = out[True], out["adaptive"]
-    # the plain smoother is near the limit on this pass (measured 0.31 deg), the adaptive noise below it (measured
-    # 0.26 deg with the second pass)
-    assert max_s > 0.28 and max_a < 0.3 and max_a < max_s - 0.02, (max_s, max_a)
-    assert np.all(z_a < 1.2), z_a                                     # sigmas not optimistic (measured 0.48 / 0.45 / 0.51)
+    # with the rigid update (the default) the plain smoother is below the limit on this pass too (measured 0.24 deg;
+    # 0.31 with `baseline_update: additive`, whose lengths drift), the adaptive noise lower still (measured 0.19 deg
+    # with the second pass; additive 0.23): the second pass takes 0.05 deg off the lag peak, at least 0.02 required
+    assert max_s < 0.3 and max_a < 0.3 and max_a < max_s - 0.02, (max_s, max_a)
+    assert np.all(z_a < 1.2), z_a                                     # sigmas not optimistic (measured 0.66 / 0.58 / 0.68)
     # the second pass is a whole filter run: no fix lost, the first fix at the same epoch; it starts its noise
     # estimator where the first pass ended (FilterRun.start_noise_from, the first pass's phase noise above Table 1's
     # 3 mm floor), so the float epochs before the fix differ too
