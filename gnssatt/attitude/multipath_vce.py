@@ -19,6 +19,13 @@ estimate s = sum(products) / sum(expected per unit s), the sums averaged over an
 - biased low by rho(1) (1.7 % for tau = 60 s at 1 Hz), and high by up to 1 / (1 - absorbed share) where a dynamic
   filter absorbs less of m than an epoch-by-epoch solution (measured on the simulator's Gauss-Markov multipath alone,
   truth 0.98: 0.97 kinematic, 1.06 dynamic over 30 minutes; tests/attitude/test_multipath_vce.py).
+The lag-0 sums then give the white part as a diagnostic (summary.json noise_model "white_phase_scale_residuals"):
+E[sum_i r_k,i^2] = s_w x sum_ij (M_k)_ij^2 v_white,j + s x sum_ij (M_k)_ij^2 v_mp,j, s_w the white variance over
+the filter's (1: the triple differences' estimate is right); for epoch-by-epoch solutions (kinematic mode) high
+only by the correlated variance's 1 - rho(1), in dynamic mode also where the filter absorbs less noise than M.
+Measured (seed-0 106-min passes, kinematic / dynamic): clean 1.07 / 1.19 (the simulator's white variance over the
+triple differences' estimate: 1.13), slew 1.12 / 1.30, realistic 0.88 / 0.97, hard 0.87 / 0.98.
+
 The leverage formula (multipath_adaptive_method "leverage", gnssatt.attitude.reference_update.multipath_scale_sums)
 solves E[r^2] = R (1 - h) for s instead, which holds only where the filter's R is right (docs/attitude.md).
 """
@@ -28,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LagEpoch", "residual_maker", "lag_epoch", "lag1_sums", "MultipathVce"]
+__all__ = ["LagEpoch", "residual_maker", "lag_epoch", "lag1_sums", "lag0_sums", "MultipathVce"]
 
 
 @dataclass
@@ -39,6 +46,7 @@ class LagEpoch:
     resid_m: np.ndarray    # (n,) post-fit residuals (m)
     v_mp_m2: np.ndarray    # (n,) configured correlated variance v_mp (m^2, before any scale)
     M: np.ndarray          # (n, n) residual maker I - A (A^T W A)^+ A^T W
+    v_white_m2: np.ndarray | None = None   # (n,) the filter's white variance (m^2), for the lag-0 sums
 
 
 def residual_maker(A: np.ndarray, var_m2: np.ndarray) -> np.ndarray:
@@ -55,17 +63,23 @@ def residual_maker(A: np.ndarray, var_m2: np.ndarray) -> np.ndarray:
 
 
 def lag_epoch(t_s: float, key: np.ndarray, cols: np.ndarray, coef: np.ndarray, var_m2: np.ndarray,
-              v_mp_m2: np.ndarray, post_m: np.ndarray, sel: np.ndarray) -> LagEpoch:
+              v_mp_m2: np.ndarray, post_m: np.ndarray, sel: np.ndarray, mp_mult: float = 0.0) -> LagEpoch:
     """The LagEpoch of the rows sel of an update (update_records.UpdateOutputs: cols / coef (m, 5), columns 0..3
     baseline and phase clock), key (m,) int64 the rows' arcs (unique within an epoch): A the dense columns 0..3 of
-    those rows."""
+    those rows; the white variance var - mp_mult x v_mp (mp_mult the update's multipath multiplier)."""
     rows = np.flatnonzero(sel)
     c, a = cols[rows, :4], coef[rows, :4]
     uniq, inv = np.unique(c, return_inverse=True)          # phase rows: every one of the 4 columns is set
     A = np.zeros((rows.size, uniq.size))
     A[np.repeat(np.arange(rows.size), 4), inv.ravel()] = a.ravel()        # the 4 columns of a row differ
     return LagEpoch(float(t_s), key[rows].astype(np.int64), post_m[rows].copy(), v_mp_m2[rows].copy(),
-                    residual_maker(A, var_m2[rows]))
+                    residual_maker(A, var_m2[rows]), var_m2[rows] - mp_mult * v_mp_m2[rows])
+
+
+def lag0_sums(cur: LagEpoch) -> tuple[float, float, float]:
+    """(sum r_i^2, sum_ij M_ij^2 v_white,j, sum_ij M_ij^2 v_mp,j) of one epoch (module doc)."""
+    M2 = cur.M * cur.M
+    return float(np.dot(cur.resid_m, cur.resid_m)), float(np.sum(M2 @ cur.v_white_m2)), float(np.sum(M2 @ cur.v_mp_m2))
 
 
 def lag1_sums(prev: LagEpoch, cur: LagEpoch) -> tuple[float, float, int]:
@@ -90,6 +104,7 @@ class MultipathVce:
         self.num = self.den = 0.0
         self.n_ep = 0
         self.prev: LagEpoch | None = None
+        self.sq = np.zeros(3)          # averaged lag-0 sums (lag0_sums), same weights
 
     def add(self, cur: LagEpoch) -> bool:
         """Add one epoch (a LagEpoch, or None: the arcs break); True when the sums changed."""
@@ -102,8 +117,16 @@ class MultipathVce:
         a = 1.0 / min(self.n_ep + 1.0, self.memory)
         self.num += a * (num - self.num)
         self.den += a * (den - self.den)
+        if cur.v_white_m2 is not None:
+            self.sq += a * (np.array(lag0_sums(cur)) - self.sq)
         self.n_ep += 1
         return True
+
+    def white_scale(self) -> float | None:
+        """s_w of the module doc from the averaged sums (with the clipped s), or None before any epoch."""
+        if self.n_ep == 0 or self.sq[1] <= 0:
+            return None
+        return float((self.sq[0] - self.scale(0.0) * self.sq[2]) / self.sq[1])
 
     def scale(self, default: float) -> float:
         """The estimate s, or default before any epoch was added."""
@@ -113,8 +136,9 @@ class MultipathVce:
 
     def state(self) -> dict:
         """The averaged sums and their count (a second pass starts from them; the arcs restart)."""
-        return {"num": self.num, "den": self.den, "n_ep": self.n_ep}
+        return {"num": self.num, "den": self.den, "n_ep": self.n_ep, "sq": self.sq.copy()}
 
     def start_from(self, state: dict) -> None:
         """Continue from state()."""
         self.num, self.den, self.n_ep, self.prev = float(state["num"]), float(state["den"]), int(state["n_ep"]), None
+        self.sq = np.array(state["sq"], float)

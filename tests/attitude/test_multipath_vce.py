@@ -35,7 +35,7 @@ def _gauss_markov(rng, sigma_m):
     return x
 
 
-def _run(seed: int, sigma_gm_m: float, var_assumed_factor: np.ndarray):
+def _run(seed: int, sigma_gm_m: float, var_assumed_factor: np.ndarray, vce_out: list | None = None):
     """(VCE scale unclipped, leverage-formula scale): residuals of the WLS fit (weights 1 / (var_assumed_factor x
     the true variance)) of e = white + GM, fed to both estimators; the leverage formula gets the assumed white
     variance (as the filter would use a wrong R)."""
@@ -54,10 +54,13 @@ def _run(seed: int, sigma_gm_m: float, var_assumed_factor: np.ndarray):
         coef = np.column_stack([-u[k], np.ones(N_SAT), np.full(N_SAT, 0.19)])
         A = coef[:, :4]
         post = residual_maker(A, var) @ e[k]
-        vce.add(lag_epoch(k * DT_S, np.arange(N_SAT), cols, coef, var, v_mp, post, np.ones(N_SAT, bool)))
+        vce.add(lag_epoch(k * DT_S, np.arange(N_SAT), cols, coef, var, v_mp, post, np.ones(N_SAT, bool),
+                          float(np.mean(var_assumed_factor)) * sigma_gm_m ** 2 / SIGMA_CFG_M ** 2))
         P_post = np.linalg.inv(A.T @ (A / var[:, None]))
         n, d, _ = multipath_scale_sums(A, P_post, var, v_white_assumed, v_mp, post, np.ones(N_SAT, bool))
         lev_num, lev_den = lev_num + n, lev_den + d
+    if vce_out is not None:
+        vce_out.append(vce)
     return vce.num / vce.den, lev_num / lev_den
 
 
@@ -89,6 +92,17 @@ def test_a_misspecified_r_does_not_bias_the_scale_but_biases_the_leverage_formul
     s0, s0_lev = _run(4, 0.0, wrong)
     assert abs(s0) < 0.06, s0
     assert abs(s0_lev) > 1.0, s0_lev
+
+
+def test_white_scale_from_the_lag0_sums():
+    """The white variance over the filter's: 1 with the right white variance, 0.5 where the filter assumes twice
+    it (uniform factor: the white part of the assumed variance is 2 x the true one). Measured 1.051 / 0.526: the
+    lag-1 scale is low by rho(1) = 0.983 of the GM's 36 mm^2, which leaves 0.6 of the white 16 mm^2 (+3.8 %); the
+    lag-0 and lag-1 sums share the GM realisation, so the sampling part is small; 10 % covers both."""
+    for factor, want in ((1.0, 1.0), (2.0, 0.5)):
+        out = []
+        _run(5, 0.006, np.full(N_SAT, factor), out)
+        assert abs(out[0].white_scale() / want - 1) < 0.1, (factor, out[0].white_scale())
 
 
 def test_lag1_sums_pair_only_the_common_arcs():

@@ -100,7 +100,8 @@ def _multipath_vce(run: FilterRun, ep: EpochData, out: UpdateOutputs) -> None:
         return
     key = np.full(out.z.size, -1, np.int64)
     key[mc_n:] = run.st.amb_arc[out.cols[mc_n:, 4] - run.st.n_fixed_part]     # one id per arc
-    if run.mp_vce.add(lag_epoch(ep.t, key, out.cols, out.coef, out.var_m2, out.v_mp_m2, out.post_m, sel)):
+    mp_mult = run.mp_infl * run.mp_scale            # the update's multiplier (before this epoch changes it)
+    if run.mp_vce.add(lag_epoch(ep.t, key, out.cols, out.coef, out.var_m2, out.v_mp_m2, out.post_m, sel, mp_mult)):
         run.mp_scale = run.mp_vce.scale(run.mp_scale)
         run.mp_n_ep = run.mp_vce.n_ep
 
