@@ -41,6 +41,10 @@ RUNS = {"smoother, adaptive noise": {"smoother": True, "smoother_adaptive_noise"
 EXTRA_RUNS = {"+ noise_em 4": {"smoother": True, "smoother_adaptive_noise": True, "smoother_noise_em_iterations": 4},
               "+ acceleration, noise_em 4": {"smoother": True, "smoother_adaptive_noise": True,
                                              "angular_acceleration_state": True, "smoother_noise_em_iterations": 4}}
+#: not in the default table: the multipath scale from the residuals' lag-1 autocovariance (multipath_vce)
+EXTRA_RUNS.update({f"{name}, autocovariance{tag}": {**cfg, "multipath_adaptive_method": "autocovariance", **k}
+                   for name, cfg in RUNS.items()
+                   for tag, k in (("", {}), (" k 1", {"multipath_correlation_factor": 1.0}))})
 
 
 def figures(d: Path, inputs, cfg: dict) -> dict:

@@ -9,6 +9,9 @@ consider term of summary.json (antenna_consider: median sigmas) and the pass mea
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_smoother_chi2.py [--passes clean,realistic,hard,slew]
         [--seed 0] [--runs kinematic,forward,forward-adaptive,plain,adaptive,acceleration] [--sets DIR (keep the simulated sets)]
 
+Every run also as NAME-vce: multipath_adaptive_method "autocovariance" (gnssatt/attitude/multipath_vce.py), and
+NAME-vce1: that with multipath_correlation_factor 1.
+
 Prints a markdown table; writes nothing into docs/BENCHMARKS.md (its section is hand-written).
 """
 from __future__ import annotations
@@ -35,6 +38,12 @@ RUNS = {"kinematic": {"mode": "kinematic"}, "forward": {}, "forward-adaptive": {
         "adaptive-em": {"smoother": True, "smoother_adaptive_noise": True, "smoother_noise_em_iterations": 4},
         "acceleration-em": {"smoother": True, "smoother_adaptive_noise": True, "angular_acceleration_state": True,
                             "smoother_noise_em_iterations": 4}}
+#: the same runs with the multipath scale from the residuals' lag-1 autocovariance (gnssatt.attitude.multipath_vce)
+VCE = {"multipath_adaptive_method": "autocovariance"}
+#: and with the time-correlation factor 1 (the lag-1 scale is the whole correlated variance; docs/attitude.md)
+VCE1 = {**VCE, "multipath_correlation_factor": 1.0}
+RUNS.update({f"{name}-{tag}": {**cfg, **extra} for name, cfg in list(RUNS.items())
+             for tag, extra in (("vce", VCE), ("vce1", VCE1))})
 
 
 def chi2_row(d: Path, inputs, cfg: dict) -> dict:

@@ -16,6 +16,7 @@ import numpy as np
 from gnssatt.attitude.adaptive import ManoeuvreDetector
 from gnssatt.attitude.angular_acceleration import jerk_rate_profile
 from gnssatt.attitude.fastops import clip as _clip, nz as _nz
+from gnssatt.attitude.multipath_vce import MultipathVce
 from gnssatt.attitude.pcv_correction import pcv_tables_for
 from gnssatt.attitude.qc_kernels import add_states, drop_states
 from gnssatt.attitude.qc_records import EpochClock, EpochMemory, QcLimits, QcWork, ResidualBuffers, WhiteNoise
@@ -257,6 +258,9 @@ class FilterRun:
         self.gam_n = np.zeros((2, n_sig))
         self.mom = np.zeros((2, n_sig, 4))
         self.mp_scale, self.mp_n_ep = 1.0, 0   # adaptive scale of the multipath variance (1 = the configured sigmas)
+        # its variance-component estimate from the residuals' lag-1 autocovariance (multipath_adaptive_method)
+        self.mp_vce = MultipathVce(NOISE_EPOCHS, MP_SCALE_MIN, MP_SCALE_MAX, TD_MAX_DT_S) \
+            if s.noise.multipath_adaptive_method == "autocovariance" else None
         # per-signal white-noise estimates (variance of one SD) from the triple differences: robust, exponentially
         # weighted over NOISE_EPOCHS epochs; used once NOISE_MIN_SAMPLES TDs have been seen
         self.est_var_c = np.full(n_sig, s.table1.sigma_code_m ** 2)
@@ -271,7 +275,8 @@ class FilterRun:
         multipath scale): what a second pass over the same data starts from (start_noise_from)."""
         return {"est_var_c": self.est_var_c.copy(), "est_var_p": self.est_var_p.copy(), "est_n": self.est_n.copy(),
                 "gamma": self.gamma.copy(), "gam_n": self.gam_n.copy(), "mom": self.mom.copy(),
-                "mp_scale": float(self.mp_scale), "mp_n_ep": int(self.mp_n_ep)}
+                "mp_scale": float(self.mp_scale), "mp_n_ep": int(self.mp_n_ep),
+                "mp_vce": self.mp_vce.state() if self.mp_vce is not None else None}
 
     def start_noise_from(self, noise0: dict) -> None:
         """Start the noise estimator where a first pass over the same data ended (noise_state), in place (the
@@ -281,6 +286,8 @@ class FilterRun:
         for name in ("est_var_c", "est_var_p", "est_n", "gamma", "gam_n", "mom"):
             getattr(self, name)[...] = noise0[name]
         self.mp_scale, self.mp_n_ep = float(noise0["mp_scale"]), int(noise0["mp_n_ep"])
+        if self.mp_vce is not None and noise0.get("mp_vce") is not None:
+            self.mp_vce.start_from(noise0["mp_vce"])
 
     def _init_outputs(self):
         """Per-epoch output buffers, the residual records and (dynamic, smoother) the smoother's records."""

@@ -163,6 +163,10 @@ class NoiseModel:
                                                   "within one correlation time).", gt=0, le=1000)
     multipath_adaptive: bool = _f(True, "Scale the multipath variance by what the post-fit residuals of fixed "
                                         "phases show (300-epoch memory).")
+    multipath_adaptive_method: Literal["leverage", "autocovariance"] = _f(
+        "leverage", "How the adaptive scale is estimated: leverage (post-fit residuals' square over 1 - leverage, "
+                    "minus the white variance) or autocovariance (the lag-1 product of one SD's post-fit "
+                    "residuals: no white noise in it, whatever R the filter assumes).")
 
 
 @dataclass

@@ -32,7 +32,8 @@ OLD_FLAT_DEFAULTS = {
 #: group fields added after the restructuring (issue 21), with their defaults (length_validation: "both" since
 #: bench/bench_fix_validation.py showed "filter" alone letting wrong integers through)
 NEW_GROUP_DEFAULTS = {"length_validation": "both", "smoother_quiet_jerk_share": 1.0,
-                      "smoother_noise_em_iterations": 0, "smoother_noise_em_bound": 10.0}
+                      "smoother_noise_em_iterations": 0, "smoother_noise_em_bound": 10.0,
+                      "multipath_adaptive_method": "leverage"}
 OLD_TOP_DEFAULTS = {"mode": "dynamic", "signals": ["L1", "L2"], "systems": None, "rk4_step_s": 1.0,
                     "initial_attitude": "earth-pointing", "initial_q_body_from_ecef": None, "attitude_method": "quest"}
 

@@ -13,6 +13,7 @@ import numpy as np
 
 from gnssatt.attitude.filter_state import JOSEPH_RATIO, MP_SCALE_MAX, MP_SCALE_MIN, NOISE_EPOCHS, EpochData, FilterRun
 from gnssatt.attitude.length_constraint import project_lengths
+from gnssatt.attitude.multipath_vce import lag_epoch
 from gnssatt.attitude.rigid_update import rigid_retract
 from gnssatt.attitude.update_kernels import update_epoch
 from gnssatt.attitude.update_records import FixState, UpdateObs, UpdateOutputs
@@ -76,7 +77,9 @@ def _update(run: FilterRun, ep: EpochData) -> UpdateOutputs:
         run.sm_corr[k] = float(np.sum(out.v_mp_m2[mc_n:] * mp_mult * w_p * w_p) / np.sum(w_p))
     if out.good and watch_w and not rigid:
         _observe_manoeuvre(run, ep, sub_prior, P_sub_prior)
-    if run.mp_model and s.noise.multipath_adaptive and out.good and out.n_mp >= 6:
+    if run.mp_model and s.noise.multipath_adaptive and run.mp_vce is not None:
+        _multipath_vce(run, ep, out)
+    elif run.mp_model and s.noise.multipath_adaptive and out.good and out.n_mp >= 6:
         # scale of the multipath variance from the post-fit residuals of fixed phases:
         # E[r^2] = R_true (1 - h), h = (H P+ H^T)_ii / R_model (leverage); R_true = white + scale * mp
         a = 1.0 / min(run.mp_n_ep + 1.0, NOISE_EPOCHS)
@@ -84,6 +87,23 @@ def _update(run: FilterRun, ep: EpochData) -> UpdateOutputs:
         run.mp_scale = float(min(max(run.mp_scale + a * (ratio - run.mp_scale), MP_SCALE_MIN), MP_SCALE_MAX))
         run.mp_n_ep += 1
     return out
+
+
+def _multipath_vce(run: FilterRun, ep: EpochData, out: UpdateOutputs) -> None:
+    """run.mp_scale from the lag-1 autocovariance of the fixed phase rows' post-fit residuals
+    (gnssatt.attitude.multipath_vce; multipath_adaptive_method "autocovariance"); a bad update breaks the arcs."""
+    mc_n = ep.mc_n
+    sel = np.zeros(out.z.size, bool)
+    sel[mc_n:] = run.st.amb_fixed[out.cols[mc_n:, 4] - run.st.n_fixed_part]
+    if not out.good or sel.sum() < 6:
+        run.mp_vce.add(None)
+        return
+    key = np.full(out.z.size, -1, np.int64)
+    key[mc_n:] = run.st.amb_arc[out.cols[mc_n:, 4] - run.st.n_fixed_part]     # one id per arc
+    mp_mult = run.mp_infl * run.mp_scale            # the update's multiplier (before this epoch changes it)
+    if run.mp_vce.add(lag_epoch(ep.t, key, out.cols, out.coef, out.var_m2, out.v_mp_m2, out.post_m, sel, mp_mult)):
+        run.mp_scale = run.mp_vce.scale(run.mp_scale)
+        run.mp_n_ep = run.mp_vce.n_ep
 
 
 def _observe_manoeuvre(run: FilterRun, ep: EpochData, sub_prior: np.ndarray, P_sub_prior: np.ndarray) -> None:

@@ -64,7 +64,9 @@ def filter_result(run: FilterRun) -> FilterResult:
              "cn0_gamma_code": {sg: float(run.gamma[0, f]) for f, sg in enumerate(signals)},
              "cn0_gamma_phase": {sg: float(run.gamma[1, f]) for f, sg in enumerate(signals)},
              "multipath_scale": float(run.mp_scale) if run.mp_model else None,
-             "multipath_correlation_factor": float(run.mp_infl)}
+             "multipath_correlation_factor": float(run.mp_infl),
+             # multipath_adaptive_method "autocovariance": the residuals' white phase variance over the filter's
+             "white_phase_scale_residuals": run.mp_vce.white_scale() if run.mp_vce is not None else None}
     smoother_data = {"x_prior": run.sm_xp, "P_prior": run.sm_Pp, "x_post": run.sm_xf, "P_post": run.sm_Pf,
                      "Phi": run.sm_Phi, "start": run.sm_start, "corr_share": run.sm_corr, "dt_s": run.sm_dt,
                      "q_omega": run.q_w, "noise_state": run.noise_state()} if run.record else None
