@@ -202,9 +202,18 @@ def maps_for_settings(docs: list[tuple[str, dict]], baselines: list[tuple[str, s
 # ---- the pipeline: parse the set, run gnssatt.attitude.process, write the products
 
 log = logging.getLogger("gnssatt.attitude")
-#: imported by the worker at start (worker.main.preload_pipelines), not by the first job
+#: imported by the worker at start (worker.main.preload_pipelines), not by the first job: the pipeline's modules
+#: and those it imports inside functions (the readers, orbits, chart series, the smoother), so that a job child of
+#: the fork server imports nothing (~0.2-0.4 s per job without .pyc files, PYTHONDONTWRITEBYTECODE;
+#: tests/worker/test_preload.py)
 PRELOAD = ("gnssatt.attitude.process", "gnssatt.attitude.products", "gnssatt.attitude.statistics",
-           "gnssatt.plots.attitude", "gnssatt.report", "matplotlib.backends.backend_agg")
+           "gnssatt.attitude.chart_series", "gnssatt.attitude.quality", "gnssatt.attitude.smoother",
+           "gnssatt.attitude.process_noise_em",
+           "gnssatt.gnss.io.rinex_obs", "gnssatt.gnss.io.rinex_nav", "gnssatt.gnss.io.sp3",
+           "gnssatt.gnss.io.platform", "gnssatt.gnss.io.reference_attitude", "gnssatt.gnss.io.reader_warnings",
+           "gnssatt.gnss.io.compression", "gnssatt.gnss.orbits.broadcast", "gnssatt.gnss.orbits.sp3_interp",
+           "gnssatt.gnss.ephemeris", "gnssatt.gnss.geometry", "gnssatt.gnss.positioning",
+           "gnssatt.plots.attitude", "gnssatt.plots.elevation", "gnssatt.report", "matplotlib.backends.backend_agg")
 
 
 class StageClock:
