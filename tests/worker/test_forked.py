@@ -68,3 +68,13 @@ def test_a_child_that_dies_is_replaced_by_running_here():
         return 7
 
     assert Forked(dies_in_the_child).result() == 7
+
+
+def test_the_child_freezes_what_it_inherits_and_the_parent_does_not():
+    """gc.freeze in the child: its collections skip the parent's objects (no copy-on-write of their pages)."""
+    import gc
+
+    parent_frozen = gc.get_freeze_count()
+    inherited = len(gc.get_objects())
+    assert Forked(gc.get_freeze_count).result() >= inherited
+    assert gc.get_freeze_count() == parent_frozen
