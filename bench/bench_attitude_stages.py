@@ -159,7 +159,8 @@ def main() -> None:
             rows = run_jobs(d, args.mode, args.runs, Path(tmp))
     warm = rows if args.fork_server else (rows[1:] or rows)
     first = 1 if args.fork_server else 2
-    print(f"\n{args.mode}{' (forked)' if args.fork_server else ''}, median of runs {first}-{len(rows)} (load {min(r['load'] for r in warm):.1f}-"
+    how = " (forked)" if args.fork_server else ""
+    print(f"\n{args.mode}{how}, median of runs {first}-{len(rows)} (load {min(r['load'] for r in warm):.1f}-"
           f"{max(r['load'] for r in warm):.1f}):\n{table(warm)}")
 
 
