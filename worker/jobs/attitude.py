@@ -303,12 +303,12 @@ def run(ctx: JobContext, config) -> None:
 
 
 #: the plots by the forked process that draws them while the job writes the CSV products: two children, so that both
-#: cores draw while this process formats and stores the texts (on the 106-minute pass ~1.2 s CPU for the first
-#: group, ~0.8 s for the second, against ~0.9 s of CSV texts + storing here: one child that drew the first group
-#: while this process drew the second after its texts left it ~0.5 s behind the child; docs/BENCHMARKS.md
+#: cores draw while this process formats and stores the texts (on the 106-minute pass ~1.0 s CPU for each group
+#: against ~0.9 s of CSV texts + storing here: one child that drew the first three plots and the fix sky plot
+#: while this process drew the rest after its texts left it ~0.5 s behind the child; docs/BENCHMARKS.md
 #: "Attitude job speed"). The second group reads events.csv, made by its child from the solution.
-PLOT_GROUPS = (("residuals.png", "skyplot.png", "elevation.png", "skyplot_fix.png"),
-               ("euler.png", "fix_status.png", "dop.png"))
+PLOT_GROUPS = (("residuals.png", "skyplot.png", "elevation.png"),
+               ("euler.png", "fix_status.png", "dop.png", "skyplot_fix.png"))
 
 
 class _PlotJob:
