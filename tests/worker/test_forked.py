@@ -78,4 +78,3 @@ def test_a_child_that_dies_is_replaced_by_running_here():
         return 7
 
     assert Forked(dies_in_the_child).result() == 7
-
