@@ -7,6 +7,11 @@ worker.jobs.attitude.run on a bench.local_jobs.job_context; the first run of the
 drawings) and left out of the medians.
 
     OPENBLAS_NUM_THREADS=1 .venv/bin/python bench/bench_attitude_stages.py [--runs 3] [--mode kinematic] [--minutes 106]
+        [--fork-server]
+
+--fork-server runs each job as the service does: in a child forked from a process that has imported worker.zygote
+(the fork server's preload: pipelines, kernels, warm-up) and done nothing else, so every run pays what a service
+job pays (lazy imports, first drawings, copy-on-write faults); all runs then count in the medians.
 
 Run it in two trees one after the other (interleaved, several rounds) to compare them on a shared machine; the
 figures go into docs/BENCHMARKS.md "Attitude job speed" by hand.
@@ -55,7 +60,7 @@ class SplitClock:
 CLOCKS: list[SplitClock] = []
 
 
-def run_jobs(d: Path, mode: str, runs: int, work: Path) -> list[dict]:
+def run_jobs(d: Path, mode: str, runs: int, work: Path, quiet: bool = False) -> list[dict]:
     """`runs` attitude jobs in this process: per job, stage -> (wall, own CPU, children CPU) and the load."""
     import worker.jobs.attitude as WA
     from bench.bench_attitude_speed import files_of
@@ -71,8 +76,42 @@ def run_jobs(d: Path, mode: str, runs: int, work: Path) -> list[dict]:
         stages = {r[0]: r[1:] for r in CLOCKS[-1].rows}
         stages["job"] = tuple(a - b for a, b in zip(t1, t0))
         out.append({"stages": stages, "load": os.getloadavg()[0]})
-        print(f"run {i}: job wall {stages['job'][0]:.2f} s, own CPU {stages['job'][1]:.2f} s, children "
-              f"{stages['job'][2]:.2f} s, load {out[-1]['load']:.1f}", flush=True)
+        if not quiet:
+                print(f"run {i}: job wall {stages['job'][0]:.2f} s, own CPU {stages['job'][1]:.2f} s, children "
+                  f"{stages['job'][2]:.2f} s, load {out[-1]['load']:.1f}", flush=True)
+    return out
+
+
+def run_jobs_forked(d: Path, mode: str, runs: int, work: Path) -> list[dict]:
+    """Like run_jobs, each job in a child forked from this process after `import worker.zygote` (the fork server's
+    preload), its figures sent back through a pipe."""
+    import pickle
+
+    import worker.zygote  # noqa: F401 - what the service's fork server loads before its first fork
+
+    out = []
+    for i in range(runs):
+        read_fd, write_fd = os.pipe()
+        pid = os.fork()
+        if pid == 0:                                      # the job child
+            code = 1
+            try:
+                os.close(read_fd)
+                row = run_jobs(d, mode, 1, work / f"fork{i}", quiet=True)[0]
+                with os.fdopen(write_fd, "wb") as fh:
+                    pickle.dump(row, fh)
+                code = 0
+            finally:
+                os._exit(code)
+        os.close(write_fd)
+        with os.fdopen(read_fd, "rb") as fh:
+            data = fh.read()
+        os.waitpid(pid, 0)
+        row = pickle.loads(data)
+        out.append(row)
+        job = row["stages"]["job"]
+        print(f"run {i} (forked): job wall {job[0]:.2f} s, own CPU {job[1]:.2f} s, children {job[2]:.2f} s, "
+              f"load {row['load']:.1f}", flush=True)
     return out
 
 
@@ -85,20 +124,43 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def _simulate(d: Path, minutes: float) -> None:
+    """The pass, simulated in a forked child: this process imports nothing of the simulator (a job forked from it
+    would find modules loaded that the service's job children do not have)."""
+    pid = os.fork()
+    if pid == 0:
+        code = 1
+        try:
+            from gnssatt.sim import simulate_scenario
+
+            simulate_scenario("earth-pointing", d, seed=0, overrides={"duration_s": minutes * 60.0})
+            code = 0
+        finally:
+            os._exit(code)
+    _, status = os.waitpid(pid, 0)
+    if status != 0:
+        raise RuntimeError("simulating the pass failed")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--mode", default="kinematic", choices=("kinematic", "dynamic"))
     ap.add_argument("--minutes", type=float, default=106.0)
+    ap.add_argument("--fork-server", action="store_true", help="each job in a child forked after the fork "
+                    "server's preload (worker.zygote), as the service runs it")
     args = ap.parse_args()
-    from gnssatt.sim import simulate_scenario
-
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp) / "realistic"
-        simulate_scenario("earth-pointing", d, seed=0, overrides={"duration_s": args.minutes * 60.0})
-        rows = run_jobs(d, args.mode, args.runs, Path(tmp))
-    warm = rows[1:] or rows
-    print(f"\n{args.mode}, median of runs 2-{len(rows)} (load {min(r['load'] for r in warm):.1f}-"
+        _simulate(d, args.minutes)
+        if args.fork_server:
+            rows = run_jobs_forked(d, args.mode, args.runs, Path(tmp))
+        else:
+            rows = run_jobs(d, args.mode, args.runs, Path(tmp))
+    warm = rows if args.fork_server else (rows[1:] or rows)
+    first = 1 if args.fork_server else 2
+    how = " (forked)" if args.fork_server else ""
+    print(f"\n{args.mode}{how}, median of runs {first}-{len(rows)} (load {min(r['load'] for r in warm):.1f}-"
           f"{max(r['load'] for r in warm):.1f}):\n{table(warm)}")
 
 

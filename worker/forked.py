@@ -12,6 +12,7 @@ function runs in this process when the result is asked for.
 """
 from __future__ import annotations
 
+import gc
 import logging
 import os
 import pickle
@@ -54,6 +55,10 @@ def _child(write_fd: int, fn: Callable[[], Any]) -> None:
     """In the child: run fn, write the pickled ("ok", value) or ("error", traceback) and leave at once."""
     code = 0
     try:
+        # every object inherited is frozen out of the cyclic collector: fn's collections traverse only what fn
+        # made and write no inherited page (the attitude job's plot children: ~0.15 s of collections and ~8000
+        # copy-on-write faults fewer per child on the 106-min pass)
+        gc.freeze()
         try:
             payload = pickle.dumps(("ok", fn()), protocol=pickle.HIGHEST_PROTOCOL)
         except BaseException:          # noqa: BLE001 - everything goes back to the parent, which raises it

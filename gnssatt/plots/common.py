@@ -448,7 +448,39 @@ def polar_screen_points(ax, az_deg: np.ndarray, r: np.ndarray) -> np.ndarray:
     return screen_points(r * np.sin(a), r * np.cos(a), w, h)
 
 
-def warm_up() -> None:
-    """Compile (or load from the cache) the decimation kernels."""
+def warm_up(draw: bool = True) -> None:
+    """Compile (or load from the cache) the decimation kernels; with `draw`, also render one small figure with
+    the artists and text sizes of the job plots (date axis, markers, band, legend, polar scatter, colour bar) to
+    PNG, so that a process forked afterwards (the worker's job children) finds matplotlib's font lookups, loaded
+    fonts and PIL's image plugins ready instead of loading them in every job (~0.1-0.2 s; docs/BENCHMARKS.md
+    "Attitude job speed"). Drawing changes no later figure: every plot builds its own Figure."""
     screen_points(np.arange(8.0), np.arange(8.0), 1, 4)             # > 4 points per column: the kernel runs
     first_per_epoch_and_key(np.arange(3).astype("datetime64[ms]"), np.zeros(3, np.int64), np.arange(3))
+    if draw:
+        figure_png(_warm_up_figure())
+
+
+def _warm_up_figure() -> Figure:
+    """A 3 x 2 inch figure using what the job plots use (gnssatt.plots.attitude, gnssatt.plots.elevation)."""
+    fig = new_figure(3.0, 2.0, Margins(left=0.4, top=0.4, bottom=0.3, wgap=0.4, cols=2))
+    t = np.datetime64("2020-01-01T00:00:00", "ms") + np.arange(0, 60_000, 10_000).astype("timedelta64[ms]")
+    ax = fig.add_subplot(1, 2, 1)
+    y = np.arange(len(t), dtype=float)
+    ax.plot(t, y, ".", ms=2.5, label="a")
+    ax.plot(t, y, "-", lw=1.0, label="b")
+    ax.fill_between(t, y - 1, y + 1, where=y > 0, alpha=0.12, lw=0)
+    ax.step(t, y, where="post", lw=0.8)
+    ax.set_ylabel("y [-]")
+    ax.set_title("title", fontsize=8)
+    ax.legend(fontsize=7, markerscale=4, loc="upper right")
+    ax.grid(color="0.88", lw=0.5)
+    ax.text(0.01, 0.02, "note", transform=ax.transAxes, fontsize=7, color="0.35")
+    time_axis(ax, t, maxticks=5)
+    polar = fig.add_subplot(1, 2, 2, projection="polar")
+    sc = polar.scatter(np.radians(y * 60.0), 90.0 - y * 10.0, c=y, s=4, cmap="viridis", linewidths=0)
+    polar.annotate("G01", (0.5, 30.0), fontsize=6, color="0.25")
+    polar.set_rticks([0, 30, 60])
+    polar.set_yticklabels(["90°", "60°", "30°"], fontsize=7)
+    fig.colorbar(sc, ax=[polar], label="C/N0 [dB-Hz]", shrink=0.8)
+    set_title(fig, "warm-up", None)
+    return fig

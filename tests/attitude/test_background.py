@@ -105,3 +105,29 @@ def test_geometry_waits_only_when_the_filter_reaches_the_background_part(realist
     assert handle.asked == 0 and geom.pending is not None
     geom.ready(k1 + 1)
     assert handle.asked == 1 and geom.pending is None and not geom.valid.any()
+
+
+def test_the_plot_children_draw_every_plot_once_and_the_same_pngs_as_one_process(realistic_pass, tmp_path):
+    """The job's two plot children (worker.jobs.attitude.PLOT_GROUPS) give every PNG of PLOT_NAMES once, the bytes
+    that attitude_plots draws in one process from the same tables, events.csv text and reference."""
+    from gnssatt.attitude.products import events_csv, product_tables
+    from gnssatt.plots.attitude import PLOT_NAMES, attitude_plots
+    from gnssatt.plots import PlotContext
+    from bench.local_jobs import files_set, job_context
+    from worker.jobs.attitude import PLOT_GROUPS, _PlotJob
+
+    groups = [n for g in PLOT_GROUPS for n in g]
+    assert sorted(groups) == sorted(PLOT_NAMES)
+    config = AttitudeConfig(mode="kinematic")
+    sol = process(load_inputs(set_files(realistic_pass)), config.to_settings())
+    tables = product_tables(sol)
+    obs_set = files_set(set_files(realistic_pass), name="pass")
+    ctx = job_context(tmp_path, [obs_set], job_id="plots")
+    job = _PlotJob(ctx, config, obs_set, sol, tables)
+    pngs = job.draw()
+    job.cancel()
+    assert list(pngs) == list(PLOT_NAMES)
+    here = attitude_plots({**tables, "events.csv": events_csv(sol)}, (realistic_pass / "reference_attitude.csv")
+                          .read_text(), PlotContext(set_name="pass", job_id="plots",
+                                                    config={"preset": config.preset, "mode": config.mode}))
+    assert pngs == here

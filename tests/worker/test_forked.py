@@ -46,6 +46,16 @@ def test_the_child_runs_in_another_process_and_its_exception_comes_back():
         Forked(boom).result()
 
 
+def test_the_child_freezes_what_it_inherits_and_the_parent_does_not():
+    """gc.freeze in the child: its collections skip the parent's objects (no copy-on-write of their pages)."""
+    import gc
+
+    parent_frozen = gc.get_freeze_count()
+    made_here = [[i] for i in range(10_000)]       # tracked objects the child inherits
+    assert Forked(gc.get_freeze_count).result() >= parent_frozen + len(made_here)
+    assert gc.get_freeze_count() == parent_frozen
+
+
 def test_a_child_that_hangs_is_killed_and_the_function_runs_here():
     parent = os.getpid()
 

@@ -202,9 +202,18 @@ def maps_for_settings(docs: list[tuple[str, dict]], baselines: list[tuple[str, s
 # ---- the pipeline: parse the set, run gnssatt.attitude.process, write the products
 
 log = logging.getLogger("gnssatt.attitude")
-#: imported by the worker at start (worker.main.preload_pipelines), not by the first job
+#: imported by the worker at start (worker.main.preload_pipelines), not by the first job: the pipeline's modules
+#: and those it imports inside functions (the readers, orbits, chart series, the smoother), so that a job child of
+#: the fork server imports nothing (~0.2-0.4 s per job without .pyc files, PYTHONDONTWRITEBYTECODE;
+#: tests/worker/test_preload.py)
 PRELOAD = ("gnssatt.attitude.process", "gnssatt.attitude.products", "gnssatt.attitude.statistics",
-           "gnssatt.plots.attitude", "gnssatt.report", "matplotlib.backends.backend_agg")
+           "gnssatt.attitude.chart_series", "gnssatt.attitude.quality", "gnssatt.attitude.smoother",
+           "gnssatt.attitude.process_noise_em",
+           "gnssatt.gnss.io.rinex_obs", "gnssatt.gnss.io.rinex_nav", "gnssatt.gnss.io.sp3",
+           "gnssatt.gnss.io.platform", "gnssatt.gnss.io.reference_attitude", "gnssatt.gnss.io.reader_warnings",
+           "gnssatt.gnss.io.compression", "gnssatt.gnss.orbits.broadcast", "gnssatt.gnss.orbits.sp3_interp",
+           "gnssatt.gnss.ephemeris", "gnssatt.gnss.geometry", "gnssatt.gnss.positioning",
+           "gnssatt.plots.attitude", "gnssatt.plots.elevation", "gnssatt.report", "matplotlib.backends.backend_agg")
 
 
 class StageClock:
@@ -275,14 +284,14 @@ def run(ctx: JobContext, config) -> None:
     sol.summary["pcv_map_ids"] = list(config.pcv_map_ids)
     sol.summary["reader_warnings"] = reader_warnings([obs_set])
     tables = product_tables(sol)
-    plots = _PlotJob(ctx, config, obs_set, tables)
+    plots = _PlotJob(ctx, config, obs_set, sol, tables)
     try:
         products = all_products(sol)
         clock.mark("storing products")
         for name, content in products.items():
             ctx.write_product(name, content)
         clock.mark("plots")
-        pngs = plots.draw(products)
+        pngs = plots.draw()
     finally:
         plots.cancel()
     clock.mark("report and storing plots")
@@ -293,47 +302,59 @@ def run(ctx: JobContext, config) -> None:
     ctx.progress(1.0, "done")
 
 
-#: plots a forked process draws while the job writes the CSV products (the others are drawn here after them):
-#: the four of residuals.csv (skyplot_fix.png also takes baselines.csv's table), ~1.5 s CPU of the ~2.0 s of all
-#: plots on the 106-minute pass, against ~0.8 s of CSV texts + storing + the three plots drawn here (balanced so
-#: that neither process waits long for the other on 2 cores; docs/BENCHMARKS.md "Attitude job speed")
-FORKED_PLOTS = ("residuals.png", "skyplot.png", "elevation.png", "skyplot_fix.png")
+#: the plots by the forked process that draws them while the job writes the CSV products: two children, so that both
+#: cores draw while this process formats and stores the texts (on the 106-minute pass ~1.0 s CPU for each group
+#: against ~0.9 s of CSV texts + storing here: one child that drew the first three plots and the fix sky plot
+#: while this process drew the rest after its texts left it ~0.5 s behind the child; docs/BENCHMARKS.md
+#: "Attitude job speed"). The second group reads events.csv, made by its child from the solution.
+PLOT_GROUPS = (("residuals.png", "skyplot.png", "elevation.png"),
+               ("euler.png", "fix_status.png", "dop.png", "skyplot_fix.png"))
 
 
 class _PlotJob:
-    """The job's PNG plots (seed 000 Figs. 5-7 style Euler errors, fix status, DOP, residuals, sky plots) drawn in
-    two processes: FORKED_PLOTS by a child forked at once (it inherits `tables` without a copy), the others here
-    by `draw` once the CSV products are written. The plots take the CSV products' column arrays (`tables`,
-    gnssatt.attitude.products.product_tables), not the texts parsed back."""
+    """The job's PNG plots (seed 000 Figs. 5-7 style Euler errors, fix status, DOP, residuals, sky plots), each
+    group of PLOT_GROUPS drawn by a child forked at once (it inherits the solution and `tables` without a copy).
+    The plots take the CSV products' column arrays (`tables`, gnssatt.attitude.products.product_tables), not the
+    texts parsed back; events.csv is the only text they read."""
 
-    def __init__(self, ctx: JobContext, config, obs_set, tables: dict):
+    def __init__(self, ctx: JobContext, config, obs_set, sol, tables: dict):
         from gnssatt.plots import PlotContext
-        from gnssatt.plots.attitude import attitude_plots
         from worker.forked import Forked
 
         ctx.progress(0.93, "plotting")
         refs = obs_set.of_kind("reference_attitude")
-        self.reference = refs[0].path.read_text() if refs else None
-        self.tables = tables
+        reference_path = refs[0].path if refs else None
         # the plot titles name the few settings that change what a plot shows; the report shows the config once
-        self.context = PlotContext(set_name=obs_set.name or obs_set.id, job_id=ctx.job_id,
-                                   config={"preset": config.preset, "mode": config.mode})
-        self.child = Forked(lambda: attitude_plots(tables, self.reference, self.context, names=FORKED_PLOTS))
+        context = PlotContext(set_name=obs_set.name or obs_set.id, job_id=ctx.job_id,
+                              config={"preset": config.preset, "mode": config.mode})
+        self.children = [Forked(lambda names=names: _draw_group(sol, tables, reference_path, context, names))
+                         for names in PLOT_GROUPS]
 
-    def draw(self, products: dict) -> dict[str, bytes]:
-        """Every PNG by name in report order: the ones drawn here (CSV texts the tables do not hold, e.g.
-        events.csv, from `products`) and the child's."""
-        from gnssatt.plots.attitude import PLOT_NAMES, attitude_plots
+    def draw(self) -> dict[str, bytes]:
+        """Every PNG by name in report order."""
+        from gnssatt.plots.attitude import PLOT_NAMES
 
-        texts = {name: content for name, content in products.items() if name.endswith(".csv")}
-        texts.update({name: table for name, table in self.tables.items() if name in texts})
-        here = attitude_plots(texts, self.reference, self.context,
-                              names=[n for n in PLOT_NAMES if n not in FORKED_PLOTS])
-        pngs = {**here, **self.child.result()}
+        pngs: dict[str, bytes] = {}
+        for child in self.children:
+            pngs.update(child.result())
         return {name: pngs[name] for name in PLOT_NAMES if name in pngs}
 
     def cancel(self) -> None:
-        self.child.cancel()
+        for child in self.children:
+            child.cancel()
+
+
+def _draw_group(sol, tables: dict, reference_path, context, names) -> dict[str, bytes]:
+    """The PNGs `names` of the solution (in a plot child): tables for the CSVs they hold, events.csv's text, and
+    the reference attitude CSV only when euler.png is drawn."""
+    from gnssatt.attitude.products import events_csv
+    from gnssatt.plots.attitude import attitude_plots
+
+    products = dict(tables)
+    if "fix_status.png" in names:
+        products["events.csv"] = events_csv(sol)
+    reference = reference_path.read_text() if reference_path is not None and "euler.png" in names else None
+    return attitude_plots(products, reference, context, names=names)
 
 
 def _write_plots_and_report(ctx: JobContext, config, obs_set, pngs: dict, summary: dict) -> None:
