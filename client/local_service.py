@@ -111,8 +111,21 @@ class LocalService:
 
     def start_worker(self, concurrency: int = 1) -> subprocess.Popen:
         proc = self._spawn(["worker", "--concurrency", str(concurrency)], "worker")
+        proc.log_path = self.logs[-1]
         self.workers.append(proc)
         return proc
+
+    def wait_worker_ready(self, proc: subprocess.Popen, timeout_s: float = 180.0) -> None:
+        """Until the worker's queue consumer runs (Huey logs "consumer started" once the fork server has loaded
+        the pipelines and kernels, ~20-40 s idle): a test that needs the work shared must not submit before."""
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            if proc.poll() is not None:
+                raise RuntimeError(f"worker exited early:\n{self.logs_text()}")
+            if "consumer started" in (proc.log_path.read_text(errors="replace") if proc.log_path.exists() else ""):
+                return
+            time.sleep(0.2)
+        raise RuntimeError(f"worker not ready in {timeout_s} s:\n{self.logs_text()}")
 
     def kill_worker(self, proc: subprocess.Popen, sig=signal.SIGKILL) -> None:
         proc.send_signal(sig)

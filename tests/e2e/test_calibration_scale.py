@@ -76,8 +76,9 @@ def test_same_campaign_same_maps_on_one_and_three_workers(service, campaign, in_
             ids.append(r.json()["id"])
 
         one, tasks_one = _run_job(c, ids)
-        service.start_worker()
-        service.start_worker()
+        extra = [service.start_worker(), service.start_worker()]
+        for proc in extra:  # both consuming before the job (once, all its tasks ran on the first worker)
+            service.wait_worker_ready(proc)
         three, tasks_three = _run_job(c, ids)
 
     assert len([k for k in one if k.startswith("pcv_")]) == 4  # 2 baselines x L1, L2

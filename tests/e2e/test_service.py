@@ -185,9 +185,10 @@ def test_processes_starting_at_once_share_one_migrated_database(service):
 
 def test_fan_out_spreads_over_workers_and_survives_a_killed_one(service):
     service.start_api()
-    first = service.start_worker()
-    service.start_worker()
+    first, second = service.start_worker(), service.start_worker()
     key = service.create_key("ops")
+    for proc in (first, second):  # both consuming before the job, or one may take every task
+        service.wait_worker_ready(proc)
     with service.client(key) as c:
         job = c.post("/v1/jobs", json={"type": "selftest", "config": {"duration_s": 0, "fan_out": 12,
                                                                       "task_seconds": 0.6}}).json()
