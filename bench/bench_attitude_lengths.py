@@ -66,6 +66,18 @@ RUNS = {"forward, no constraint": {**ADD, "length_constraint_sigma_m": 0.0},
         "smoother, rigid update": {"baseline_update": "rigid", "smoother": True}}
 
 
+def simulated_pass(base: Path, label: str, seed: int, minutes: float) -> Path:
+    """The set of pass `label` (PASSES) for `seed`, `minutes` long, at base/seed<seed>_<label>: simulated once,
+    then reused (the benches' --sets folder)."""
+    from gnssatt.sim import simulate_scenario
+
+    preset, over = PASSES[label]
+    d = Path(base) / f"seed{seed}_{label}"
+    if not (d / "platform.json").exists():
+        simulate_scenario(preset, d, seed=seed, overrides={"duration_s": minutes * 60.0, **over})
+    return d
+
+
 def phase_centre_lengths_m(d: Path, baselines: list) -> np.ndarray:
     """(n_bl,) phase-centre lengths of the simulated set d (m): |body baseline + PCO_b - PCO_a| with the PCOs
     (truth/model.json, antenna frame) turned to the body, mean of L1 and L2 (module doc)."""

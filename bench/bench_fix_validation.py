@@ -49,9 +49,8 @@ def run_row(d: Path, inputs, mode: str, validation: str) -> dict:
 
 
 def main() -> None:
-    from bench.bench_attitude_lengths import PASSES
+    from bench.bench_attitude_lengths import simulated_pass
     from gnssatt.attitude.process import load_inputs
-    from gnssatt.sim import simulate_scenario
 
     ap = argparse.ArgumentParser()
     ap.add_argument("--seeds", default="0,1,2,3,4,5,6,7")
@@ -70,10 +69,7 @@ def main() -> None:
         base = Path(args.sets) if args.sets else Path(tmp)
         for seed in (int(s) for s in args.seeds.split(",")):
             for label in args.passes.split(","):
-                preset, over = PASSES[label]
-                d = base / f"seed{seed}_{label}"
-                if not (d / "platform.json").exists():
-                    simulate_scenario(preset, d, seed=seed, overrides={"duration_s": args.minutes * 60.0, **over})
+                d = simulated_pass(base, label, seed, args.minutes)
                 inputs = load_inputs(files_of(d))
                 for mode in args.modes.split(","):
                     for val in args.validations.split(","):

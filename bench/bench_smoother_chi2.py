@@ -75,9 +75,8 @@ def chi2_row(d: Path, inputs, cfg: dict) -> dict:
 
 
 def main() -> None:
-    from bench.bench_attitude_lengths import PASSES
+    from bench.bench_attitude_lengths import PASSES, simulated_pass
     from gnssatt.attitude.process import load_inputs
-    from gnssatt.sim import simulate_scenario
 
     ap = argparse.ArgumentParser()
     ap.add_argument("--passes", default=",".join(PASSES))
@@ -94,10 +93,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         base = Path(args.sets) if args.sets else Path(tmp)
         for label in args.passes.split(","):
-            preset, over = PASSES[label]
-            d = base / f"seed{args.seed}_{label}"
-            if not (d / "platform.json").exists():
-                simulate_scenario(preset, d, seed=args.seed, overrides={"duration_s": args.minutes * 60.0, **over})
+            d = simulated_pass(base, label, args.seed, args.minutes)
             inputs = load_inputs(files_of(d))
             for name in args.runs.split(","):
                 r = chi2_row(d, inputs, RUNS[name])
